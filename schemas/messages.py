@@ -1,0 +1,176 @@
+"""Pydantic v2 models of every message in DESIGN.md.
+
+Field names are the contract: add fields freely, never rename these. Unknown fields
+are ignored on receipt so that a newer publisher never breaks an older receiver.
+"""
+
+from __future__ import annotations
+
+import time
+from enum import StrEnum
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Confidence = Annotated[float, Field(ge=0.0, le=1.0)]
+NonNegInt = Annotated[int, Field(ge=0)]
+
+
+class Shape(StrEnum):
+    X = "X"
+    O = "O"  # noqa: E741 - the mark is literally called O
+    TRIANGLE = "TRIANGLE"
+
+    @property
+    def is_danger(self) -> bool:
+        return self in (Shape.X, Shape.TRIANGLE)
+
+
+class Command(StrEnum):
+    STAND = "stand"
+    DOWN = "down"
+    YES = "yes"
+    NO = "no"
+    GO = "go"
+    STOP = "stop"
+
+
+class Action(StrEnum):
+    STAND_UP = "stand_up"
+    SIT_DOWN = "sit_down"
+    NOD = "nod"
+    SHAKE_HEAD = "shake_head"
+    WALK_FORWARD = "walk_forward"
+    STOP = "stop"
+
+
+class Posture(StrEnum):
+    SITTING = "sitting"
+    STANDING = "standing"
+    WALKING = "walking"
+    MOVING = "moving"
+    UNKNOWN = "unknown"
+
+
+class Verdict(StrEnum):
+    OBEY = "obey"
+    REFUSE = "refuse"
+    IGNORE = "ignore"
+
+
+class Reason(StrEnum):
+    """Why a directive was (not) carried out, after Briggs and Scheutz (2015)."""
+
+    OK = "ok"
+    DANGER_SIGN = "danger_sign"
+    NOT_UNDERSTOOD = "not_understood"
+    ALREADY_DONE = "already_done"
+    BUSY = "busy"
+
+
+class Situation(StrEnum):
+    SAFE = "safe"
+    DANGER = "danger"
+
+
+class HealthStatus(StrEnum):
+    OK = "ok"
+    DEGRADED = "degraded"
+    FAILED = "failed"
+
+
+class Header(BaseModel):
+    """Fields every message carries: when it was made and the publisher's sequence number."""
+
+    model_config = ConfigDict(extra="ignore", frozen=False, use_enum_values=False)
+
+    stamp: float = Field(default_factory=time.time, ge=0.0, description="UNIX seconds")
+    seq: NonNegInt = Field(default=0, description="monotonic per publisher")
+
+
+class Mark(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+
+    shape: Shape
+    confidence: Confidence
+    box: tuple[NonNegInt, NonNegInt, NonNegInt, NonNegInt] = Field(
+        description="x, y, width, height in pixels"
+    )
+
+
+class MarkObservation(Header):
+    marks: list[Mark] = Field(default_factory=list)
+    frame: NonNegInt = 0
+
+
+class VoiceCommand(Header):
+    command: Command | None
+    text: str = ""
+    confidence: Confidence = 0.0
+    engine: str = ""
+
+
+class MotionGoal(Header):
+    action: Action
+    goal_id: str = Field(min_length=1)
+    cause_stamp: float | None = Field(
+        default=None, description="stamp of the input message (command or marks) that led to this goal"
+    )
+
+
+class MotionState(Header):
+    posture: Posture
+    action: Action | None = None
+    goal_id: str | None = None
+    bus_ok: bool = True
+    goal_stamp: float | None = Field(default=None, description="stamp of the goal being carried out")
+    first_write: float | None = Field(
+        default=None, description="UNIX time of the first servo write that carried the current goal"
+    )
+
+
+class Decision(Header):
+    command: Command | None = None
+    verdict: Verdict
+    reason: Reason
+    action: Action | None = None
+    situation: Situation
+    say: str | None = None
+    cause_stamp: float | None = Field(default=None, description="stamp of the input that caused it")
+
+
+class SpeechRequest(Header):
+    text: str
+    id: str = Field(min_length=1)
+
+
+class SpeechState(Header):
+    speaking: bool
+    id: str | None = None
+    text: str | None = None
+
+
+class Health(Header):
+    service: str
+    status: HealthStatus
+    uptime_s: float = Field(ge=0.0)
+    received: NonNegInt = 0
+    published: NonNegInt = 0
+    rejected: NonNegInt = 0
+    detail: dict[str, Any] = Field(default_factory=dict)
+
+
+MODELS: dict[str, type[Header]] = {
+    m.__name__: m
+    for m in (
+        MarkObservation,
+        VoiceCommand,
+        MotionGoal,
+        MotionState,
+        Decision,
+        SpeechRequest,
+        SpeechState,
+        Health,
+    )
+}
+"""Every top-level message model by name (the name is the encoding schema on the wire)."""

@@ -1,0 +1,1 @@
+"""The five HRI services, their shared Zenoh runtime and the `hri` command."""

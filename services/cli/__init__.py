@@ -1,0 +1,1 @@
+"""The `hri` command: launcher, demo and probing tools."""

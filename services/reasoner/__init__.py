@@ -1,0 +1,1 @@
+"""The reasoner service (DESIGN.md, Processes)."""

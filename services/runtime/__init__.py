@@ -1,0 +1,41 @@
+"""The Zenoh runtime every service uses: session, typed pub/sub, health, liveliness, shutdown."""
+
+from services.runtime.codec import DecodeError, decode, encode, encoding_for
+from services.runtime.config import (
+    DEFAULT_CONNECT,
+    BusSettings,
+    ConfigError,
+    client_config,
+    parse_endpoints,
+    router_config,
+)
+from services.runtime.logs import configure_logging, get_logger
+from services.runtime.service import (
+    PARENT_ENV,
+    Counters,
+    ServiceContext,
+    TypedPublisher,
+    open_session,
+    run_service,
+)
+
+__all__ = [
+    "DEFAULT_CONNECT",
+    "PARENT_ENV",
+    "BusSettings",
+    "ConfigError",
+    "Counters",
+    "DecodeError",
+    "ServiceContext",
+    "TypedPublisher",
+    "client_config",
+    "configure_logging",
+    "decode",
+    "encode",
+    "encoding_for",
+    "get_logger",
+    "open_session",
+    "parse_endpoints",
+    "router_config",
+    "run_service",
+]

@@ -1,0 +1,49 @@
+"""Structured logging (structlog) with the service name on every line.
+
+`HRI_LOG_LEVEL` (default `info`) sets the level, `HRI_LOG_FORMAT=json` switches the console
+renderer for one JSON object per line.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+
+import structlog
+
+_configured = False
+
+
+def configure_logging(level: str | None = None, fmt: str | None = None) -> None:
+    global _configured
+    level_name = (level or os.environ.get("HRI_LOG_LEVEL") or "info").upper()
+    numeric = logging.getLevelName(level_name)
+    if not isinstance(numeric, int):
+        numeric = logging.INFO
+    fmt = fmt or os.environ.get("HRI_LOG_FORMAT") or "console"
+    renderer: structlog.typing.Processor
+    if fmt == "json":
+        renderer = structlog.processors.JSONRenderer()
+    else:
+        renderer = structlog.dev.ConsoleRenderer(colors=False, pad_event_to=32)
+    structlog.configure(
+        processors=[
+            structlog.contextvars.merge_contextvars,
+            structlog.processors.add_log_level,
+            structlog.processors.TimeStamper(fmt="%H:%M:%S.%f", utc=False),
+            structlog.processors.StackInfoRenderer(),
+            structlog.processors.format_exc_info,
+            renderer,
+        ],
+        wrapper_class=structlog.make_filtering_bound_logger(numeric),
+        logger_factory=structlog.PrintLoggerFactory(sys.stderr),
+        cache_logger_on_first_use=False,
+    )
+    _configured = True
+
+
+def get_logger(service: str, **context: object) -> structlog.typing.FilteringBoundLogger:
+    if not _configured:
+        configure_logging()
+    return structlog.get_logger().bind(service=service, **context)

@@ -1,0 +1,377 @@
+"""What every service process shares: one Zenoh session, typed pub/sub, liveliness, health
+and a clean stop on SIGTERM or Ctrl-C.
+
+A service is a function `body(ctx)` run by `run_service`. The body declares its publishers and
+subscribers on `ctx`, starts what it needs, and returns when `ctx.stopping` is set (usually by
+looping on `ctx.wait(period)`). `run_service` then runs the registered cleanups and closes the
+session in `finally`: a session left open hangs the interpreter's exit (REFERENCE.md).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import FrameType
+from typing import Any, Generic, TypeVar
+
+import zenoh
+from pydantic import BaseModel
+
+from schemas.keys import Keys
+from schemas.messages import Health, HealthStatus, Header
+from services.runtime.codec import DecodeError, decode, encode, encoding_for
+from services.runtime.config import BusSettings, ConfigError
+from services.runtime.logs import get_logger
+
+M = TypeVar("M", bound=BaseModel)
+H = TypeVar("H", bound=Header)
+
+PARENT_ENV = "HRI_LAUNCHER_PID"
+"""Set by the launcher: a child whose parent is gone stops by itself (no orphans)."""
+
+
+@dataclass
+class Counters:
+    """Message counters reported in `Health`; safe to bump from any thread."""
+
+    received: int = 0
+    published: int = 0
+    rejected: int = 0
+    callback_errors: int = 0
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    def bump(self, name: str, n: int = 1) -> None:
+        with self._lock:
+            setattr(self, name, getattr(self, name) + n)
+
+
+class TypedPublisher(Generic[H]):
+    """Publishes one model on one key, numbering messages with a per-publisher `seq`."""
+
+    def __init__(self, ctx: ServiceContext, key: str, model: type[H], pub: zenoh.Publisher) -> None:
+        self.key = key
+        self.model = model
+        self._ctx = ctx
+        self._pub = pub
+        self._seq = 0
+        self._lock = threading.Lock()
+
+    def put(self, msg: H) -> H:
+        if not isinstance(msg, self.model):
+            raise TypeError(f"{self.key} carries {self.model.__name__}, not {type(msg).__name__}")
+        with self._lock:
+            self._seq += 1
+            msg.seq = self._seq
+            self._pub.put(encode(msg))
+        self._ctx.counters.bump("published")
+        return msg
+
+
+class ServiceContext:
+    """One service's view of the bus. Built by `run_service`; also usable directly in tests."""
+
+    def __init__(self, name: str, session: zenoh.Session, keys: Keys) -> None:
+        self.name = name
+        self.session = session
+        self.keys = keys
+        self.robot = keys.robot
+        self.log = get_logger(name, robot=keys.robot)
+        self.counters = Counters()
+        self.stopping = threading.Event()
+        self.started = time.monotonic()
+        self._status = HealthStatus.OK
+        self._detail: dict[str, Any] = {}
+        self._detail_lock = threading.Lock()
+        self._cleanups: list[Callable[[], None]] = []
+        self._keep: list[Any] = []  # declared zenoh entities: alive while referenced
+        self._token = session.liveliness().declare_token(keys.alive(name))
+        self._keep.append(
+            session.declare_queryable(keys.health(name), self._guard(self._answer_health, "health"))
+        )
+
+    # ------------------------------------------------------------------ publish / subscribe
+    def publisher(
+        self,
+        key: str,
+        model: type[H],
+        *,
+        priority: zenoh.Priority | None = None,
+        block: bool = False,
+        express: bool = False,
+    ) -> TypedPublisher[H]:
+        """A typed publisher. `block=True` makes congestion block rather than drop (motion goals)."""
+        pub = self.session.declare_publisher(
+            key,
+            encoding=encoding_for(model),
+            congestion_control=zenoh.CongestionControl.BLOCK if block else zenoh.CongestionControl.DROP,
+            priority=priority,
+            express=express,
+            reliability=zenoh.Reliability.RELIABLE,
+        )
+        self._keep.append(pub)
+        return TypedPublisher(self, key, model, pub)
+
+    def subscribe(
+        self,
+        key: str,
+        model: type[M],
+        callback: Callable[[M], None],
+        *,
+        latest_only: bool = False,
+    ) -> None:
+        """Deliver each valid `model` on `key` to `callback`; log, count and drop anything else.
+
+        Callbacks run on Zenoh's threads one at a time and must be short. With
+        `latest_only=True` a worker thread calls `callback` with the newest message only
+        (a `RingChannel(1)`), for consumers that may fall behind (camera-rate marks).
+        """
+        handle = self._guard(callback, f"subscriber {key}")
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            msg = self._decode(sample, model)
+            if msg is not None:
+                handle(msg)
+
+        if not latest_only:
+            self._keep.append(self.session.declare_subscriber(key, self._guard(on_sample, key)))
+            return
+        sub = self.session.declare_subscriber(key, zenoh.handlers.RingChannel(1))
+        self._keep.append(sub)
+
+        def drain() -> None:
+            while not self.stopping.is_set():
+                try:
+                    sample = sub.handler.recv()
+                except Exception:  # channel closed with the session
+                    return
+                on_sample(sample)
+
+        self.thread(drain, f"latest:{key}")
+
+    def _decode(self, sample: zenoh.Sample, model: type[M]) -> M | None:
+        self.counters.bump("received")
+        payload = sample.payload.to_bytes()
+        try:
+            return decode(payload, model)
+        except DecodeError as exc:
+            self.counters.bump("rejected")
+            self.log.warning(
+                "rejected payload",
+                key=str(sample.key_expr),
+                error=str(exc),
+                payload=payload[:120].decode("utf-8", "replace"),
+            )
+            return None
+
+    def on_liveliness(self, key: str, callback: Callable[[str, bool], None], *, history: bool = True) -> None:
+        """`callback(key, alive)` when a liveliness token matching `key` appears or goes."""
+        handle = self._guard(callback, f"liveliness {key}")
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            handle(str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT)
+
+        self._keep.append(
+            self.session.liveliness().declare_subscriber(key, self._guard(on_sample, key), history=history)
+        )
+
+    def queryable(self, key: str, answer: Callable[[str, bytes], BaseModel | str]) -> None:
+        """Answer `session.get(key)` with `answer(parameters, payload)`; an exception replies an error."""
+
+        def on_query(query: zenoh.Query) -> None:
+            payload = query.payload.to_bytes() if query.payload is not None else b""
+            try:
+                result = answer(str(query.parameters), payload)
+            except Exception as exc:  # reported to the asker, not fatal here
+                self.counters.bump("callback_errors")
+                self.log.warning("query failed", key=key, error=str(exc))
+                query.reply_err(str(exc))
+                return
+            if isinstance(result, BaseModel):
+                query.reply(key, encode(result), encoding=encoding_for(type(result)))
+            else:
+                query.reply(key, str(result), encoding=zenoh.Encoding.TEXT_PLAIN)
+
+        self._keep.append(self.session.declare_queryable(key, self._guard(on_query, key)))
+
+    # ------------------------------------------------------------------ health
+    def set_status(self, status: HealthStatus, **detail: Any) -> None:
+        """Set health status; `detail` entries are merged into `Health.detail`."""
+        with self._detail_lock:
+            if status != self._status:
+                self.log.info("health", status=status.value, **detail)
+            self._status = status
+            self._detail.update(detail)
+
+    def update_detail(self, **detail: Any) -> None:
+        with self._detail_lock:
+            self._detail.update(detail)
+
+    @property
+    def status(self) -> HealthStatus:
+        return self._status
+
+    def health(self) -> Health:
+        with self._detail_lock:
+            detail = dict(self._detail)
+        detail["callback_errors"] = self.counters.callback_errors
+        return Health(
+            service=self.name,
+            status=self._status,
+            uptime_s=round(time.monotonic() - self.started, 3),
+            received=self.counters.received,
+            published=self.counters.published,
+            rejected=self.counters.rejected,
+            detail=detail,
+        )
+
+    def _answer_health(self, query: zenoh.Query) -> None:
+        query.reply(self.keys.health(self.name), encode(self.health()), encoding=encoding_for(Health))
+
+    # ------------------------------------------------------------------ lifecycle
+    def wait(self, timeout: float | None = None) -> bool:
+        """Sleep up to `timeout` seconds; True once the service is asked to stop."""
+        return self.stopping.wait(timeout)
+
+    def stop(self) -> None:
+        self.stopping.set()
+
+    def on_close(self, fn: Callable[[], None]) -> None:
+        """Run `fn` at shutdown, before the session closes (last registered runs first)."""
+        self._cleanups.append(fn)
+
+    def thread(self, target: Callable[[], None], name: str) -> threading.Thread:
+        """Start a daemon thread whose exceptions are logged and counted, never fatal."""
+        t = threading.Thread(target=self._guard(target, name), name=f"{self.name}:{name}", daemon=True)
+        t.start()
+        return t
+
+    def _guard(self, fn: Callable[..., Any], where: str) -> Callable[..., Any]:
+        def guarded(*args: Any) -> Any:
+            try:
+                return fn(*args)
+            except Exception:
+                self.counters.bump("callback_errors")
+                self.log.exception("callback failed", where=where)
+                return None
+
+        return guarded
+
+    def close(self) -> None:
+        """Run cleanups, drop the token and declarations, close the session. Idempotent."""
+        self.stopping.set()
+        while self._cleanups:
+            fn = self._cleanups.pop()
+            try:
+                fn()
+            except Exception:
+                self.log.exception("cleanup failed", cleanup=getattr(fn, "__qualname__", repr(fn)))
+        for obj in reversed(self._keep):
+            try:
+                obj.undeclare()
+            except Exception:  # already undeclared or session gone
+                pass
+        self._keep.clear()
+        try:
+            self._token.undeclare()
+        except Exception:
+            pass
+        if not self.session.is_closed():
+            self.session.close()
+
+
+def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh.Session:
+    """Open a session. zenoh clients fail at once when no router answers; retry, logging each time.
+
+    `attempts=0` retries until stopped by a signal (a robot waits for its router to come up).
+    """
+    delay, n = 0.2, 0
+    while True:
+        n += 1
+        try:
+            return zenoh.open(settings.zenoh_config())
+        except Exception as exc:
+            if attempts and n >= attempts:
+                raise
+            log.warning("no zenoh router yet, retrying", endpoints=",".join(settings.connect),
+                        error=str(exc).splitlines()[0][:200], retry_in_s=delay)
+            time.sleep(delay)
+            delay = min(delay * 2, 3.0)
+
+
+def run_service(
+    name: str,
+    body: Callable[[ServiceContext], None],
+    *,
+    robot: str | None = None,
+    connect: str | None = None,
+) -> int:
+    """Run one service process: open the session, serve `body(ctx)`, close cleanly. Returns an exit code."""
+    log = get_logger(name)
+    try:
+        settings = BusSettings.from_env(robot=robot, connect=connect)
+    except ConfigError as exc:
+        log.error("configuration error", error=str(exc))
+        return 2
+    stop_requested = threading.Event()
+    ctx_box: list[ServiceContext] = []
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        if stop_requested.is_set():  # second Ctrl-C: the user means it
+            log.warning("second signal, exiting now", signal=signal.Signals(signum).name)
+            os._exit(128 + signum)
+        stop_requested.set()
+        log.info("stopping", signal=signal.Signals(signum).name)
+        for ctx in ctx_box:
+            ctx.stop()
+        if not ctx_box:
+            raise KeyboardInterrupt  # still opening the session
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    try:
+        session = open_session(settings, log)
+    except KeyboardInterrupt:
+        return 0
+    ctx: ServiceContext | None = None
+    try:
+        ctx = ServiceContext(name, session, Keys(settings.robot))
+        ctx_box.append(ctx)
+        if stop_requested.is_set():
+            ctx.stop()
+        _watch_parent(ctx)
+        ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect),
+                     config_file=str(settings.config_file) if settings.config_file else None)
+        body(ctx)
+        return 0
+    except KeyboardInterrupt:
+        return 0
+    except Exception:
+        log.exception("service failed")
+        return 1
+    finally:
+        if ctx is not None:
+            ctx.close()
+        elif not session.is_closed():
+            session.close()
+        log.info("stopped")
+
+
+def _watch_parent(ctx: ServiceContext) -> None:
+    """Under the launcher, stop when the launcher is gone, even if it was SIGKILLed."""
+    raw = os.environ.get(PARENT_ENV)
+    if not raw or not raw.isdigit():
+        return
+    parent = int(raw)
+
+    def watch() -> None:
+        while not ctx.wait(0.5):
+            if os.getppid() != parent:
+                ctx.log.warning("launcher gone, stopping", launcher_pid=parent)
+                ctx.stop()
+                return
+
+    ctx.thread(watch, "parent-watch")

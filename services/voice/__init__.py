@@ -1,0 +1,1 @@
+"""The voice service (DESIGN.md, Processes)."""

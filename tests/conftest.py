@@ -1,0 +1,142 @@
+"""Shared fixtures: a real Zenoh router per test session, a unique robot id per test (so tests
+sharing the router never see each other's traffic), and service processes started as users would."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+import zenoh
+
+from schemas.keys import Keys
+from services.runtime import ServiceContext, client_config
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def wait_for(predicate: Callable[[], object], timeout: float = 10.0, interval: float = 0.02) -> object:
+    """Poll `predicate` until it returns something truthy; fail the test after `timeout` seconds."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"condition not met within {timeout} s: {predicate}")
+        time.sleep(interval)
+
+
+def _wait_port(port: int, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.05)
+    raise RuntimeError(f"router did not listen on port {port}")
+
+
+@pytest.fixture(scope="session")
+def router_endpoint() -> Iterator[str]:
+    """A zenoh-python router on a free loopback port, in its own process."""
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "services.cli.router", "--port", str(port)],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        _wait_port(port)
+        yield f"tcp/127.0.0.1:{port}"
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+@pytest.fixture
+def robot_id() -> str:
+    return f"t{uuid.uuid4().hex[:10]}"
+
+
+@pytest.fixture
+def keys(robot_id: str) -> Keys:
+    return Keys(robot_id)
+
+
+@pytest.fixture
+def bus(router_endpoint: str, keys: Keys) -> Iterator[ServiceContext]:
+    """A test-side participant on the bus (service name `tester`), closed after the test."""
+    ctx = ServiceContext("tester", zenoh.open(client_config([router_endpoint])), keys)
+    try:
+        yield ctx
+    finally:
+        ctx.close()
+
+
+def service_env(router_endpoint: str, robot_id: str, **extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("ZENOH_CONFIG", None)
+    env.update(HRI_ZENOH_CONNECT=router_endpoint, HRI_ROBOT=robot_id, PYTHONUNBUFFERED="1")
+    env.update(extra)
+    return env
+
+
+@pytest.fixture
+def start_service(
+    router_endpoint: str, robot_id: str, tmp_path: Path
+) -> Iterator[Callable[..., subprocess.Popen[bytes]]]:
+    """`start_service("vision", "--opt", env={...})` runs `python -m services.vision` on the test bus.
+
+    Its combined output goes to `tmp_path/<name>.log`; every process is stopped at teardown.
+    """
+    procs: list[subprocess.Popen[bytes]] = []
+
+    def start(name: str, *args: str, env: dict[str, str] | None = None) -> subprocess.Popen[bytes]:
+        log = open(tmp_path / f"{name}.log", "ab")  # noqa: SIM115 - closed with the process
+        proc = subprocess.Popen(
+            [sys.executable, "-m", f"services.{name}", *args],
+            cwd=ROOT,
+            env=service_env(router_endpoint, robot_id, HRI_STATE_DIR=str(tmp_path / "state"), **(env or {})),
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        proc.log_path = tmp_path / f"{name}.log"  # type: ignore[attr-defined]
+        procs.append(proc)
+        return proc
+
+    yield start
+    for proc in procs:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+    for proc in procs:
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def alive_services(ctx: ServiceContext) -> set[str]:
+    """Names of the services whose liveliness tokens are on the bus now."""
+    return {
+        ctx.keys.service_of_alive(str(r.ok.key_expr))
+        for r in ctx.session.liveliness().get(ctx.keys.alive_all, timeout=2.0)
+        if r.ok is not None
+    }
