@@ -43,6 +43,16 @@ class Keys:
         return f"{self.prefix}/vision/marks"
 
     @property
+    def vision_scene(self) -> str:
+        """Simulator control: what the synthetic scene source shows (`SceneCommand`)."""
+        return f"{self.prefix}/vision/scene"
+
+    @property
+    def reasoner_soar(self) -> str:
+        """Queryable: run a Soar command on the live agent (payload: the command, reply: its output)."""
+        return f"{self.prefix}/reasoner/soar"
+
+    @property
     def voice_command(self) -> str:
         return f"{self.prefix}/voice/command"
 

@@ -160,6 +160,12 @@ class Health(Header):
     detail: dict[str, Any] = Field(default_factory=dict)
 
 
+class SceneCommand(Header):
+    """Simulator control, not robot data: what the synthetic camera scene holds up (null: nothing)."""
+
+    shape: Shape | None = None
+
+
 MODELS: dict[str, type[Header]] = {
     m.__name__: m
     for m in (
@@ -171,6 +177,7 @@ MODELS: dict[str, type[Header]] = {
         SpeechRequest,
         SpeechState,
         Health,
+        SceneCommand,
     )
 }
 """Every top-level message model by name (the name is the encoding schema on the wire)."""
