@@ -15,6 +15,23 @@ import structlog
 _configured = False
 
 
+class _SafeStderr:
+    """stderr that never raises: a service whose log reader died (a pipe to a killed launcher)
+    must still be able to shut down cleanly instead of dying on BrokenPipeError."""
+
+    def write(self, text: str) -> int:
+        try:
+            return sys.stderr.write(text)
+        except (OSError, ValueError):
+            return 0
+
+    def flush(self) -> None:
+        try:
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            pass
+
+
 def configure_logging(level: str | None = None, fmt: str | None = None) -> None:
     global _configured
     level_name = (level or os.environ.get("HRI_LOG_LEVEL") or "info").upper()
@@ -37,7 +54,7 @@ def configure_logging(level: str | None = None, fmt: str | None = None) -> None:
             renderer,
         ],
         wrapper_class=structlog.make_filtering_bound_logger(numeric),
-        logger_factory=structlog.PrintLoggerFactory(sys.stderr),
+        logger_factory=structlog.PrintLoggerFactory(_SafeStderr()),  # type: ignore[arg-type]
         cache_logger_on_first_use=False,
     )
     _configured = True

@@ -218,6 +218,7 @@ class ServiceContext:
         with self._detail_lock:
             detail = dict(self._detail)
         detail["callback_errors"] = self.counters.callback_errors
+        detail.setdefault("pid", os.getpid())
         return Health(
             service=self.name,
             status=self._status,
@@ -370,8 +371,8 @@ def _watch_parent(ctx: ServiceContext) -> None:
     def watch() -> None:
         while not ctx.wait(0.5):
             if os.getppid() != parent:
-                ctx.log.warning("launcher gone, stopping", launcher_pid=parent)
                 ctx.stop()
+                ctx.log.warning("launcher gone, stopping", launcher_pid=parent)
                 return
 
     ctx.thread(watch, "parent-watch")

@@ -1,0 +1,161 @@
+"""The shared Zenoh runtime over a real router: typed pub/sub, rejection, health, liveliness, config."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import zenoh
+
+from schemas import Health, HealthStatus, Keys, MarkObservation, VoiceCommand
+from services.runtime import BusSettings, ConfigError, ServiceContext, client_config, decode
+from tests.conftest import ROOT, alive_services, free_port, service_env, wait_for
+
+
+@pytest.fixture
+def peer(router_endpoint: str, keys: Keys):
+    ctx = ServiceContext("peer", zenoh.open(client_config([router_endpoint])), keys)
+    yield ctx
+    ctx.close()
+
+
+def test_typed_messages_arrive_validated_and_numbered(bus: ServiceContext, peer: ServiceContext) -> None:
+    got: list[VoiceCommand] = []
+    encodings: list[str] = []
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, got.append)
+    bus.session.declare_subscriber(bus.keys.voice_command, lambda s: encodings.append(str(s.encoding)))
+    pub = peer.publisher(peer.keys.voice_command, VoiceCommand)
+    time.sleep(0.3)
+    for word in ("stand", "go"):
+        pub.put(VoiceCommand(command=word, text=word, confidence=0.9, engine="test"))
+    wait_for(lambda: len(got) == 2)
+    assert [m.command.value for m in got] == ["stand", "go"]
+    assert [m.seq for m in got] == [1, 2]
+    assert encodings[0] == "application/json;VoiceCommand"
+    assert peer.counters.published == 2 and bus.counters.received >= 2
+
+
+def test_bad_payloads_are_counted_and_dropped(bus: ServiceContext, peer: ServiceContext) -> None:
+    got: list[MarkObservation] = []
+    bus.subscribe(bus.keys.vision_marks, MarkObservation, got.append)
+    time.sleep(0.3)
+    for garbage in (b"not json", b"{}", b'{"marks":[{"shape":"STAR","confidence":1,"box":[0,0,1,1]}]}',
+                    b"\xff\xfe", b'{"marks": "X"}'):
+        peer.session.put(peer.keys.vision_marks, garbage)
+    peer.session.put(peer.keys.vision_marks, MarkObservation(frame=9).model_dump_json())
+    wait_for(lambda: len(got) == 2)
+    assert [m.frame for m in got] == [0, 9]  # "{}" is a valid observation: every field has a default
+    assert bus.counters.rejected == 4
+
+
+def test_a_failing_callback_is_counted_not_fatal(bus: ServiceContext, peer: ServiceContext) -> None:
+    calls: list[int] = []
+
+    def explode(msg: VoiceCommand) -> None:
+        calls.append(msg.seq)
+        raise RuntimeError("boom")
+
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, explode)
+    pub = peer.publisher(peer.keys.voice_command, VoiceCommand)
+    time.sleep(0.3)
+    pub.put(VoiceCommand(command="go", confidence=1))
+    pub.put(VoiceCommand(command="go", confidence=1))
+    wait_for(lambda: len(calls) == 2)
+    assert bus.counters.callback_errors == 2
+
+
+def test_latest_only_subscriber_skips_to_the_newest(bus: ServiceContext, peer: ServiceContext) -> None:
+    seen: list[int] = []
+
+    def slow(msg: MarkObservation) -> None:
+        seen.append(msg.frame)
+        time.sleep(0.2)
+
+    bus.subscribe(bus.keys.vision_marks, MarkObservation, slow, latest_only=True)
+    pub = peer.publisher(peer.keys.vision_marks, MarkObservation)
+    time.sleep(0.3)
+    for frame in range(1, 51):
+        pub.put(MarkObservation(frame=frame))
+    wait_for(lambda: seen and seen[-1] == 50, timeout=5)
+    assert len(seen) < 10, seen
+
+
+def test_health_queryable_and_liveliness(bus: ServiceContext, peer: ServiceContext) -> None:
+    peer.set_status(HealthStatus.DEGRADED, device="camera:0 missing")
+    replies = list(bus.session.get(bus.keys.health("peer"), timeout=2))
+    health = decode(replies[0].ok.payload.to_bytes(), Health)
+    assert health.service == "peer" and health.status is HealthStatus.DEGRADED
+    assert health.detail["device"] == "camera:0 missing"
+    assert wait_for(lambda: {"peer", "tester"} <= alive_services(bus))
+    peer.close()
+    wait_for(lambda: "peer" not in alive_services(bus), timeout=5)
+
+
+def test_settings_from_environment(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.delenv("ZENOH_CONFIG", raising=False)
+    monkeypatch.delenv("HRI_ZENOH_CONNECT", raising=False)
+    monkeypatch.delenv("HRI_ROBOT", raising=False)
+    s = BusSettings.from_env()
+    assert s.robot == "op2" and s.connect == ("tcp/127.0.0.1:7447",) and s.config_file is None
+    conf = s.zenoh_config()
+    assert conf.get_json("mode") == '"client"'
+    assert conf.get_json("scouting/multicast/enabled") == "false"
+
+    monkeypatch.setenv("HRI_ZENOH_CONNECT", "tcp/10.0.0.2:7447, tcp/10.0.0.3:7447")
+    monkeypatch.setenv("HRI_ROBOT", "op2-b")
+    s = BusSettings.from_env()
+    assert s.connect == ("tcp/10.0.0.2:7447", "tcp/10.0.0.3:7447") and s.robot == "op2-b"
+
+    cfg = tmp_path / "z.json5"
+    cfg.write_text('{ mode: "peer", scouting: { multicast: { enabled: false } } }')
+    monkeypatch.setenv("ZENOH_CONFIG", str(cfg))
+    s = BusSettings.from_env()
+    assert s.config_file == cfg and s.zenoh_config().get_json("mode") == '"peer"'
+
+    monkeypatch.setenv("ZENOH_CONFIG", str(tmp_path / "missing.json5"))
+    with pytest.raises(ConfigError, match="ZENOH_CONFIG"):
+        BusSettings.from_env()
+    monkeypatch.delenv("ZENOH_CONFIG")
+    monkeypatch.setenv("HRI_ZENOH_CONNECT", "127.0.0.1:7447")
+    with pytest.raises(ConfigError, match="no protocol"):
+        BusSettings.from_env()
+    monkeypatch.setenv("HRI_ZENOH_CONNECT", "tcp/127.0.0.1:7447")
+    monkeypatch.setenv("HRI_ROBOT", "a/b")
+    with pytest.raises(ConfigError, match="HRI_ROBOT"):
+        BusSettings.from_env()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_service_stops_cleanly_on_signal(start_service, bus: ServiceContext, sig: signal.Signals) -> None:
+    proc = start_service("speech")
+    wait_for(lambda: "speech" in alive_services(bus), timeout=15)
+    t0 = time.monotonic()
+    proc.send_signal(sig)
+    assert proc.wait(5) == 0
+    assert time.monotonic() - t0 < 3
+    assert b"stopped" in proc.log_path.read_bytes()
+    wait_for(lambda: "speech" not in alive_services(bus), timeout=5)
+
+
+def test_service_without_a_router_retries_and_still_stops(robot_id: str) -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"  # nobody listens here
+    proc = subprocess.Popen([sys.executable, "-m", "services.speech"], cwd=ROOT,
+                            env=service_env(endpoint, robot_id), stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT)
+    time.sleep(2.5)
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=10)
+    assert proc.returncode == 0
+    assert b"no zenoh router yet" in out and endpoint.encode() in out
+
+
+def test_bad_configuration_is_a_clear_error(router_endpoint: str, robot_id: str) -> None:
+    env = service_env(router_endpoint, robot_id, HRI_ZENOH_CONNECT="localhost:7447")
+    out = subprocess.run([sys.executable, "-m", "services.vision"], cwd=ROOT, env=env,
+                         capture_output=True, timeout=30)
+    assert out.returncode == 2
+    assert b"no protocol" in out.stderr
