@@ -1,0 +1,321 @@
+"""Find X, O and triangle marks with contour shape features (no keypoints, no learned model).
+
+A mark is dark ink on a light card: a ring (O), a triangle outline (TRIANGLE) or two crossed bars (X).
+Per frame, on a two-level pyramid (full resolution for small marks, a quarter for large ones):
+
+1. grey image -> adaptive mean threshold (ink = darker than its neighbourhood by `offset`), which
+   copes with uneven lighting;
+2. connected components, filtered by size, aspect and fill ratio in one vectorised pass;
+3. per surviving component: its outer contour and holes, then shape tests that survive rotation,
+   perspective and blur -
+   O: one hole, outer and hole both ellipses (small fit residual), concentric;
+   TRIANGLE: one hole, outer and hole both fill their minimum enclosing triangle, concentric;
+   X: no hole, exactly four deep convexity defects clustered at the centre, four arms of similar
+   length, solidity of a bar cross;
+4. context: the mark must be isolated on a clean light surround (a margin of `surround` times its
+   size with almost no other ink, clearly brighter than the ink), and a ring's or triangle's hole
+   must be empty - this rejects letters inside words, faces, eyes, and shapes on cluttered texture;
+5. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
+
+A filled disc, a square (outline or filled) or a filled triangle is not a mark.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from schemas.messages import Mark, Shape
+
+Box = tuple[int, int, int, int]
+
+
+@dataclass(frozen=True)
+class DetectorConfig:
+    scales: tuple[int, ...] = (1, 4)  # pyramid factors: full resolution, then 1/4 for large marks
+    block: int = 31  # adaptive-threshold window, pixels at each scale (odd)
+    offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
+    min_size: int = 12  # smallest mark width/height in pixels at a scale
+    max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
+    surround: float = 0.15  # clear margin around a mark, as a fraction of its size
+    max_surround_ink: float = 0.06  # fraction of the margin that may be ink
+    max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
+    min_confidence: float = 0.5
+    overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
+
+
+@dataclass(frozen=True)
+class Detection:
+    shape: Shape
+    confidence: float
+    box: Box  # x, y, w, h in pixels of the input image
+
+    def to_mark(self) -> Mark:
+        return Mark(shape=self.shape, confidence=round(self.confidence, 4), box=self.box)
+
+
+@dataclass(frozen=True)
+class _Blob:
+    """One component at one scale, with its contours relative to the ROI origin."""
+
+    outer: np.ndarray
+    holes: list[np.ndarray]
+    area: float  # area enclosed by the outer contour
+    size: float  # max(w, h) at this scale
+
+
+class MarkDetector:
+    """Stateless per frame; safe to reuse for every frame of a stream (not across threads)."""
+
+    def __init__(self, config: DetectorConfig | None = None) -> None:
+        self.config = config or DetectorConfig()
+        if self.config.block % 2 == 0 or self.config.block < 3:
+            raise ValueError(f"block must be odd and >= 3, got {self.config.block}")
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        gray = to_gray(image)
+        found: list[Detection] = []
+        for f in self.config.scales:
+            if f == 1:
+                g = cv2.GaussianBlur(gray, (3, 3), 0)
+            else:
+                w, h = gray.shape[1] // f, gray.shape[0] // f
+                if min(w, h) < 2 * self.config.min_size:
+                    continue
+                g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
+            for det in self._detect_scale(g):
+                x, y, w, h = det.box
+                found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
+        return _merge(found, self.config.overlap)
+
+    # ------------------------------------------------------------------ one pyramid level
+    def _detect_scale(self, g: np.ndarray) -> list[Detection]:
+        cfg = self.config
+        binary = cv2.adaptiveThreshold(g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV,
+                                       cfg.block, cfg.offset)
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+        if n <= 1:
+            return []
+        H, W = g.shape
+        x, y, w, h, area = (stats[:, i] for i in range(5))
+        fill = area / np.maximum(w * h, 1)
+        long_side, short_side = np.maximum(w, h), np.minimum(w, h)
+        keep = (
+            (short_side >= cfg.min_size)
+            & (long_side <= 0.98 * min(H, W))
+            & (long_side <= cfg.max_aspect * short_side)
+            & (fill >= 0.08) & (fill <= 0.72)
+            & (x > 0) & (y > 0) & (x + w < W) & (y + h < H)  # cut by the frame edge: not judged
+        )
+        keep[0] = False  # background label
+        out: list[Detection] = []
+        for i in np.flatnonzero(keep):
+            det = self._judge(g, binary, labels, int(i), stats[i])
+            if det is not None and det.confidence >= cfg.min_confidence:
+                out.append(det)
+        return out
+
+    def _judge(self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int,
+               stat: np.ndarray) -> Detection | None:
+        cfg = self.config
+        x, y, w, h = (int(v) for v in stat[:4])
+        size = float(max(w, h))
+        pad = int(math.ceil(cfg.surround * size)) + 2
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(g.shape[1], x + w + pad), min(g.shape[0], y + h + pad)
+        comp = np.where(labels[y0:y1, x0:x1] == i, np.uint8(255), np.uint8(0))
+        blob = _blob(comp, size)
+        if blob is None:
+            return None
+        judged = _classify(blob)
+        if judged is None:
+            return None
+        shape, conf = judged
+        filled = np.zeros_like(comp)
+        cv2.drawContours(filled, [blob.outer], -1, 255, cv2.FILLED)
+        bin_roi = binary[y0:y1, x0:x1]
+        if blob.holes and not _holes_empty(filled, comp, bin_roi):
+            return None
+        m = int(math.ceil(cfg.surround * size))
+        grown = cv2.dilate(filled, cv2.getStructuringElement(cv2.MORPH_RECT, (2 * m + 1, 2 * m + 1)))
+        ring = cv2.subtract(grown, filled)
+        ring_n = cv2.countNonZero(ring)
+        if ring_n == 0:
+            return None
+        if cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.max_surround_ink * ring_n:
+            return None
+        g_roi = g[y0:y1, x0:x1]
+        paper = cv2.mean(g_roi, mask=ring)[0]
+        ink = cv2.mean(g_roi, mask=comp)[0]
+        if paper < 20 or ink > cfg.max_contrast_ratio * paper:
+            return None
+        return Detection(shape, conf, (x, y, w, h))
+
+
+def to_gray(image: np.ndarray) -> np.ndarray:
+    """A uint8 single-channel view of a BGR, BGRA or grey image; ValueError for anything else."""
+    if not isinstance(image, np.ndarray) or image.size == 0:
+        raise ValueError("not an image: empty or not a numpy array")
+    if image.dtype != np.uint8:
+        raise ValueError(f"expected an 8-bit image, got dtype {image.dtype}")
+    if image.ndim == 2:
+        return image
+    if image.ndim == 3 and image.shape[2] == 3:
+        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    if image.ndim == 3 and image.shape[2] == 4:
+        return cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY)
+    if image.ndim == 3 and image.shape[2] == 1:
+        return image[:, :, 0]
+    raise ValueError(f"unsupported image shape {image.shape}")
+
+
+# ---------------------------------------------------------------------- features
+def _blob(comp: np.ndarray, size: float) -> _Blob | None:
+    contours, hier = cv2.findContours(comp, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if not contours or hier is None:
+        return None
+    hier = hier[0]
+    tops = [j for j in range(len(contours)) if hier[j][3] < 0]
+    outer_idx = max(tops, key=lambda j: len(contours[j]))
+    outer = contours[outer_idx]
+    area = cv2.contourArea(outer)
+    if area <= 0 or len(outer) < 8:
+        return None
+    holes = [contours[j] for j in range(len(contours))
+             if hier[j][3] == outer_idx and cv2.contourArea(contours[j]) >= 0.02 * area]
+    return _Blob(outer, holes, area, size)
+
+
+def _classify(b: _Blob) -> tuple[Shape, float] | None:
+    if len(b.holes) == 1:
+        return _ring_like(b)
+    if not b.holes:
+        return _cross(b)
+    return None
+
+
+def _ring_like(b: _Blob) -> tuple[Shape, float] | None:
+    hole = b.holes[0]
+    hole_area = cv2.contourArea(hole)
+    ratio = hole_area / b.area
+    if not 0.08 <= ratio <= 0.85 or len(hole) < 6:
+        return None
+    offset = float(np.hypot(*(_centroid(b.outer) - _centroid(hole)))) / b.size
+    # O: both contours are ellipses
+    e_out = _ellipse_residual(b.outer)
+    e_in = _ellipse_residual(hole)
+    if e_out is not None and e_in is not None and e_out <= 0.05 and e_in <= 0.08 and offset <= 0.1 \
+            and 0.15 <= ratio <= 0.85 and _axis_ratio(b.outer) >= 0.3:
+        badness = max(e_out / 0.05, e_in / 0.08, offset / 0.1)
+        return Shape.O, 1.0 - 0.5 * badness
+    # TRIANGLE: both contours fill their minimum enclosing triangle
+    t_out = _triangle_fill(b.outer, b.area)
+    t_in = _triangle_fill(hole, hole_area)
+    if t_out >= 0.84 and t_in >= 0.72 and offset <= 0.12 and ratio <= 0.8:
+        badness = max((1 - t_out) / 0.16, (1 - t_in) / 0.28, offset / 0.12)
+        return Shape.TRIANGLE, 1.0 - 0.5 * badness
+    return None
+
+
+def _cross(b: _Blob) -> tuple[Shape, float] | None:
+    hull_pts = cv2.convexHull(b.outer)
+    hull_area = cv2.contourArea(hull_pts)
+    if hull_area <= 0:
+        return None
+    solidity = b.area / hull_area
+    if not 0.18 <= solidity <= 0.68:
+        return None
+    try:
+        hull_idx = cv2.convexHull(b.outer, returnPoints=False)
+        defects = cv2.convexityDefects(b.outer, hull_idx)
+    except cv2.error:  # a self-touching contour
+        return None
+    if defects is None:
+        return None
+    scale = math.sqrt(hull_area)
+    d = defects[:, 0, :]
+    deep = d[d[:, 3] / 256.0 >= 0.1 * scale]
+    if len(deep) != 4:
+        return None
+    pts = b.outer[:, 0, :].astype(np.float64)
+    far = pts[deep[:, 2]]
+    centre = far.mean(axis=0)
+    hull_c = _centroid(hull_pts)
+    offset = float(np.hypot(*(centre - hull_c))) / scale
+    spread = float(np.max(np.hypot(*(far - centre).T))) / scale
+    if offset > 0.15 or spread > 0.3:
+        return None
+    # the four arms: contour runs between consecutive defect points, each with its farthest tip
+    order = np.sort(deep[:, 2])
+    arms = []
+    for k in range(4):
+        a, z = order[k], order[(k + 1) % 4]
+        seg = pts[a:z + 1] if z > a else np.concatenate([pts[a:], pts[:z + 1]])
+        arms.append(float(np.max(np.hypot(*(seg - centre).T))))
+    arm_ratio = min(arms) / max(arms)
+    if arm_ratio < 0.45:
+        return None
+    badness = max(offset / 0.15, spread / 0.3, (1 - arm_ratio) / 0.55)
+    return Shape.X, 1.0 - 0.5 * badness
+
+
+def _holes_empty(filled: np.ndarray, comp: np.ndarray, bin_roi: np.ndarray) -> bool:
+    """No other ink inside the holes (a ring with eyes in it is a face, not an O)."""
+    inside = cv2.subtract(filled, comp)  # the holes
+    n = cv2.countNonZero(inside)
+    if n == 0:
+        return False
+    return cv2.countNonZero(cv2.bitwise_and(inside, bin_roi)) <= 0.03 * n
+
+
+def _centroid(c: np.ndarray) -> np.ndarray:
+    m = cv2.moments(c)
+    if m["m00"] == 0:
+        return c.reshape(-1, 2).mean(axis=0)
+    return np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]])
+
+
+def _ellipse_residual(c: np.ndarray) -> float | None:
+    """Mean |r - 1| of the contour points in the frame of the fitted ellipse (0 for an ellipse)."""
+    if len(c) < 6:
+        return None
+    (cx, cy), (ma, mb), ang = cv2.fitEllipse(c)
+    if ma <= 1 or mb <= 1:
+        return None
+    p = c.reshape(-1, 2).astype(np.float64) - (cx, cy)
+    t = math.radians(ang)
+    u = (p[:, 0] * math.cos(t) + p[:, 1] * math.sin(t)) / (ma / 2)
+    v = (-p[:, 0] * math.sin(t) + p[:, 1] * math.cos(t)) / (mb / 2)
+    return float(np.mean(np.abs(np.hypot(u, v) - 1.0)))
+
+
+def _axis_ratio(c: np.ndarray) -> float:
+    _, (ma, mb), _ = cv2.fitEllipse(c)
+    return min(ma, mb) / max(ma, mb, 1e-9)
+
+
+def _triangle_fill(c: np.ndarray, area: float) -> float:
+    try:
+        tri_area, _ = cv2.minEnclosingTriangle(c.astype(np.float32))
+    except cv2.error:
+        return 0.0
+    return float(area / tri_area) if tri_area > 0 else 0.0
+
+
+def _merge(dets: list[Detection], overlap: float) -> list[Detection]:
+    """Greedy: best confidence first; drop any detection mostly overlapping one already kept."""
+    kept: list[Detection] = []
+    for d in sorted(dets, key=lambda d: -d.confidence):
+        if all(_overlap(d.box, k.box) <= overlap for k in kept):
+            kept.append(d)
+    return kept
+
+
+def _overlap(a: Box, b: Box) -> float:
+    ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    smaller = min(a[2] * a[3], b[2] * b[3])
+    return ix * iy / smaller if smaller > 0 else 0.0

@@ -1,0 +1,475 @@
+"""Synthetic camera frames: X, O and triangle marks on hand-held cards in front of cluttered scenes.
+
+Each frame is labelled (the mark's shape and its box in pixels), so the generator serves the tests,
+the benchmark and the `synthetic:` source of the service. Variations: rotation, perspective tilt,
+scale (a small card across the room to one filling the frame), uneven lighting, motion blur, sensor
+noise, JPEG artefacts, and distractors (squares, discs, letters and text, faces, cables, textures,
+and cards that carry a non-mark). Backgrounds come from scikit-image's bundled sample images when
+scikit-image is importable, otherwise they are procedural.
+"""
+
+from __future__ import annotations
+
+import math
+import string
+from dataclasses import dataclass, field, replace
+
+import cv2
+import numpy as np
+
+from schemas.messages import Shape
+from services.runtime import get_logger
+
+log = get_logger("vision.synthetic")
+
+Box = tuple[int, int, int, int]
+Rng = np.random.Generator
+
+SKIMAGE_BACKGROUNDS: tuple[str, ...] = (
+    "astronaut", "brick", "camera", "chelsea", "coffee", "coins", "grass", "gravel",
+    "moon", "page", "text", "rocket", "clock", "hubble_deep_field", "immunohistochemistry",
+)
+DISTRACTORS: tuple[str, ...] = ("square", "disc", "text", "face", "cable", "texture", "card")
+
+
+@dataclass(frozen=True)
+class Label:
+    """Ground truth of one mark in a frame."""
+
+    shape: Shape
+    box: Box
+
+
+@dataclass(frozen=True)
+class Variation:
+    """Ranges the generator samples from. Narrow one to test a single variation."""
+
+    size: tuple[float, float] = (26.0, 380.0)  # mark width in pixels, sampled log-uniformly
+    rotation_deg: float = 180.0  # in-plane rotation, uniform in +-this
+    tilt_deg: float = 50.0  # out-of-plane tilt, uniform in 0..this
+    light: float = 0.6  # uneven lighting strength, 0 (flat) .. 1 (strong gradient and shadow)
+    dim: tuple[float, float] = (0.45, 1.1)  # overall exposure gain
+    blur: float = 7.0  # longest motion blur, pixels
+    noise: float = 10.0  # largest Gaussian sensor-noise sigma, grey levels
+    jpeg: tuple[int, int] = (45, 95)  # JPEG quality range (0 disables)
+    distractors: tuple[int, int] = (2, 7)  # how many clutter objects
+    kinds: tuple[str, ...] = DISTRACTORS
+
+    def only(self, **changes: object) -> Variation:
+        return replace(self, **changes)  # type: ignore[arg-type]
+
+
+MILD = Variation(size=(60.0, 160.0), rotation_deg=0.0, tilt_deg=0.0, light=0.0, dim=(1.0, 1.0),
+                 blur=0.0, noise=2.0, jpeg=(0, 0), distractors=(0, 0))
+"""A clean scene: one variation at a time is added to this in the tests."""
+
+
+@dataclass
+class Scene:
+    """One sampled scene: everything but the per-frame noise is fixed, so a held card stays put."""
+
+    background: np.ndarray  # BGR, distractors drawn, before lighting
+    shape: Shape | None
+    size: float
+    stroke: float  # stroke width as a fraction of the mark width
+    rotation_deg: float
+    tilt: tuple[float, float]  # degrees about x and y
+    center: tuple[float, float]
+    card: tuple[float, float]  # card width and height as multiples of the mark width
+    paper: tuple[int, int, int]
+    ink: tuple[int, int, int]
+    light: np.ndarray  # float32 gain, HxW
+    blur: tuple[float, float]  # motion blur length (px) and angle (deg)
+    noise: float
+    jpeg: int
+    skew: float = 0.0  # hand-drawn irregularity: X arm angle offset (deg)
+    hand: bool = True
+    extras: dict[str, float] = field(default_factory=dict)
+
+
+class SceneGenerator:
+    """Renders labelled frames. Deterministic for a given seed."""
+
+    def __init__(self, width: int = 640, height: int = 480, seed: int = 0,
+                 variation: Variation = Variation(), use_skimage: bool = True) -> None:
+        self.width = width
+        self.height = height
+        self.variation = variation
+        self.rng = np.random.default_rng(seed)
+        self.bank = _load_backgrounds() if use_skimage else []
+        self.face = _load_face() if use_skimage else None
+
+    # ------------------------------------------------------------------ public
+    def frame(self, shape: Shape | None) -> tuple[np.ndarray, list[Label]]:
+        """A fresh random scene holding `shape` (or nothing), rendered once."""
+        return self.render(self.scene(shape))
+
+    def scene(self, shape: Shape | None) -> Scene:
+        v, rng = self.variation, self.rng
+        size = float(math.exp(rng.uniform(math.log(v.size[0]), math.log(v.size[1]))))
+        size = min(size, 0.9 * min(self.width, self.height))
+        card = (rng.uniform(1.5, 2.1), 0.0)
+        card = (card[0], card[0] * rng.uniform(1.0, 1.35))
+        tilt_mag = rng.uniform(0, v.tilt_deg)
+        tilt_dir = rng.uniform(0, 2 * math.pi)
+        margin = 0.62 * size
+        cx = rng.uniform(margin, self.width - margin) if self.width > 2 * margin else self.width / 2
+        cy = rng.uniform(margin, self.height - margin) if self.height > 2 * margin else self.height / 2
+        paper_level = int(rng.integers(205, 256))
+        tint = rng.integers(-12, 6, size=3)
+        return Scene(
+            background=self._background(),
+            shape=shape,
+            size=size,
+            stroke=float(rng.uniform(0.11, 0.19)),
+            rotation_deg=float(rng.uniform(-v.rotation_deg, v.rotation_deg)),
+            tilt=(tilt_mag * math.cos(tilt_dir), tilt_mag * math.sin(tilt_dir)),
+            center=(float(cx), float(cy)),
+            card=card,
+            paper=tuple(int(np.clip(paper_level + t, 0, 255)) for t in tint),  # type: ignore[arg-type]
+            ink=tuple(int(x) for x in rng.integers(0, 60, size=3)),  # type: ignore[arg-type]
+            light=self._lighting(v.light),
+            blur=(float(rng.uniform(0, v.blur)), float(rng.uniform(0, 180))),
+            noise=float(rng.uniform(0, v.noise)),
+            jpeg=int(rng.integers(v.jpeg[0], v.jpeg[1] + 1)) if v.jpeg[1] > 0 else 0,
+            skew=float(rng.uniform(-10, 10)),
+            hand=bool(rng.random() < 0.6),
+        )
+
+    def render(self, scene: Scene, jitter: float = 0.0) -> tuple[np.ndarray, list[Label]]:
+        """Render `scene`; `jitter` moves the card by up to that many pixels (a hand is never still)."""
+        img = scene.background.copy()
+        labels: list[Label] = []
+        if scene.shape is not None:
+            center = scene.center
+            if jitter:
+                center = (center[0] + self.rng.uniform(-jitter, jitter),
+                          center[1] + self.rng.uniform(-jitter, jitter))
+            box = self._draw_card(img, scene, center)
+            if box is not None:
+                labels.append(Label(scene.shape, box))
+        out = cv2.multiply(img.astype(np.float32), cv2.merge([scene.light] * 3))
+        out = _motion_blur(out, *scene.blur)
+        if scene.noise > 0:
+            noise = self.rng.standard_normal(out.shape, dtype=np.float32)
+            out = cv2.scaleAdd(noise, scene.noise, out)
+        frame = np.clip(out, 0, 255, out=out).astype(np.uint8)
+        if scene.jpeg:
+            ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, scene.jpeg])
+            if ok:
+                frame = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        return frame, labels
+
+    # ------------------------------------------------------------------ background and clutter
+    def _background(self) -> np.ndarray:
+        rng, w, h = self.rng, self.width, self.height
+        if self.bank and rng.random() < 0.85:
+            src = self.bank[int(rng.integers(len(self.bank)))]
+            scale = max(w / src.shape[1], h / src.shape[0]) * rng.uniform(1.0, 1.6)
+            big = cv2.resize(src, None, fx=scale, fy=scale, interpolation=cv2.INTER_LINEAR)
+            y0 = int(rng.integers(0, big.shape[0] - h + 1))
+            x0 = int(rng.integers(0, big.shape[1] - w + 1))
+            img = np.ascontiguousarray(big[y0:y0 + h, x0:x0 + w])
+            if rng.random() < 0.5:
+                img = np.ascontiguousarray(img[:, ::-1])
+        else:
+            img = _procedural_background(rng, w, h)
+        lo, hi = self.variation.distractors
+        for _ in range(int(rng.integers(lo, hi + 1))):
+            kind = self.variation.kinds[int(rng.integers(len(self.variation.kinds)))]
+            self._distractor(img, kind)
+        return img
+
+    def _distractor(self, img: np.ndarray, kind: str) -> None:
+        rng, w, h = self.rng, self.width, self.height
+        cx, cy = float(rng.uniform(0, w)), float(rng.uniform(0, h))
+        size = float(math.exp(rng.uniform(math.log(20), math.log(220))))
+        colour = _dark_or_any(rng)
+        if kind == "square":
+            pts = _rotated_rect(cx, cy, size, size * rng.uniform(0.8, 1.2), rng.uniform(0, 90))
+            if rng.random() < 0.5:
+                cv2.fillPoly(img, [pts], colour, cv2.LINE_AA)
+            else:
+                cv2.polylines(img, [pts], True, colour, max(2, int(size * rng.uniform(0.08, 0.2))), cv2.LINE_AA)
+        elif kind == "disc":
+            cv2.circle(img, (int(cx), int(cy)), int(size / 2), colour, -1, cv2.LINE_AA)
+        elif kind == "text":
+            _draw_text(img, rng, (int(cx) - 100, int(cy)), colour)
+        elif kind == "face":
+            self._draw_face(img, cx, cy, size * 1.5)
+        elif kind == "cable":
+            pts = _bezier(rng, w, h)
+            cv2.polylines(img, [pts], False, colour, int(rng.integers(2, 12)), cv2.LINE_AA)
+        elif kind == "texture":
+            _draw_texture(img, rng, cx, cy, size * 1.5)
+        elif kind == "card":
+            self._draw_decoy_card(img, cx, cy, size)
+
+    def _draw_decoy_card(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
+        """A white card carrying a non-mark: square, filled disc, filled square or a word."""
+        rng = self.rng
+        side = size * 1.8
+        card = np.full((int(side), int(side), 3), int(rng.integers(200, 256)), np.uint8)
+        c = side / 2
+        ink = tuple(int(x) for x in rng.integers(0, 60, size=3))
+        what = rng.integers(4)
+        t = max(2, int(size * rng.uniform(0.1, 0.18)))
+        if what == 0:
+            cv2.polylines(card, [_rotated_rect(c, c, size, size, 0)], True, ink, t, cv2.LINE_AA)
+        elif what == 1:
+            cv2.circle(card, (int(c), int(c)), int(size / 2), ink, -1, cv2.LINE_AA)
+        elif what == 2:
+            cv2.fillPoly(card, [_rotated_rect(c, c, size, size, 0)], ink, cv2.LINE_AA)
+        else:
+            word = "".join(rng.choice(list("AOXVTKQDRB"), size=int(rng.integers(3, 6))))
+            scale = side / (40 * len(word))
+            cv2.putText(card, word, (int(side * 0.05), int(c + 10 * scale)), cv2.FONT_HERSHEY_SIMPLEX,
+                        scale, ink, max(1, int(2 * scale)), cv2.LINE_AA)
+        h_mat = _card_homography(side, side, (cx, cy), 1.0, rng.uniform(-180, 180),
+                                 (rng.uniform(-30, 30), rng.uniform(-30, 30)))
+        _paste_warped(img, card, h_mat)
+
+    def _draw_face(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
+        size = max(size, 40.0)
+        if self.face is not None:
+            face = cv2.resize(self.face, (int(size), int(size * 1.2)), interpolation=cv2.INTER_AREA)
+            _paste(img, face, int(cx - size / 2), int(cy - size * 0.6))
+            return
+        # procedural: skin-coloured oval with eyes, brows and a mouth
+        c = (int(cx), int(cy))
+        cv2.ellipse(img, c, (int(size / 2), int(size * 0.6)), 0, 0, 360, (140, 170, 220), -1, cv2.LINE_AA)
+        for dx in (-0.2, 0.2):
+            e = (int(cx + dx * size), int(cy - 0.1 * size))
+            cv2.ellipse(img, e, (int(size * 0.08), int(size * 0.05)), 0, 0, 360, (255, 255, 255), -1)
+            cv2.circle(img, e, max(1, int(size * 0.035)), (40, 30, 20), -1, cv2.LINE_AA)
+        cv2.ellipse(img, (c[0], int(cy + 0.25 * size)), (int(size * 0.18), int(size * 0.07)), 0, 0, 180,
+                    (40, 40, 120), max(1, int(size * 0.03)), cv2.LINE_AA)
+
+    def _lighting(self, strength: float) -> np.ndarray:
+        rng, v = self.rng, self.variation
+        gw, gh = 32, 24
+        yy, xx = np.mgrid[0:gh, 0:gw].astype(np.float32)
+        gain = np.full((gh, gw), rng.uniform(*v.dim), np.float32)
+        if strength > 0:
+            ang = rng.uniform(0, 2 * math.pi)
+            ramp = (math.cos(ang) * (xx / gw - 0.5) + math.sin(ang) * (yy / gh - 0.5))
+            gain *= 1.0 + strength * 0.9 * ramp
+            # a soft shadow or a bright spot somewhere
+            sx, sy, sr = rng.uniform(0, gw), rng.uniform(0, gh), rng.uniform(4, 12)
+            blob = np.exp(-((xx - sx) ** 2 + (yy - sy) ** 2) / (2 * sr * sr))
+            gain *= 1.0 + strength * rng.uniform(-0.5, 0.3) * blob
+        gain = np.clip(gain, 0.2, 1.4)
+        return cv2.resize(gain, (self.width, self.height), interpolation=cv2.INTER_CUBIC)
+
+    # ------------------------------------------------------------------ the mark
+    def _draw_card(self, img: np.ndarray, scene: Scene, center: tuple[float, float]) -> Box | None:
+        s = scene.size
+        # supersample small cards so the anti-aliased mark stays crisp before warping
+        k = 4.0 if s < 80 else 2.0 if s < 160 else 1.0
+        cw, ch = scene.card[0] * s * k, scene.card[1] * s * k
+        card = np.empty((int(ch), int(cw), 3), np.uint8)
+        card[:] = scene.paper
+        mark_pts = _draw_mark(card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k,
+                              scene.ink, scene.skew)
+        if scene.hand:
+            hc = (int(cw * self.rng.uniform(0.3, 0.7)), int(ch))
+            cv2.ellipse(card, hc, (int(cw * 0.16), int(ch * 0.14)), 0, 0, 360, (120, 150, 200), -1,
+                        cv2.LINE_AA)
+        h_mat = _card_homography(card.shape[1], card.shape[0], center, 1.0 / k, scene.rotation_deg,
+                                 scene.tilt)
+        _paste_warped(img, card, h_mat)
+        proj = cv2.perspectiveTransform(mark_pts.reshape(-1, 1, 2).astype(np.float64), h_mat).reshape(-1, 2)
+        x0, y0 = np.floor(proj.min(axis=0))
+        x1, y1 = np.ceil(proj.max(axis=0))
+        x0, y0 = max(0, int(x0)), max(0, int(y0))
+        x1, y1 = min(self.width, int(x1)), min(self.height, int(y1))
+        if x1 - x0 < 2 or y1 - y0 < 2:
+            return None
+        return (x0, y0, x1 - x0, y1 - y0)
+
+
+def _draw_mark(card: np.ndarray, shape: Shape | None, c: tuple[float, float], s: float, t: float,
+               ink: tuple[int, int, int], skew: float) -> np.ndarray:
+    """Draw the mark (width `s`, stroke `t`) centred at `c`; return its outline points for the label."""
+    cx, cy = c
+    t = max(t, 1.5)
+    if shape is Shape.O:
+        r = (s - t) / 2
+        cv2.circle(card, (int(cx), int(cy)), int(round(r)), ink, int(round(t)), cv2.LINE_AA)
+        a = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+        return np.stack([cx + (s / 2) * np.cos(a), cy + (s / 2) * np.sin(a)], axis=1)
+    if shape is Shape.TRIANGLE:
+        a = s  # side
+        r_out = a / math.sqrt(3)  # circumradius
+        verts = np.array([[cx + r_out * math.cos(math.radians(-90 + 120 * i)),
+                           cy + r_out * math.sin(math.radians(-90 + 120 * i))] for i in range(3)])
+        # centroid at c; inner triangle inset by the stroke width
+        inr = a / (2 * math.sqrt(3))
+        inner = c + (verts - c) * max(0.05, (inr - t) / inr)
+        cv2.fillPoly(card, [_fixed(verts)], ink, cv2.LINE_AA, shift=4)
+        paper = tuple(int(x) for x in card[0, 0])
+        cv2.fillPoly(card, [_fixed(inner)], paper, cv2.LINE_AA, shift=4)
+        return verts
+    if shape is Shape.X:
+        h = s / 2 - t / 2
+        pts = []
+        for ang in (45 + skew / 2, 135 - skew / 2):
+            dx, dy = h * math.cos(math.radians(ang)) * math.sqrt(2), h * math.sin(math.radians(ang)) * math.sqrt(2)
+            dx, dy = np.clip([dx, dy], -h, h)
+            p0, p1 = (cx - dx, cy - dy), (cx + dx, cy + dy)
+            cv2.line(card, (int(p0[0] * 16), int(p0[1] * 16)), (int(p1[0] * 16), int(p1[1] * 16)), ink,
+                     int(round(t)), cv2.LINE_AA, shift=4)
+            for p in (p0, p1):
+                pts += [(p[0] + ox, p[1] + oy) for ox, oy in ((t / 2, t / 2), (-t / 2, -t / 2),
+                                                               (t / 2, -t / 2), (-t / 2, t / 2))]
+        return np.array(pts)
+    return np.array([[cx, cy]])
+
+
+def _fixed(pts: np.ndarray) -> np.ndarray:
+    return np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2)
+
+
+def _card_homography(w: float, h: float, center: tuple[float, float], scale: float, rot_deg: float,
+                     tilt_deg: tuple[float, float], focal: float = 700.0) -> np.ndarray:
+    """Homography taking card pixels to frame pixels: scale, rotate in plane, tilt in 3-D, project."""
+    src = np.array([[0, 0], [w, 0], [w, h], [0, h]], np.float64)
+    pts = (src - [w / 2, h / 2]) * scale
+    pts3 = np.concatenate([pts, np.zeros((4, 1))], axis=1)
+    r = math.radians(rot_deg)
+    rz = np.array([[math.cos(r), -math.sin(r), 0], [math.sin(r), math.cos(r), 0], [0, 0, 1]])
+    ax, ay = (math.radians(a) for a in tilt_deg)
+    rx = np.array([[1, 0, 0], [0, math.cos(ax), -math.sin(ax)], [0, math.sin(ax), math.cos(ax)]])
+    ry = np.array([[math.cos(ay), 0, math.sin(ay)], [0, 1, 0], [-math.sin(ay), 0, math.cos(ay)]])
+    p = pts3 @ (ry @ rx @ rz).T
+    z = focal + p[:, 2]
+    dst = np.stack([focal * p[:, 0] / z + center[0], focal * p[:, 1] / z + center[1]], axis=1)
+    return cv2.getPerspectiveTransform(src.astype(np.float32), dst.astype(np.float32)).astype(np.float64)
+
+
+def _paste_warped(img: np.ndarray, patch: np.ndarray, h_mat: np.ndarray) -> None:
+    """Warp `patch` by `h_mat` into `img`, blending along the anti-aliased patch edge."""
+    ph, pw = patch.shape[:2]
+    corners = cv2.perspectiveTransform(np.array([[[0, 0]], [[pw, 0]], [[pw, ph]], [[0, ph]]], np.float64), h_mat)
+    x0, y0 = np.floor(corners.reshape(-1, 2).min(axis=0)).astype(int)
+    x1, y1 = np.ceil(corners.reshape(-1, 2).max(axis=0)).astype(int)
+    x0, y0 = max(0, x0), max(0, y0)
+    x1, y1 = min(img.shape[1], x1), min(img.shape[0], y1)
+    if x1 <= x0 or y1 <= y0:
+        return
+    shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], np.float64) @ h_mat
+    size = (x1 - x0, y1 - y0)
+    warped = cv2.warpPerspective(patch, shift, size, flags=cv2.INTER_AREA if np.abs(h_mat[0, 0]) < 0.6
+                                 else cv2.INTER_LINEAR)
+    mask = cv2.warpPerspective(np.full((ph, pw), 255, np.uint8), shift, size, flags=cv2.INTER_LINEAR)
+    m = (mask.astype(np.float32) / 255.0)[..., None]
+    roi = img[y0:y1, x0:x1]
+    roi[:] = (warped * m + roi * (1 - m)).astype(np.uint8)
+
+
+def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int) -> None:
+    h, w = patch.shape[:2]
+    x0, y0, x1, y1 = max(0, x), max(0, y), min(img.shape[1], x + w), min(img.shape[0], y + h)
+    if x1 > x0 and y1 > y0:
+        img[y0:y1, x0:x1] = patch[y0 - y:y1 - y, x0 - x:x1 - x]
+
+
+def _motion_blur(img: np.ndarray, length: float, angle_deg: float) -> np.ndarray:
+    if length < 1.5:
+        return img
+    n = int(math.ceil(length)) | 1
+    kernel = np.zeros((n, n), np.float32)
+    c = n // 2
+    dx, dy = math.cos(math.radians(angle_deg)) * length / 2, math.sin(math.radians(angle_deg)) * length / 2
+    cv2.line(kernel, (int(round(c - dx)), int(round(c - dy))), (int(round(c + dx)), int(round(c + dy))), 1.0, 1,
+             cv2.LINE_AA)
+    kernel /= kernel.sum()
+    return cv2.filter2D(img, -1, kernel)
+
+
+def _rotated_rect(cx: float, cy: float, w: float, h: float, ang: float) -> np.ndarray:
+    pts = cv2.boxPoints(((cx, cy), (w, h), ang))
+    return np.round(pts).astype(np.int32).reshape(-1, 1, 2)
+
+
+def _bezier(rng: Rng, w: int, h: int) -> np.ndarray:
+    p = rng.uniform([-50, -50], [w + 50, h + 50], size=(4, 2))
+    tt = np.linspace(0, 1, 40)[:, None]
+    curve = ((1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt ** 2 * p[2]
+             + tt ** 3 * p[3])
+    return np.round(curve).astype(np.int32).reshape(-1, 1, 2)
+
+
+def _draw_text(img: np.ndarray, rng: Rng, org: tuple[int, int], colour: tuple[int, int, int]) -> None:
+    letters = string.ascii_uppercase + string.ascii_lowercase + "0123456789"
+    for line in range(int(rng.integers(1, 4))):
+        word = "".join(rng.choice(list(letters + "XOAXOV"), size=int(rng.integers(3, 9))))
+        scale = float(rng.uniform(0.6, 2.5))
+        cv2.putText(img, word, (org[0], org[1] + int(line * 32 * scale)),
+                    int(rng.choice([cv2.FONT_HERSHEY_SIMPLEX, cv2.FONT_HERSHEY_DUPLEX, cv2.FONT_HERSHEY_TRIPLEX])),
+                    scale, colour, int(rng.integers(1, 5)), cv2.LINE_AA)
+
+
+def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
+    s = max(8, int(size))
+    cell = max(3, int(rng.integers(3, 16)))
+    yy, xx = np.mgrid[0:s, 0:s]
+    kind = rng.integers(3)
+    if kind == 0:
+        pat = (((yy // cell) + (xx // cell)) % 2) * 255
+    elif kind == 1:
+        pat = ((xx + yy) // cell % 2) * 255
+    else:
+        pat = rng.integers(0, 2, size=(s // cell + 1, s // cell + 1)).repeat(cell, 0).repeat(cell, 1)[:s, :s] * 255
+    patch = np.repeat(pat.astype(np.uint8)[..., None], 3, axis=2)
+    _paste(img, patch, int(cx - s / 2), int(cy - s / 2))
+
+
+def _dark_or_any(rng: Rng) -> tuple[int, int, int]:
+    if rng.random() < 0.6:
+        return tuple(int(x) for x in rng.integers(0, 70, size=3))  # type: ignore[return-value]
+    return tuple(int(x) for x in rng.integers(0, 256, size=3))  # type: ignore[return-value]
+
+
+def _procedural_background(rng: Rng, w: int, h: int) -> np.ndarray:
+    """Low-frequency colour noise plus rectangles and stripes: a room-ish clutter without images."""
+    small = rng.uniform(30, 220, size=(6, 8, 3)).astype(np.float32)
+    img = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    fine = rng.normal(0, 12, size=(h // 4, w // 4, 3)).astype(np.float32)
+    img += cv2.resize(fine, (w, h), interpolation=cv2.INTER_LINEAR)
+    img = np.clip(img, 0, 255).astype(np.uint8)
+    for _ in range(int(rng.integers(3, 10))):
+        x, y = int(rng.integers(0, w)), int(rng.integers(0, h))
+        cv2.rectangle(img, (x, y), (x + int(rng.integers(20, 200)), y + int(rng.integers(20, 200))),
+                      _dark_or_any(rng), -1)
+    return img
+
+
+def _load_backgrounds() -> list[np.ndarray]:
+    try:
+        import skimage.data as data
+    except ImportError:
+        log.info("scikit-image not importable: procedural backgrounds only")
+        return []
+    bank = []
+    for name in SKIMAGE_BACKGROUNDS:
+        try:
+            img = np.asarray(getattr(data, name)())
+        except Exception as exc:  # a sample that needs a download, or a changed API
+            log.debug("skipping sample image", name=name, error=str(exc))
+            continue
+        if img.dtype != np.uint8:
+            img = (img.astype(np.float32) * (255.0 / max(1.0, float(img.max())))).astype(np.uint8)
+        img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2BGR)
+        bank.append(img)
+    return bank
+
+
+def _load_face() -> np.ndarray | None:
+    try:
+        import skimage.data as data
+
+        img = np.asarray(data.astronaut())
+    except Exception:
+        return None
+    return cv2.cvtColor(img[20:230, 150:330], cv2.COLOR_RGB2BGR)  # Eileen Collins's face
