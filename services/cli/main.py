@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import threading
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -74,6 +75,35 @@ def spy(
             probe.spy(session, keyexpr or keys.all, keys.prefix, console, stop)
         except KeyboardInterrupt:
             stop.set()
+
+
+@app.command()
+def demo(
+    scenario: Annotated[str, typer.Option(
+        help="A built-in scenario name or a YAML scenario file (see services/cli/scenarios/)")] = "paper",
+    out: Annotated[Path, typer.Option(help="Folder for the spoken WAVs, the timeline and the service logs "
+                                           "(emptied first)")] = Path("hri-demo"),
+    port: Annotated[int, typer.Option(help="Router port on 127.0.0.1 (0: a free one)")] = 0,
+    voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = "en-us",
+    list_scenarios: Annotated[bool, typer.Option("--list", help="List the built-in scenarios and exit")] = False,
+) -> None:
+    """Run a scenario (default: the paper's experiment) on the simulated robot, with a live timeline.
+
+    Exits 0 when every step turned out as the scenario expects.
+    """
+    from services.cli import scenario as scenarios
+    from services.cli.demo import run_demo
+
+    if list_scenarios:
+        for name in scenarios.builtin_names():
+            typer.echo(f"{name:<24} {scenarios.load(name).description.strip().splitlines()[0][:80]}")
+        raise typer.Exit(0)
+    try:
+        loaded = scenarios.load(scenario)
+    except scenarios.ScenarioError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console))
 
 
 @send_app.command("command")

@@ -1,0 +1,171 @@
+"""Runs a scenario against a live robot (real processes, real Zenoh) and checks each step's outcome."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from schemas.messages import Decision, MotionGoal, MotionState, Posture, SceneCommand, SpeechState, VoiceCommand
+from services.cli.recorder import Recorder
+from services.cli.scenario import Scenario, Step
+from services.cli.utterance import speak_into
+from services.runtime import ServiceContext
+
+SETTLE_S = 8.0  # longest a motion may take to finish before the next step
+GAP_S = 0.3  # pause between steps, as a person would leave
+
+
+@dataclass
+class StepResult:
+    index: int
+    step: Step
+    problems: list[str] = field(default_factory=list)
+    heard: VoiceCommand | None = None
+    decision: Decision | None = None
+    goals: list[MotionGoal] = field(default_factory=list)
+    posture: Posture | None = None
+    said: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+class ScenarioRunner:
+    def __init__(self, ctx: ServiceContext, recorder: Recorder, spool: Path, *, voice: str = "en-us") -> None:
+        self.ctx = ctx
+        self.rec = recorder
+        self.spool = spool
+        self.voice = voice
+        self._scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
+
+    # ------------------------------------------------------------------ readiness
+    def wait_ready(self, timeout: float = 90.0) -> list[str]:
+        """Wait for motion state and camera frames; returns what is still missing (empty when ready)."""
+        ok = self.rec.wait(lambda: self.rec.latest_state is not None and self.rec.latest_marks is not None,
+                           timeout)
+        missing = []
+        if not ok:
+            if self.rec.latest_state is None:
+                missing.append("motion state")
+            if self.rec.latest_marks is None:
+                missing.append("vision frames")
+        return missing
+
+    def run(self, scenario: Scenario, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
+        results = []
+        for i, step in enumerate(scenario.steps, 1):
+            result = self.run_step(i, step)
+            results.append(result)
+            if on_step:
+                on_step(result)
+        return results
+
+    # ------------------------------------------------------------------ one step
+    def run_step(self, index: int, step: Step) -> StepResult:
+        res = StepResult(index, step)
+        t0 = time.monotonic()
+        known_goals = set(self.rec.goal_ids)
+        exp = step.expect
+        if step.say is not None:
+            speak_into(self.spool, step.say, voice=self.voice)
+            res.heard = self.rec.wait(lambda: next(iter(self.rec.since(t0, "heard")), None), step.timeout)
+            if res.heard is None:
+                res.problems.append("the voice service published nothing")
+            else:
+                res.decision = self.rec.wait(lambda: self._decision_for(t0, res.heard), step.timeout)
+                if res.decision is None and (exp is None or exp.heard is not None or exp.verdict is not None):
+                    res.problems.append("the reasoner made no decision")
+        elif step.show is not None:
+            self._scene.put(SceneCommand(shape=step.shape))
+            want = {step.shape.value} if step.shape else set()
+            seen = self.rec.wait(lambda: any({m.shape.value for m in o.marks} == want
+                                             for o in self.rec.since(t0, "seen")), step.timeout)
+            if not seen:
+                res.problems.append(f"vision never reported {sorted(want) or 'no mark'}")
+            elif exp is not None and (exp.situation or exp.verdict or exp.action):
+                res.decision = self.rec.wait(
+                    lambda: next((d for d in self.rec.since(t0, "decision") if d.command is None), None),
+                    step.timeout)
+                if res.decision is None:
+                    res.problems.append("the reasoner made no decision on the mark")
+        else:
+            time.sleep(step.wait or 0.0)
+        if exp is not None:
+            self._check(res, t0, known_goals)
+        else:
+            self._settle(SETTLE_S)
+        res.goals = [g for g in self.rec.since(t0, "goal") if g.goal_id not in known_goals]
+        res.said = [s.text for s in self.rec.since(t0, "say")]
+        res.seconds = time.monotonic() - t0
+        time.sleep(GAP_S)
+        return res
+
+    def _decision_for(self, t0: float, heard: VoiceCommand) -> Decision | None:
+        for d in self.rec.since(t0, "decision"):
+            if heard.command is not None and d.command == heard.command:
+                return d
+            if heard.command is None and d.command is None and d.reason.value == "not_understood":
+                return d
+        return None
+
+    def _check(self, res: StepResult, t0: float, known_goals: set[str]) -> None:
+        exp = res.step.expect
+        assert exp is not None
+        p = res.problems
+        if exp.heard is not None and res.heard is not None and res.heard.command != exp.heard:
+            p.append(f"heard {res.heard.command.value if res.heard.command else 'nothing'} "
+                     f"({res.heard.text!r}), expected {exp.heard.value}")
+        d = res.decision
+        if d is not None:
+            for name in ("verdict", "reason", "situation"):
+                want = getattr(exp, name)
+                if want is not None and getattr(d, name) != want:
+                    p.append(f"{name} {getattr(d, name).value}, expected {want.value}")
+        elif res.step.wait is not None and exp.situation is not None:
+            last = next((e.msg for e in reversed(self.rec.events) if e.kind == "decision"), None)
+            if last is None or last.situation != exp.situation:
+                p.append(f"situation {last.situation.value if last else 'unknown'}, expected {exp.situation.value}")
+        if exp.action is not None:
+            got = self.rec.wait(lambda: any(g.action == exp.action for g in self._new_goals(t0, known_goals)),
+                                res.step.timeout)
+            if not got:
+                p.append(f"no {exp.action.value} goal was sent")
+        if exp.no_action:
+            time.sleep(0.5)
+            extra = self._new_goals(t0, known_goals)
+            if extra:
+                p.append(f"unexpected motion goal(s): {', '.join(g.action.value for g in extra)}")
+        if exp.said is not None:
+            spoken = self.rec.wait(lambda: any(s.speaking and exp.said in (s.text or "")
+                                               for s in self.rec.since(t0, "speaking")), res.step.timeout)
+            if not spoken:
+                p.append(f'the robot did not say "{exp.said}"')
+        if exp.posture is not None:
+            ok = self.rec.wait(lambda: self._settled_in(exp.posture), res.step.timeout)
+            res.posture = self.rec.latest_state.posture if self.rec.latest_state else None
+            if not ok:
+                p.append(f"posture {res.posture.value if res.posture else 'unknown'}, expected {exp.posture.value}")
+        else:
+            self._settle(SETTLE_S)
+
+    def _new_goals(self, t0: float, known: set[str]) -> list[MotionGoal]:
+        return [g for g in self.rec.since(t0, "goal") if g.goal_id not in known]
+
+    def _settled_in(self, posture: Posture) -> bool:
+        s: MotionState | None = self.rec.latest_state
+        return s is not None and s.posture == posture and (s.action is None or posture == Posture.WALKING)
+
+    def _settle(self, timeout: float) -> None:
+        """Wait until the robot is idle (or steadily walking) and not speaking."""
+
+        def idle() -> bool:
+            s = self.rec.latest_state
+            speaking = [e.msg for e in self.rec.events if e.kind == "speaking"]
+            talking = bool(speaking) and isinstance(speaking[-1], SpeechState) and speaking[-1].speaking
+            return s is not None and (s.action is None or s.posture == Posture.WALKING) and not talking
+
+        self.rec.wait(idle, timeout)
