@@ -51,6 +51,8 @@ def describe(event: Event) -> tuple[str, str]:
         case "say":
             return "reasoner", f'asks to say "{m.text}"'
         case "speaking":
+            if m.id is None:
+                return "speech", "ready (not speaking)"
             return "speech", ("speaking" if m.speaking else "done") + f' "{m.text}"'
     return event.kind, str(m)
 

@@ -39,7 +39,8 @@ RateOption = Annotated[
     int, typer.Option("--rate", envvar="HRI_SPEECH_RATE", min=80, max=450, help="Words per minute")
 ]
 VolumeOption = Annotated[
-    int, typer.Option("--volume", envvar="HRI_SPEECH_VOLUME", min=0, max=200, help="espeak-ng amplitude 0..200")
+    int,
+    typer.Option("--volume", envvar="HRI_SPEECH_VOLUME", min=0, max=200, help="espeak-ng amplitude 0..200"),
 ]
 
 
@@ -94,7 +95,9 @@ def say(
     voice: VoiceOption = DEFAULT_VOICE,
     rate: RateOption = DEFAULT_RATE,
     volume: VolumeOption = DEFAULT_VOLUME,
-    max_chars: Annotated[int, typer.Option("--max-chars", min=1, help="Longest text spoken")] = DEFAULT_MAX_CHARS,
+    max_chars: Annotated[
+        int, typer.Option("--max-chars", min=1, help="Longest text spoken")
+    ] = DEFAULT_MAX_CHARS,
 ) -> None:
     """Say TEXT once, into a WAV file or out loud, and print a JSON summary.
 

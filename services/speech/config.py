@@ -14,8 +14,8 @@ from services.runtime import ConfigError
 
 DEFAULT_VOICE = "en-us"
 """espeak-ng's American English voice: pocketsphinx's US model recognises it best (round-trip test)."""
-DEFAULT_RATE = 160
-"""Words per minute (espeak-ng's own default is 175; a little slower carries better from a small speaker)."""
+DEFAULT_RATE = 175
+"""Words per minute, espeak-ng's own default; the round-trip test decodes the refusal word for word at it."""
 DEFAULT_VOLUME = 100
 """espeak-ng amplitude, 0..200."""
 DEFAULT_QUEUE_SIZE = 4
@@ -60,7 +60,9 @@ class SpeechConfig:
 
     def __post_init__(self) -> None:
         if not self.voice.strip() or any(c.isspace() for c in self.voice):
-            raise ConfigError(f"voice {self.voice!r}: give one espeak-ng voice name (see `espeak-ng --voices`)")
+            raise ConfigError(
+                f"voice {self.voice!r}: give one espeak-ng voice name (see `espeak-ng --voices`)"
+            )
         _check_range("rate", self.rate, RATE_RANGE, "words per minute")
         _check_range("volume", self.volume, VOLUME_RANGE, "espeak-ng amplitude")
         if self.queue_size < 1:
@@ -96,7 +98,9 @@ def parse_output(raw: str | None) -> OutputTarget | None:
     if raw.startswith(DEVICE + ":"):
         pcm = raw[len(DEVICE) + 1 :].strip()
         if not pcm:
-            raise ConfigError("HRI_SPEECH_OUT=device: needs an ALSA PCM name after the colon, e.g. device:plughw:1")
+            raise ConfigError(
+                "HRI_SPEECH_OUT=device: needs an ALSA PCM name after the colon, e.g. device:plughw:1"
+            )
         return OutputTarget(device=pcm)
     folder = Path(raw).expanduser()
     if folder.exists() and not folder.is_dir():

@@ -104,7 +104,9 @@ class AplayOutput:
     def _command(self, path: Path) -> list[str]:
         program = shutil.which(self.binary)
         if program is None:
-            raise PlaybackError(f"`{self.binary}` not found; {APLAY_HINT}, {FOLDER_HINT}")
+            raise PlaybackError(
+                f"cannot play on {self.describe()}: `{self.binary}` not found; {APLAY_HINT}, {FOLDER_HINT}"
+            )
         return [program, "-q", *(["-D", self.pcm] if self.pcm else []), str(path)]
 
     def probe(self) -> str | None:
@@ -122,15 +124,18 @@ class AplayOutput:
         return None
 
     def play(self, audio: Synthesis, stop: threading.Event) -> bool:
-        try:
-            return self._run(audio.path, stop)
-        finally:
-            audio.path.unlink(missing_ok=True)
+        """Played files are removed; on PlaybackError the file stays for the caller to keep elsewhere."""
+        finished = self._run(audio.path, stop)
+        audio.path.unlink(missing_ok=True)
+        return finished
 
     def _run(self, path: Path, stop: threading.Event) -> bool:
         try:
             proc = subprocess.Popen(
-                self._command(path), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+                self._command(path),
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
             )
         except OSError as exc:
             raise PlaybackError(f"cannot run {self.binary}: {exc}") from None

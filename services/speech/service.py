@@ -18,7 +18,7 @@ from services.speech.player import AplayOutput, FolderOutput, Output, PlaybackEr
 from services.speech.queue import SpeechQueue, Utterance
 from services.speech.stats import SpeechStats
 from services.speech.text import TextRejected, clean_text
-from services.speech.tts import INSTALL_HINT, EngineMissing, EspeakNg, SynthesisError
+from services.speech.tts import INSTALL_HINT, EngineMissing, EspeakNg, Synthesis, SynthesisError
 
 NAME = "speech"
 ENGINE_RETRY_S = 2.0
@@ -77,7 +77,6 @@ class SpeechService:
                 self.log.info("speech engine ready", engine=version, voice=self.config.voice)
                 self.ctx.update_detail(engine=version)
             self._engine_error = None
-        self._publish_status()
 
     def check_output(self) -> None:
         problem = self.output.probe()
@@ -85,14 +84,14 @@ class SpeechService:
             if problem is None:
                 self.log.info("speech output ready", out=self.output.describe())
             elif self.output is self.fallback:
-                self.log.error("speech output unusable, will retry", out=self.output.describe(), error=problem)
+                self.log.error("speech output unusable, will retry",
+                               out=self.output.describe(), error=problem)
             else:
                 self.log.warning(
                     "sound device unusable, writing WAV files instead; will retry",
                     device=self.output.describe(), error=problem, fallback=self.fallback.describe(),
                 )
         self._output_error = problem
-        self._publish_status()
 
     def _publish_status(self) -> None:
         detail = {
@@ -100,12 +99,13 @@ class SpeechService:
             "output_error": self._output_error,
             "install": INSTALL_HINT if self._engine_error else None,
         }
-        if self._engine_error is not None:
-            self.ctx.set_status(HealthStatus.FAILED, **detail)
-        elif self._output_error is not None and self.output is self.fallback:
-            self.ctx.set_status(HealthStatus.FAILED, **detail)
+        nowhere = self._output_error is not None and self.output is self.fallback
+        if self._engine_error is not None or nowhere:
+            self.ctx.set_status(HealthStatus.FAILED, **detail)  # nothing can be said, or nowhere to put it
         elif self._output_error is not None:
-            alternatives = f"HRI_SPEECH_OUT=<folder> to write WAV files; now writing to {self.fallback.folder}"
+            alternatives = (
+                f"HRI_SPEECH_OUT=<folder> to write WAV files; now writing to {self.fallback.folder}"
+            )
             self.ctx.set_status(HealthStatus.DEGRADED, device=self.output.describe(),
                                 alternatives=alternatives, **detail)
         else:
@@ -160,9 +160,14 @@ class SpeechService:
                                  waited_s=round(s.age_s, 3), max_age_s=self.queue.max_age_s)
             if skipped:
                 self._report()
-            if utt is not None:
+            if utt is None:
+                continue
+            try:
                 self.speak(utt)
-                self._report()
+            except Exception:  # the worker must outlive any one utterance
+                self.stats.bump("synth_errors")
+                self.log.exception("speaking failed", id=utt.id)
+            self._report()
 
     def speak(self, utt: Utterance) -> None:
         output = self.output if self.output_ok else self.fallback
@@ -185,22 +190,27 @@ class SpeechService:
                       out=output.describe(), file=str(audio.path) if output is self.fallback else None)
         self.state.put(SpeechState(speaking=True, id=utt.id, text=utt.text))
         try:
-            finished = output.play(audio, self.ctx.stopping)
+            finished = self._play(output, audio, utt)
+        finally:
+            self.state.put(SpeechState(speaking=False, id=utt.id, text=utt.text))
+        self.stats.bump("spoken" if finished else "interrupted")
+        if not finished:
+            self.log.info("utterance cut short by shutdown", id=utt.id)
+
+    def _play(self, output: Output, audio: Synthesis, utt: Utterance) -> bool:
+        try:
+            return output.play(audio, self.ctx.stopping)
         except PlaybackError as exc:
             self._output_error = str(exc)
             self._publish_status()
             self.log.warning("playback failed, writing the WAV instead", id=utt.id, error=str(exc))
-            audio = self.fallback.adopt(audio, utt.id)
-            finished = self.fallback.play(audio, self.ctx.stopping)
-        self.state.put(SpeechState(speaking=False, id=utt.id, text=utt.text))
-        self.stats.bump("spoken" if finished else "interrupted")
-        if not finished:
-            self.log.info("utterance cut short by shutdown", id=utt.id)
+            return self.fallback.play(self.fallback.adopt(audio, utt.id), self.ctx.stopping)
 
     # ------------------------------------------------------------------ lifecycle
     def run(self) -> None:
         self.check_engine()
         self.check_output()
+        self._publish_status()
         self.log.info("speech output", out=self.output.describe(),
                       fallback=None if self.output is self.fallback else self.fallback.describe(),
                       note="folder output: speaking lasts the WAV's duration after it is written")
@@ -214,9 +224,11 @@ class SpeechService:
                 now = time.monotonic()
                 if not self.engine_ready and now >= next_engine:
                     self.check_engine()
+                    self._publish_status()
                     next_engine = now + ENGINE_RETRY_S
                 if not self.output_ok and now >= next_output:
                     self.check_output()
+                    self._publish_status()
                     next_output = now + OUTPUT_RETRY_S
         finally:
             worker.join(timeout=5.0)  # it publishes speaking=False before the session closes

@@ -18,7 +18,9 @@ from pathlib import Path
 from services.speech.audio import AudioError, wav_duration
 
 ENGINE = "espeak-ng"
-INSTALL_HINT = "install it with `sudo apt-get install espeak-ng` (Debian/Ubuntu; `brew install espeak-ng` on macOS)"
+INSTALL_HINT = (
+    "install it with `sudo apt-get install espeak-ng` (Debian/Ubuntu; `brew install espeak-ng` on macOS)"
+)
 
 
 class EngineMissing(RuntimeError):
