@@ -1,12 +1,113 @@
-"""The reasoner service process: joins the bus with its liveliness token and health queryable."""
+"""The reasoner service: Zenoh in and out of the Soar agent. Python only moves data here;
+every decision is made by the productions in services/reasoner/agent/.
+
+Start-up order: restore the saved situation, start the agent from it and wait until it is
+ready, and only then subscribe to marks, commands and motion state.
+"""
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import zenoh
+
+from schemas.messages import (
+    Decision,
+    HealthStatus,
+    MarkObservation,
+    MotionGoal,
+    MotionState,
+    SpeechRequest,
+    VoiceCommand,
+)
+from services.reasoner.agent_host import KNOWLEDGE_FILE, AgentConfig, CommandInput, MarksInput
+from services.reasoner.driver import AgentDriver
+from services.reasoner.outputs import OutputBridge
+from services.reasoner.state import StateStore, default_state_dir
 from services.runtime import ServiceContext
 
 NAME = "reasoner"
 
 
-def serve(ctx: ServiceContext) -> None:
-    while not ctx.wait(1.0):
-        pass
+@dataclass(frozen=True)
+class ReasonerOptions:
+    state_dir: Path | None = None
+    knowledge_file: Path | None = None
+    debugger_port: int | None = None
+    keepalive_s: float = 0.5
+
+    @classmethod
+    def from_env(
+        cls,
+        *,
+        state_dir: Path | None = None,
+        knowledge_file: Path | None = None,
+        debugger_port: int | None = None,
+    ) -> ReasonerOptions:
+        """Explicit values win over HRI_STATE_DIR / HRI_REASONER_KNOWLEDGE / HRI_SOAR_DEBUGGER_PORT."""
+        if debugger_port is None and os.environ.get("HRI_SOAR_DEBUGGER_PORT"):
+            raw = os.environ["HRI_SOAR_DEBUGGER_PORT"]
+            if not raw.isdigit() or not 0 < int(raw) < 65536:
+                raise ValueError(f"HRI_SOAR_DEBUGGER_PORT={raw!r} is not a TCP port (1-65535)")
+            debugger_port = int(raw)
+        if knowledge_file is None and os.environ.get("HRI_REASONER_KNOWLEDGE"):
+            knowledge_file = Path(os.environ["HRI_REASONER_KNOWLEDGE"])
+        return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port)
+
+
+def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
+    options = options or ReasonerOptions.from_env()
+    keys = ctx.keys
+    store = StateStore(options.state_dir or default_state_dir(ctx.robot), ctx.log)
+    memory = store.load()
+
+    bridge = OutputBridge(
+        ctx,
+        ctx.publisher(keys.motion_goal, MotionGoal, block=True, priority=zenoh.Priority.REAL_TIME),
+        ctx.publisher(keys.speech_say, SpeechRequest),
+        ctx.publisher(keys.reasoner_decision, Decision),
+        store,
+        keepalive_s=options.keepalive_s,
+    )
+    config = AgentConfig(knowledge_file=options.knowledge_file or KNOWLEDGE_FILE,
+                         debugger_port=options.debugger_port)
+    driver = AgentDriver(config, memory, bridge, ctx.log)
+    ctx.on_close(driver.stop)
+    restored = driver.start()
+    ctx.update_detail(state_file=str(store.path), debugger_port=options.debugger_port,
+                      knowledge=str(config.knowledge_file))
+    ctx.log.info("agent ready", situation=restored.situation, resume_go=restored.resume_go,
+                 debugger_port=options.debugger_port)
+
+    def on_command(msg: VoiceCommand) -> None:
+        driver.submit(CommandInput(word=msg.command.value if msg.command else None,
+                                   confidence=msg.confidence, stamp=msg.stamp))
+
+    def on_marks(msg: MarkObservation) -> None:
+        # No mark carries no news (DESIGN.md); only observations with marks reach the agent.
+        if msg.marks:
+            driver.submit(MarksInput(shapes=frozenset(m.shape.value for m in msg.marks), stamp=msg.stamp))
+
+    def on_motion(msg: MotionState) -> None:
+        driver.set_posture(msg.posture.value)
+
+    def on_soar(_params: str, payload: bytes) -> str:
+        ok, out = driver.run_command(payload.decode("utf-8", "replace"))
+        if not ok:
+            raise RuntimeError(out.strip() or "Soar command failed")
+        return out
+
+    ctx.subscribe(keys.motion_state, MotionState, on_motion)
+    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks)
+    ctx.subscribe(keys.voice_command, VoiceCommand, on_command)
+    ctx.queryable(keys.reasoner_soar, on_soar)
+    ctx.thread(lambda: bridge.run_keepalive(driver.responsive), "walk-keepalive")
+    ctx.update_detail(ready=True)  # every subscription is declared: inputs are accepted now
+
+    while not ctx.wait(0.5):
+        if not driver.is_alive():
+            ctx.set_status(HealthStatus.FAILED, error="the Soar driver thread ended")
+            raise RuntimeError("the Soar driver thread ended; see the log above")
+        ctx.update_detail(backlog=driver.backlog(), **driver.stats(), **bridge.detail())

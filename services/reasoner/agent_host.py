@@ -1,0 +1,473 @@
+"""Hosts the Soar kernel and the HRI agent behind a plain Python API (no Zenoh).
+
+`submit()` and `set_posture()` may be called from any thread: they only queue. Every other
+method, and the SML callbacks it triggers, runs on the one thread that owns the agent
+(REFERENCE.md: an SML call from another thread while the agent runs deadlocks). The agent is
+stepped, not free-running: `pump()` runs decision cycles until every queued input has been
+put on the input link (one event per cycle, in order, from the before-input-phase callback)
+and the agent has settled, and returns what came out on the output link.
+
+One SoarAgent per process at a time: in soar-sml 9.6.5 shutting one kernel down while another
+runs breaks the other's Python callbacks (a segfault at its next run; checked).
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+import threading
+import time
+from collections import OrderedDict, deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import soar_sml as sml
+
+from services.runtime import get_logger
+
+AGENT_DIR = Path(__file__).with_name("agent")
+KNOWLEDGE_FILE = AGENT_DIR / "knowledge.soar"
+
+POSTURES = ("sitting", "standing", "walking", "moving", "unknown")
+_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "ready": 4}
+"""Within one output phase: motion first (safety latency), then persistence, then the rest."""
+
+_AGENT_NUMBERS = itertools.count(1)
+"""Agent names must be unique in a process: two kernels with same-named agents crash on
+Shutdown (soar-sml 9.6.5, checked)."""
+_NIL = "nil"
+"""How the agent spells an absent optional field."""
+_MAX_STAMPS = 4096
+_WM_SIZE = re.compile(r"WM size:\s*(\d+) current")
+_PRODUCTION = re.compile(r"sp\s*\{\s*([^\s\"(]+)")
+
+
+class AgentLoadError(RuntimeError):
+    """The kernel or the agent's rules could not be loaded; the message names file and rule."""
+
+
+# ---------------------------------------------------------------------------------- inputs
+@dataclass(frozen=True)
+class CommandInput:
+    """A recognised utterance: `word` is None for speech that matched no command."""
+
+    word: str | None
+    confidence: float
+    stamp: float | None = None
+
+
+@dataclass(frozen=True)
+class MarksInput:
+    """Confirmed marks of one observation (an empty set carries no news and is not needed)."""
+
+    shapes: frozenset[str]
+    stamp: float | None = None
+
+
+Event = CommandInput | MarksInput
+
+
+@dataclass(frozen=True)
+class Memory:
+    """What survives a restart: the latched situation and a refused "go" awaiting an O."""
+
+    situation: str = "safe"
+    resume_go: bool = False
+
+    def __post_init__(self) -> None:
+        if self.situation not in ("safe", "danger"):
+            raise ValueError(f"situation must be 'safe' or 'danger', not {self.situation!r}")
+
+
+# ---------------------------------------------------------------------------------- outputs
+@dataclass(frozen=True)
+class MotionOutput:
+    action: str
+    cause_stamp: float | None
+    sustain: bool = False  # a lasting motion: keep it alive until another motion goal
+
+
+@dataclass(frozen=True)
+class SayOutput:
+    text: str
+    cause_stamp: float | None
+
+
+@dataclass(frozen=True)
+class DecisionOutput:
+    command: str | None
+    verdict: str
+    reason: str
+    action: str | None
+    situation: str
+    say: str | None
+    cause_stamp: float | None
+
+
+@dataclass(frozen=True)
+class RememberOutput:
+    memory: Memory
+
+
+@dataclass(frozen=True)
+class ReadyOutput:
+    memory: Memory
+
+
+Output = MotionOutput | SayOutput | DecisionOutput | RememberOutput | ReadyOutput
+
+
+@dataclass(frozen=True)
+class AgentConfig:
+    rules_dir: Path = AGENT_DIR
+    knowledge_file: Path = KNOWLEDGE_FILE
+    debugger_port: int | None = None
+    """Open the kernel listener on this port for the Soar Java debugger; None suppresses it."""
+    settle_cycles: int = 8
+    """Decision cycles run per step; pumping goes on while inputs or outputs keep coming."""
+    max_busy_steps: int = 200
+    """A pump gives up (and logs) after this many steps that still produce output without input."""
+    ready_cycles: int = 400
+
+
+class SoarAgent:
+    """One Soar kernel (in its own thread) with the HRI agent loaded and initialised."""
+
+    def __init__(
+        self,
+        config: AgentConfig | None = None,
+        memory: Memory | None = None,
+        *,
+        on_output: Callable[[Output], None] | None = None,
+        log: Any = None,
+    ) -> None:
+        self.config = config or AgentConfig()
+        self.log = log or get_logger("reasoner")
+        self._on_output = on_output
+        self._lock = threading.Lock()
+        self._events: deque[tuple[int, Event]] = deque()
+        self._pending_posture: str | None = None
+        self._next_id = 0
+        self._stamps: OrderedDict[int, float | None] = OrderedDict()
+        self._to_complete: list[tuple[Any, bool]] = []  # handled commands to mark (ok or error)
+        self._collected: list[Output] = []
+        self._applied = 0
+        self._produced = 0
+        self._ready: Memory | None = None
+        self.callback_errors = 0
+        self.events_applied = 0
+        self._event_wme: Any = None
+        self._memory_wme: Any = None
+        self._motion_wme: Any = None
+        self._posture_wme: Any = None
+        self._posture = "unknown"
+        self._closed = False
+        self.last_cycle = time.monotonic()
+        """When the last decision cycle's input phase ran (monotonic seconds)."""
+
+        port = self.config.debugger_port
+        self._kernel = sml.Kernel.CreateKernelInNewThread(
+            port if port is not None else sml.Kernel.kSuppressListener
+        )
+        if self._kernel is None or self._kernel.HadError():
+            detail = self._kernel.GetLastErrorDescription() if self._kernel is not None else "no kernel"
+            raise AgentLoadError(f"cannot create the Soar kernel: {detail}")
+        try:
+            self._kernel.SetAutoCommit(False)
+            number = next(_AGENT_NUMBERS)
+            self._agent = self._kernel.CreateAgent("hri" if number == 1 else f"hri-{number}")
+            if self._agent is None:
+                detail = self._kernel.GetLastErrorDescription()
+                raise AgentLoadError(f"cannot create the Soar agent: {detail}")
+            self._load()
+            # One callback per decision cycle: every Python callback crosses to the kernel's thread
+            # and costs about as much as the decision itself. Output is read at the start of the
+            # next input phase (right after the output phase) and after each run.
+            self._callback = self._guard(self._input_phase)
+            self._agent.RegisterForRunEvent(sml.smlEVENT_BEFORE_INPUT_PHASE, self._callback, None)
+            self._start(memory or Memory())
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------------------ loading
+    def _load(self) -> None:
+        rules = sorted(p for p in self.config.rules_dir.glob("*.soar") if p.name != KNOWLEDGE_FILE.name)
+        if not rules:
+            raise AgentLoadError(f"no *.soar rule files in {self.config.rules_dir}")
+        for path in [*rules, self.config.knowledge_file]:
+            self._source(path)
+
+    def _source(self, path: Path) -> None:
+        if not path.is_file():
+            raise AgentLoadError(f"Soar file not found: {path}")
+        before = self._production_names()
+        out = self._agent.ExecuteCommandLine(f'source "{path}"')
+        if self._agent.GetLastCommandLineResult():
+            return
+        # `source` stops at the first bad production: name it, with the first rule not loaded.
+        loaded = self._production_names() - before
+        declared = _PRODUCTION.findall(path.read_text(encoding="utf-8", errors="replace"))
+        missing = next((name for name in declared if name not in loaded), None)
+        where = f" at production {missing}" if missing else ""
+        raise AgentLoadError(f"{path.name}: failed to load{where}: {' '.join(out.split())[:600]}")
+
+    def _production_names(self) -> set[str]:
+        out = self._agent.ExecuteCommandLine("print --all --name")
+        return {line.strip() for line in out.splitlines() if line.strip()}
+
+    # ------------------------------------------------------------------------------ lifecycle
+    def _start(self, memory: Memory) -> None:
+        il = self._agent.GetInputLink()
+        self._memory_wme = self._agent.CreateIdWME(il, "memory")
+        self._agent.CreateStringWME(self._memory_wme, "situation", memory.situation)
+        self._agent.CreateStringWME(self._memory_wme, "resume-go", "yes" if memory.resume_go else "no")
+        self._motion_wme = self._agent.CreateIdWME(il, "motion")
+        self._posture_wme = self._agent.CreateStringWME(self._motion_wme, "posture", self._posture)
+        self._agent.Commit()
+        self._ready = None
+        ran = 0
+        while self._ready is None and ran < self.config.ready_cycles:
+            self._run(self.config.settle_cycles)
+            ran += self.config.settle_cycles
+        if self._ready is None:
+            raise AgentLoadError(
+                f"the agent did not report ready within {ran} decision cycles (is the knowledge file "
+                f"{self.config.knowledge_file} complete?): {self.execute('print --stack')[1].strip()}"
+            )
+        self.pump()  # let the ready command be cleaned up
+
+    def reset(self, memory: Memory | None = None) -> Memory:
+        """Re-initialise the agent (init-soar) from `memory`, keeping rules and knowledge. Fast."""
+        with self._lock:
+            self._events.clear()
+            self._pending_posture = None
+        self._stamps.clear()
+        self._to_complete.clear()
+        for attr in ("_event_wme", "_memory_wme", "_motion_wme"):
+            wme = getattr(self, attr)
+            if wme is not None:
+                self._agent.DestroyWME(wme)
+                setattr(self, attr, None)
+        self._agent.Commit()
+        self._posture = "unknown"
+        self._agent.InitSoar()
+        self._start(memory or Memory())
+        assert self._ready is not None
+        return self._ready
+
+    @property
+    def ready(self) -> Memory | None:
+        """The memory the agent started from, once it reported ready."""
+        return self._ready
+
+    def close(self) -> None:
+        """Shut the kernel down (always: REFERENCE.md). Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        kernel = self.__dict__.pop("_kernel", None)
+        self.__dict__.pop("_agent", None)
+        if kernel is not None:
+            kernel.Shutdown()
+            del kernel
+
+    def __enter__(self) -> SoarAgent:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------------------ input
+    def submit(self, event: Event) -> int:
+        """Queue an input event (any thread). Returns its input id (the `cause` of outputs)."""
+        with self._lock:
+            self._next_id += 1
+            self._events.append((self._next_id, event))
+            return self._next_id
+
+    def set_posture(self, posture: str) -> None:
+        """Latest posture reported by the motion service (any thread); unknown values -> unknown."""
+        with self._lock:
+            self._pending_posture = posture if posture in POSTURES else "unknown"
+
+    def pending(self) -> int:
+        """Input events queued and not yet on the input link (the backlog)."""
+        with self._lock:
+            return len(self._events) + (self._pending_posture is not None)
+
+    def _input_phase(self, _event_id: int, _data: Any, agent: Any, _phase: int) -> None:
+        self.last_cycle = time.monotonic()
+        self._read_output()
+        changed = False
+        if self._event_wme is not None:  # an event lives for exactly one decision cycle
+            agent.DestroyWME(self._event_wme)
+            self._event_wme = None
+            changed = True
+        if self._to_complete:
+            for command, ok in self._to_complete:
+                if ok:
+                    command.AddStatusComplete()
+                else:
+                    command.AddStatusError()
+            self._to_complete.clear()
+            changed = True
+        with self._lock:
+            posture, self._pending_posture = self._pending_posture, None
+            item = self._events.popleft() if self._events else None
+        if posture is not None and posture != self._posture:
+            self._posture = posture
+            agent.Update(self._posture_wme, posture)
+            changed = True
+        if item is not None:
+            self._put_event(agent, *item)
+            changed = True
+        if changed:
+            agent.Commit()
+
+    def _put_event(self, agent: Any, input_id: int, event: Event) -> None:
+        self._stamps[input_id] = event.stamp
+        while len(self._stamps) > _MAX_STAMPS:
+            self._stamps.popitem(last=False)
+        il = agent.GetInputLink()
+        if isinstance(event, CommandInput):
+            wme = agent.CreateIdWME(il, "command")
+            if event.word is not None:
+                agent.CreateStringWME(wme, "word", event.word)
+            agent.CreateFloatWME(wme, "confidence", float(event.confidence))
+        else:
+            wme = agent.CreateIdWME(il, "marks")
+            for shape in sorted(event.shapes):
+                agent.CreateStringWME(wme, "shape", shape)
+        agent.CreateIntWME(wme, "id", input_id)
+        self._event_wme = wme
+        self._applied += 1
+        self.events_applied += 1
+
+    # ------------------------------------------------------------------------------ output
+    def _read_output(self) -> None:
+        agent = self._agent
+        if not agent.GetNumberCommands():
+            return
+        commands = [agent.GetCommand(i) for i in range(agent.GetNumberCommands())]
+        agent.ClearOutputLinkChanges()
+        parsed: list[tuple[int, Output]] = []
+        for command in commands:
+            name = command.GetCommandName()
+            if command.GetParameterValue("status") is not None:
+                continue
+            try:
+                out = self._parse(name, command)
+            except ValueError as exc:  # a rule wrote a malformed command: report it, mark it
+                self._to_complete.append((command, False))
+                self.log.error("malformed output command", command=name, error=str(exc))
+                continue
+            self._to_complete.append((command, True))
+            parsed.append((_OUTPUT_ORDER[name], out))
+        for _, out in sorted(parsed, key=lambda p: p[0]):
+            self._produced += 1
+            if isinstance(out, ReadyOutput):
+                self._ready = out.memory
+            self._collected.append(out)
+            if self._on_output is not None:
+                try:
+                    self._on_output(out)
+                except Exception:
+                    self.callback_errors += 1
+                    self.log.exception("output sink failed", output=repr(out))
+
+    def _parse(self, name: str, cmd: Any) -> Output:
+        """One output-link command as a dataclass; ValueError names what is missing or unknown."""
+
+        def get(attr: str) -> str | None:
+            value = cmd.GetParameterValue(attr)
+            return None if value in (None, _NIL) else str(value)
+
+        def need(attr: str) -> str:
+            value = get(attr)
+            if value is None:
+                raise ValueError(f"^{name} without ^{attr}")
+            return value
+
+        if name == "motion":
+            return MotionOutput(action=need("action"), cause_stamp=self._stamp(get("cause")),
+                                sustain=get("sustain") == "yes")
+        if name == "say":
+            return SayOutput(text=need("text"), cause_stamp=self._stamp(get("cause")))
+        if name == "decision":
+            return DecisionOutput(
+                command=get("command"), verdict=need("verdict"), reason=need("reason"), action=get("action"),
+                situation=need("situation"), say=get("say"), cause_stamp=self._stamp(get("cause")),
+            )
+        if name in ("remember", "ready"):
+            memory = Memory(situation=need("situation"), resume_go=get("resume-go") == "yes")
+            return RememberOutput(memory) if name == "remember" else ReadyOutput(memory)
+        raise ValueError(f"unknown output command ^{name}")
+
+    def _stamp(self, cause: str | None) -> float | None:
+        if cause is None or not cause.lstrip("-").isdigit():
+            return None
+        return self._stamps.get(int(cause))
+
+    # ------------------------------------------------------------------------------ running
+    def pump(self) -> list[Output]:
+        """Run until every queued input is handled and the agent has settled; return the outputs."""
+        self._collected = []
+        busy_steps = 0
+        while True:
+            applied, produced = self._applied, self._produced
+            self._run(self.config.settle_cycles)
+            if self.pending():
+                busy_steps = 0
+                continue
+            if self._applied != applied:
+                continue
+            if self._produced != produced or self._to_complete:
+                busy_steps += 1
+                if busy_steps < self.config.max_busy_steps:
+                    continue
+                self.log.warning("agent keeps producing output without input", steps=busy_steps)
+            break
+        out, self._collected = self._collected, []
+        return out
+
+    def _run(self, cycles: int) -> None:
+        self._agent.RunSelf(cycles)
+        try:
+            self._read_output()  # what the last cycle of the run put on the output link
+        except Exception:
+            self.callback_errors += 1
+            self.log.exception("reading the output link failed")
+
+    def step(self, *events: Event, posture: str | None = None) -> list[Output]:
+        """Convenience for tests and tools: set the posture, queue `events`, pump."""
+        if posture is not None:
+            self.set_posture(posture)
+        for event in events:
+            self.submit(event)
+        return self.pump()
+
+    def execute(self, command: str) -> tuple[bool, str]:
+        """Run a Soar command line on the agent (owner thread, between pumps): (ok, output)."""
+        out = self._agent.ExecuteCommandLine(command)
+        return bool(self._agent.GetLastCommandLineResult()), out
+
+    def wm_size(self) -> int:
+        """Working-memory elements now (from `stats`)."""
+        match = _WM_SIZE.search(self.execute("stats")[1])
+        return int(match.group(1)) if match else -1
+
+    # ------------------------------------------------------------------------------ guards
+    def _guard(self, fn: Callable[..., None]) -> Callable[..., None]:
+        """An exception escaping an SML callback ends the process (REFERENCE.md): log it instead."""
+
+        def guarded(*args: Any) -> None:
+            try:
+                fn(*args)
+            except Exception:
+                self.callback_errors += 1
+                self.log.exception("Soar callback failed", callback=fn.__name__)
+
+        return guarded
