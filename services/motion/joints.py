@@ -29,11 +29,11 @@ class Joint:
     hi: int
 
     def clamp(self, ticks: float) -> int:
-        return int(round(min(max(ticks, self.lo), self.hi)))
+        return round(min(max(ticks, self.lo), self.hi))
 
 
 def _lim(lo_deg: float, hi_deg: float) -> tuple[int, int]:
-    return int(round(CENTER + deg(lo_deg))), int(round(CENTER + deg(hi_deg)))
+    return round(CENTER + deg(lo_deg)), round(CENTER + deg(hi_deg))
 
 
 _TABLE: tuple[tuple[int, str, tuple[int, int]], ...] = (
@@ -74,7 +74,17 @@ HEAD_HOME: Pose = {HEAD_PAN: CENTER, HEAD_TILT: CENTER}
 _NEUTRAL_LEGS: Pose = {7: CENTER, 8: CENTER, 9: CENTER, 10: CENTER, 17: CENTER, 18: CENTER}
 
 SIT: Pose = {**ARMS, **_NEUTRAL_LEGS, 11: 1277, 12: 2797, 13: 3513, 14: 571, 15: 2843, 16: 1240, **HEAD_HOME}
-STAND: Pose = {**ARMS, **_NEUTRAL_LEGS, 11: 1660, 12: 2436, 13: 2646, 14: 1450, 15: 2409, 16: 1687, **HEAD_HOME}
+STAND: Pose = {
+    **ARMS,
+    **_NEUTRAL_LEGS,
+    11: 1660,
+    12: 2436,
+    13: 2646,
+    14: 1450,
+    15: 2409,
+    16: 1687,
+    **HEAD_HOME,
+}
 
 NOD_TILT: tuple[int, int] = (2337, 2004)
 SHAKE_PAN: tuple[int, int] = (1880, 2213)
