@@ -17,6 +17,7 @@ from pathlib import Path
 import zenoh
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from schemas.keys import Keys
 from services.cli.launcher import Launcher
@@ -52,7 +53,7 @@ class Timeline:
         with self._lock:
             self.console.print(f"{stamp}  [{style or _COLOURS.get(source, 'white')}]{source:<9}[/] {text}",
                                highlight=False, markup=True, soft_wrap=True)
-            self._file.write(f"{stamp}  {source:<9} {text}\n")
+            self._file.write(f"{stamp}  {source:<9} {Text.from_markup(text).plain}\n")
             self._file.flush()
 
     def close(self) -> None:
@@ -62,16 +63,20 @@ class Timeline:
 def summary(results: list[StepResult], title: str) -> Table:
     table = Table(title=title)
     for col in ("#", "step", "heard", "decision", "goals", "posture", "said", "check"):
-        table.add_column(col)
+        table.add_column(col, overflow="fold")
     for r in results:
         heard = (r.heard.command.value if r.heard and r.heard.command else ("-" if r.heard is None else "?"))
-        dec = f"{r.decision.verdict.value} ({r.decision.reason.value})" if r.decision else "-"
-        goals = ", ".join(g.action.value for g in r.goals) or "-"
-        said = "; ".join(r.said) or "-"
-        check = "[green]pass[/]" if r.ok else "[red]FAIL[/]: " + "; ".join(r.problems)
+        dec = f"{r.decision.verdict.value} {r.decision.reason.value}" if r.decision else "-"
+        goals = " ".join(g.action.value for g in r.goals) or "-"
+        said = " ".join(f'"{t}"' for t in r.said) or "-"
+        check = "[green]pass[/]" if r.ok else "[red]FAIL[/]"
         table.add_row(str(r.index), r.step.label(), heard, dec, goals,
                       r.posture.value if r.posture else "-", said, check)
     return table
+
+
+def problems(results: list[StepResult]) -> list[str]:
+    return [f"step {r.index} ({r.step.label()}): {'; '.join(r.problems)}" for r in results if not r.ok]
 
 
 def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = "en-us",
@@ -139,6 +144,8 @@ def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = "en-u
         timeline.close()
         logfile.close()
     console.print(summary(results, f"{scenario.name}: {sum(r.ok for r in results)}/{len(results)} steps as expected"))
+    for line in problems(results):
+        console.print(f"[red]{line}", highlight=False)
     wavs = sorted((out / "speech").glob("*.wav")) if (out / "speech").exists() else []
     console.print(f"spoken replies: {len(wavs)} WAV file(s) in {out / 'speech'}; timeline in {out / 'timeline.txt'}; "
                   f"service logs in {out / 'services.log'}", highlight=False)

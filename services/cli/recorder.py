@@ -15,6 +15,7 @@ from schemas.messages import (
     MarkObservation,
     MotionGoal,
     MotionState,
+    Reason,
     SpeechRequest,
     SpeechState,
     VoiceCommand,
@@ -40,7 +41,7 @@ def describe(event: Event) -> tuple[str, str]:
             shapes = ", ".join(f"{k.shape.value} {k.confidence:.2f}" for k in m.marks) or "no mark"
             return "vision", f"sees {shapes}  (frame {m.frame})"
         case "decision":
-            cmd = m.command.value if m.command else "(mark)"
+            cmd = m.command.value if m.command else ("(speech)" if m.reason is Reason.NOT_UNDERSTOOD else "(mark)")
             act = m.action.value if m.action else "no motion"
             return "reasoner", f"{m.verdict.value.upper():<6} {cmd:<6} reason={m.reason.value}  -> {act}  situation={m.situation.value}"
         case "goal":

@@ -5,19 +5,23 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
 
 1. grey image -> adaptive mean threshold (ink = darker than its neighbourhood by `offset`), which
    copes with uneven lighting;
-2. connected components, filtered by size, aspect and fill ratio in one vectorised pass;
+2. connected components, filtered in one vectorised pass by size, aspect, fill ratio (a filled disc
+   or square is too full), the frame edge, and a thin frame around each box that must be nearly
+   free of ink (an integral-image test: a mark sits on a card, a blob of texture does not);
 3. per surviving component: its outer contour and holes, then shape tests that survive rotation,
    perspective and blur -
-   O: one hole, outer and hole both ellipses (small fit residual), concentric;
+   O: one hole, outer and hole both ellipses (small fit residual), concentric, ring-thick;
    TRIANGLE: one hole, outer and hole both fill their minimum enclosing triangle, concentric;
    X: no hole, exactly four deep convexity defects clustered at the centre, four arms of similar
-   length, solidity of a bar cross;
-4. context: the mark must be isolated on a clean light surround (a margin of `surround` times its
-   size with almost no other ink, clearly brighter than the ink), and a ring's or triangle's hole
-   must be empty - this rejects letters inside words, faces, eyes, and shapes on cluttered texture;
+   length, the solidity of a bar cross;
+4. context: a clear light margin around the mark (0.3 of its extent, at most 2 % ink, clearly
+   brighter than the ink); a ring's or triangle's hole empty and as bright as the margin (a large
+   filled disc, hollowed by the local threshold, is not a ring); not a letter inside a word (two
+   same-height neighbours on its baseline or cap line);
 5. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
-A filled disc, a square (outline or filled) or a filled triangle is not a mark.
+A filled disc, a square (outline or filled) or a filled triangle is not a mark. By construction an
+isolated letter O / digit 0 or X with a clear margin is indistinguishable from a mark.
 """
 
 from __future__ import annotations
@@ -35,15 +39,18 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class DetectorConfig:
-    scales: tuple[int, ...] = (1, 4)  # pyramid factors: full resolution, then 1/4 for large marks
-    block: int = 31  # adaptive-threshold window, pixels at each scale (odd)
+    levels: tuple[tuple[int, int], ...] = ((1, 31), (4, 31))
+    """(downscale factor, adaptive-threshold window in pixels at that scale): full resolution for small
+    marks, a quarter for large ones (whose strokes are wider than the full-resolution window)."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
-    surround: float = 0.15  # clear margin around a mark, as a fraction of its size
-    max_surround_ink: float = 0.06  # fraction of the margin that may be ink
+    surround: float = 0.3  # clear margin around a mark, as a fraction of its size
+    min_hole_contrast: float = 0.7  # hole brightness above ink, relative to the margin's
+    max_surround_ink: float = 0.02  # fraction of the margin that may be ink
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_confidence: float = 0.5
+    max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
 
 
@@ -72,13 +79,30 @@ class MarkDetector:
 
     def __init__(self, config: DetectorConfig | None = None) -> None:
         self.config = config or DetectorConfig()
-        if self.config.block % 2 == 0 or self.config.block < 3:
-            raise ValueError(f"block must be odd and >= 3, got {self.config.block}")
+        for f, block in self.config.levels:
+            if f < 1 or block % 2 == 0 or block < 3:
+                raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         gray = to_gray(image)
+        # work at about 640x480 whatever the camera gives: the thresholds are tuned for that scale
+        # (and a large frame would cost more); boxes are mapped back to the input's pixels
+        scale = 1.0
+        if max(gray.shape) > self.config.max_side:
+            scale = max(gray.shape) / self.config.max_side
+            size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
+            gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
+        found = self._detect_gray(gray)
+        if scale == 1.0:
+            return found
+        return [
+            Detection(d.shape, d.confidence, tuple(round(v * scale) for v in d.box))  # type: ignore[arg-type]
+            for d in found
+        ]
+
+    def _detect_gray(self, gray: np.ndarray) -> list[Detection]:
         found: list[Detection] = []
-        for f in self.config.scales:
+        for f, block in self.config.levels:
             if f == 1:
                 g = cv2.GaussianBlur(gray, (3, 3), 0)
             else:
@@ -86,17 +110,18 @@ class MarkDetector:
                 if min(w, h) < 2 * self.config.min_size:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
-            for det in self._detect_scale(g):
+            for det in self._detect_scale(g, block, text_check=f <= 2):
                 x, y, w, h = det.box
                 found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
         return _merge(found, self.config.overlap)
 
     # ------------------------------------------------------------------ one pyramid level
-    def _detect_scale(self, g: np.ndarray) -> list[Detection]:
+    def _detect_scale(self, g: np.ndarray, block: int, text_check: bool) -> list[Detection]:
         cfg = self.config
-        binary = cv2.adaptiveThreshold(g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV,
-                                       cfg.block, cfg.offset)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+        binary = cv2.adaptiveThreshold(
+            g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV, block, cfg.offset
+        )
+        n, labels, stats = _components(binary)
         if n <= 1:
             return []
         H, W = g.shape
@@ -107,23 +132,34 @@ class MarkDetector:
             (short_side >= cfg.min_size)
             & (long_side <= 0.98 * min(H, W))
             & (long_side <= cfg.max_aspect * short_side)
-            & (fill >= 0.08) & (fill <= 0.72)
-            & (x > 0) & (y > 0) & (x + w < W) & (y + h < H)  # cut by the frame edge: not judged
+            & (fill >= 0.08)
+            & (fill <= 0.62)  # a filled disc is 0.79, a filled square 1
+            & (x > 0)
+            & (y > 0)
+            & (x + w < W)
+            & (y + h < H)  # cut by the frame edge: not judged
         )
         keep[0] = False  # background label
+        candidates = np.flatnonzero(keep)
+        if len(candidates):
+            candidates = candidates[_clear_frames(binary, stats[candidates])]
         out: list[Detection] = []
-        for i in np.flatnonzero(keep):
+        for i in candidates:
             det = self._judge(g, binary, labels, int(i), stats[i])
-            if det is not None and det.confidence >= cfg.min_confidence:
-                out.append(det)
+            if det is None or det.confidence < cfg.min_confidence:
+                continue
+            if text_check and _in_text_line(stats, int(i), g, labels):
+                continue
+            out.append(det)
         return out
 
-    def _judge(self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int,
-               stat: np.ndarray) -> Detection | None:
+    def _judge(
+        self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int, stat: np.ndarray
+    ) -> Detection | None:
         cfg = self.config
         x, y, w, h = (int(v) for v in stat[:4])
         size = float(max(w, h))
-        pad = int(math.ceil(cfg.surround * size)) + 2
+        pad = math.ceil(cfg.surround * size) + 2
         x0, y0 = max(0, x - pad), max(0, y - pad)
         x1, y1 = min(g.shape[1], x + w + pad), min(g.shape[0], y + h + pad)
         comp = np.where(labels[y0:y1, x0:x1] == i, np.uint8(255), np.uint8(0))
@@ -137,22 +173,63 @@ class MarkDetector:
         filled = np.zeros_like(comp)
         cv2.drawContours(filled, [blob.outer], -1, 255, cv2.FILLED)
         bin_roi = binary[y0:y1, x0:x1]
-        if blob.holes and not _holes_empty(filled, comp, bin_roi):
-            return None
-        m = int(math.ceil(cfg.surround * size))
-        grown = cv2.dilate(filled, cv2.getStructuringElement(cv2.MORPH_RECT, (2 * m + 1, 2 * m + 1)))
-        ring = cv2.subtract(grown, filled)
+        g_roi = g[y0:y1, x0:x1]
+        # the clear margin: everything within `surround` x the mark's extent of its outline - the extent
+        # is sqrt(hull area), not the box: a rotated X's box is 1.4 times wider, its card is not
+        m = cfg.surround * math.sqrt(cv2.contourArea(cv2.convexHull(blob.outer)))
+        dist = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
+        ring = cv2.inRange(dist, 1.5, max(m, 3.0))  # skip the blurred edge of the outline
         ring_n = cv2.countNonZero(ring)
         if ring_n == 0:
             return None
         if cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.max_surround_ink * ring_n:
             return None
-        g_roi = g[y0:y1, x0:x1]
         paper = cv2.mean(g_roi, mask=ring)[0]
         ink = cv2.mean(g_roi, mask=comp)[0]
         if paper < 20 or ink > cfg.max_contrast_ratio * paper:
             return None
+        if blob.holes:
+            # a hole is paper: empty of other ink and about as bright as the margin (a big filled
+            # disc, hollowed by the local threshold, has a dark 'hole')
+            holes = cv2.subtract(filled, comp)
+            n_hole = cv2.countNonZero(holes)
+            if n_hole == 0 or cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
+                return None
+            hole_level = cv2.minMaxLoc(g_roi, mask=holes)[1]  # brightest: a small hole is blurred
+            if hole_level - ink < cfg.min_hole_contrast * (paper - ink):
+                return None
         return Detection(shape, conf, (x, y, w, h))
+
+
+def _clear_frames(
+    binary: np.ndarray, stats: np.ndarray, margin: float = 0.1, max_ink: float = 0.2
+) -> np.ndarray:
+    """Cheap vectorised pre-test: little ink in a thin frame just outside each box (a mark sits on
+    a card; a blob of texture or a letter in a word does not). Boolean mask over `stats` rows."""
+    ii = cv2.integral(binary, sdepth=cv2.CV_32S)
+    H, W = binary.shape
+    x, y, w, h = (stats[:, k].astype(np.int64) for k in range(4))
+    m = np.maximum(2, np.ceil(margin * np.maximum(w, h)).astype(np.int64))
+    ox0, oy0 = np.maximum(0, x - m), np.maximum(0, y - m)
+    ox1, oy1 = np.minimum(W, x + w + m), np.minimum(H, y + h + m)
+
+    def box_sum(x0: np.ndarray, y0: np.ndarray, x1: np.ndarray, y1: np.ndarray) -> np.ndarray:
+        return (ii[y1, x1] - ii[y0, x1] - ii[y1, x0] + ii[y0, x0]).astype(np.int64)
+
+    ring = box_sum(ox0, oy0, ox1, oy1) - box_sum(x, y, x + w, y + h)
+    ring_area = (ox1 - ox0) * (oy1 - oy0) - w * h
+    return ring <= max_ink * 255 * np.maximum(ring_area, 1)
+
+
+def _components(binary: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """8-connected components with stats; 16-bit labels are twice as fast and almost always enough."""
+    try:
+        n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+            binary, 8, cv2.CV_16U, cv2.CCL_SPAGHETTI
+        )
+    except cv2.error:  # more than 65535 components: a pathological (speckle) frame
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+    return n, labels, stats
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:
@@ -184,8 +261,11 @@ def _blob(comp: np.ndarray, size: float) -> _Blob | None:
     area = cv2.contourArea(outer)
     if area <= 0 or len(outer) < 8:
         return None
-    holes = [contours[j] for j in range(len(contours))
-             if hier[j][3] == outer_idx and cv2.contourArea(contours[j]) >= 0.02 * area]
+    holes = [
+        contours[j]
+        for j in range(len(contours))
+        if hier[j][3] == outer_idx and cv2.contourArea(contours[j]) >= 0.02 * area
+    ]
     return _Blob(outer, holes, area, size)
 
 
@@ -207,36 +287,43 @@ def _ring_like(b: _Blob) -> tuple[Shape, float] | None:
     # O: both contours are ellipses
     e_out = _ellipse_residual(b.outer)
     e_in = _ellipse_residual(hole)
-    if e_out is not None and e_in is not None and e_out <= 0.05 and e_in <= 0.08 and offset <= 0.1 \
-            and 0.15 <= ratio <= 0.85 and _axis_ratio(b.outer) >= 0.3:
+    if (
+        e_out is not None
+        and e_in is not None
+        and e_out <= 0.05
+        and e_in <= 0.08
+        and offset <= 0.1
+        and 0.31 <= ratio <= 0.8
+        and _axis_ratio(b.outer) >= 0.3
+    ):
         badness = max(e_out / 0.05, e_in / 0.08, offset / 0.1)
         return Shape.O, 1.0 - 0.5 * badness
     # TRIANGLE: both contours fill their minimum enclosing triangle
     t_out = _triangle_fill(b.outer, b.area)
     t_in = _triangle_fill(hole, hole_area)
-    if t_out >= 0.84 and t_in >= 0.72 and offset <= 0.12 and ratio <= 0.8:
-        badness = max((1 - t_out) / 0.16, (1 - t_in) / 0.28, offset / 0.12)
+    if t_out >= 0.8 and t_in >= 0.66 and offset <= 0.12 and ratio <= 0.8:
+        badness = max((1 - t_out) / 0.2, (1 - t_in) / 0.34, offset / 0.12)
         return Shape.TRIANGLE, 1.0 - 0.5 * badness
     return None
 
 
 def _cross(b: _Blob) -> tuple[Shape, float] | None:
-    hull_pts = cv2.convexHull(b.outer)
+    hull_idx = cv2.convexHull(b.outer, returnPoints=False)
+    hull_pts = b.outer[hull_idx.reshape(-1)]
     hull_area = cv2.contourArea(hull_pts)
     if hull_area <= 0:
         return None
     solidity = b.area / hull_area
-    if not 0.18 <= solidity <= 0.68:
+    if not 0.18 <= solidity <= 0.5:
         return None
     try:
-        hull_idx = cv2.convexHull(b.outer, returnPoints=False)
         defects = cv2.convexityDefects(b.outer, hull_idx)
     except cv2.error:  # a self-touching contour
         return None
     if defects is None:
         return None
     scale = math.sqrt(hull_area)
-    d = defects[:, 0, :]
+    d = defects.reshape(-1, 4)
     deep = d[d[:, 3] / 256.0 >= 0.1 * scale]
     if len(deep) != 4:
         return None
@@ -253,22 +340,13 @@ def _cross(b: _Blob) -> tuple[Shape, float] | None:
     arms = []
     for k in range(4):
         a, z = order[k], order[(k + 1) % 4]
-        seg = pts[a:z + 1] if z > a else np.concatenate([pts[a:], pts[:z + 1]])
+        seg = pts[a : z + 1] if z > a else np.concatenate([pts[a:], pts[: z + 1]])
         arms.append(float(np.max(np.hypot(*(seg - centre).T))))
     arm_ratio = min(arms) / max(arms)
     if arm_ratio < 0.45:
         return None
     badness = max(offset / 0.15, spread / 0.3, (1 - arm_ratio) / 0.55)
     return Shape.X, 1.0 - 0.5 * badness
-
-
-def _holes_empty(filled: np.ndarray, comp: np.ndarray, bin_roi: np.ndarray) -> bool:
-    """No other ink inside the holes (a ring with eyes in it is a face, not an O)."""
-    inside = cv2.subtract(filled, comp)  # the holes
-    n = cv2.countNonZero(inside)
-    if n == 0:
-        return False
-    return cv2.countNonZero(cv2.bitwise_and(inside, bin_roi)) <= 0.03 * n
 
 
 def _centroid(c: np.ndarray) -> np.ndarray:
@@ -305,16 +383,62 @@ def _triangle_fill(c: np.ndarray, area: float) -> float:
     return float(area / tri_area) if tri_area > 0 else 0.0
 
 
+def _in_text_line(stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray) -> bool:
+    """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
+    two of them, the nearest less than half a letter height away and the other within two; or one
+    close neighbour of the very same height beside it. (Any one neighbour is not enough: the fingers
+    holding a card come close to a mark; and the dark background at a card's corners is not ink.)"""
+    x, y, w, h, area = (int(v) for v in stats[i][:5])
+    xs, ys, ws, hs, areas = (stats[:, k] for k in range(5))
+    cy = y + h / 2
+    gap = np.maximum(xs - (x + w), x - (xs + ws))  # horizontal gap between the boxes (<0: overlap)
+    similar = (
+        (hs >= 0.7 * h)
+        & (hs <= 1.45 * h)
+        & (np.abs(ys + hs / 2 - cy) <= 0.25 * h)
+        & ((np.abs(ys + hs - (y + h)) <= 0.12 * h) | (np.abs(ys - y) <= 0.12 * h))  # baseline or cap line
+        & (ws >= 0.1 * h)
+        & (ws <= 1.5 * h)
+        & (areas >= 0.15 * area)
+        & (gap >= 0)
+        & (gap <= 2.0 * h)
+    )
+    similar[0] = similar[i] = False
+    if not (similar & (gap <= 0.5 * h)).any():
+        return False
+    # keep only neighbours written in the same ink as the candidate
+    box = g[y : y + h, x : x + w]
+    ink = _component_mean(g, labels, stats, i)
+    paper = float(np.percentile(box, 90))
+    tolerance = max(8.0, 0.25 * (paper - ink))
+    for j in np.flatnonzero(similar):
+        if abs(_component_mean(g, labels, stats, int(j)) - ink) > tolerance:
+            similar[j] = False
+    near = similar & (gap <= 0.5 * h)
+    if not near.any():
+        return False
+    if int(similar.sum()) >= 2:
+        return True
+    twin = near & (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
+    return bool(twin.any())
+
+
+def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
+    x, y, w, h = (int(v) for v in stats[i][:4])
+    mask = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
+    return float(cv2.mean(g[y : y + h, x : x + w], mask=mask)[0])
+
+
 def _merge(dets: list[Detection], overlap: float) -> list[Detection]:
     """Greedy: best confidence first; drop any detection mostly overlapping one already kept."""
     kept: list[Detection] = []
     for d in sorted(dets, key=lambda d: -d.confidence):
-        if all(_overlap(d.box, k.box) <= overlap for k in kept):
+        if all(box_overlap(d.box, k.box) <= overlap for k in kept):
             kept.append(d)
     return kept
 
 
-def _overlap(a: Box, b: Box) -> float:
+def box_overlap(a: Box, b: Box) -> float:
     ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
     iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
     smaller = min(a[2] * a[3], b[2] * b[3])

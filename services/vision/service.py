@@ -1,12 +1,198 @@
-"""The vision service process: joins the bus with its liveliness token and health queryable."""
+"""The vision service: frames from a source -> mark detector -> k-of-n debounce -> `MarkObservation`.
+
+Publishes one `MarkObservation` per processed frame on `hri/<robot>/vision/marks` (an empty list when
+no mark is confirmed), stamped with the frame's capture time. A source that cannot be opened, or a
+camera that stops delivering, turns health `degraded` (naming the source and the alternatives) and
+is retried; the service itself keeps running. With a `synthetic:` source it also follows
+`SceneCommand` on `hri/<robot>/vision/scene`.
+"""
 
 from __future__ import annotations
 
-from services.runtime import ServiceContext
+import time
+from dataclasses import dataclass, field
+
+from schemas.messages import HealthStatus, MarkObservation, SceneCommand
+from services.runtime import ServiceContext, TypedPublisher
+from services.vision.debounce import DebounceConfig, Debouncer
+from services.vision.detector import MarkDetector
+from services.vision.sources import (
+    ALTERNATIVES,
+    EndOfStream,
+    FrameSource,
+    SourceError,
+    SyntheticSource,
+    open_source,
+)
 
 NAME = "vision"
 
 
-def serve(ctx: ServiceContext) -> None:
-    while not ctx.wait(1.0):
-        pass
+@dataclass(frozen=True)
+class VisionSettings:
+    source: str = "camera:0"
+    fps: float | None = None  # cap; None: the source's own rate (camera) or its default
+    debounce: DebounceConfig = field(default_factory=DebounceConfig)
+    loop: bool = False  # replay a video file or image folder forever
+    retry_s: float = 2.0  # wait between attempts to open a missing source
+    stall_s: float = 2.0  # a camera silent this long is reported
+    seed: int = 0  # synthetic scenes
+
+
+@dataclass
+class _Stats:
+    frames: int = 0
+    detect_s: float = 0.0
+    window_start: float = field(default_factory=time.monotonic)
+    window_frames: int = 0
+    fps: float = 0.0
+
+    def add(self, detect_s: float) -> None:
+        self.frames += 1
+        self.window_frames += 1
+        self.detect_s += detect_s
+        now = time.monotonic()
+        if now - self.window_start >= 2.0:
+            self.fps = self.window_frames / (now - self.window_start)
+            self.window_start, self.window_frames = now, 0
+
+
+def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
+    settings = settings or VisionSettings()
+    pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation)
+    detector = MarkDetector()
+    debounce = Debouncer(settings.debounce)
+    stats = _Stats()
+    ctx.update_detail(source=settings.source, debounce=str(settings.debounce), fps_cap=settings.fps)
+
+    holder = _SourceHolder(settings)
+    ctx.on_close(holder.close)
+    if settings.source.strip().startswith("synthetic:"):
+
+        def on_scene(cmd: SceneCommand) -> None:
+            holder.set_shape(cmd)
+            ctx.log.info("scene", shape=cmd.shape.value if cmd.shape else None)
+
+        ctx.subscribe(ctx.keys.vision_scene, SceneCommand, on_scene)
+    _run(ctx, settings, holder, detector, debounce, pub, stats)
+
+
+class _SourceHolder:
+    """The current source, built (and rebuilt after a failure) from the settings' spec."""
+
+    def __init__(self, settings: VisionSettings) -> None:
+        self.settings = settings
+        self.source: FrameSource | None = None
+        self._pending: SceneCommand | None = None
+
+    def open(self) -> FrameSource:
+        """Build and open the source; SourceError if it cannot be."""
+        if self.source is None:
+            self.source = open_source(self.settings.source, loop=self.settings.loop, seed=self.settings.seed)
+        self.source.open()
+        if self._pending is not None:
+            self.set_shape(self._pending)
+        return self.source
+
+    def set_shape(self, cmd: SceneCommand) -> None:
+        if isinstance(self.source, SyntheticSource):
+            self.source.set_shape(cmd.shape)
+        else:
+            self._pending = cmd  # applied once the synthetic source exists
+
+    def close(self) -> None:
+        if self.source is not None:
+            self.source.close()
+
+
+def _run(
+    ctx: ServiceContext,
+    settings: VisionSettings,
+    holder: _SourceHolder,
+    detector: MarkDetector,
+    debounce: Debouncer,
+    pub: TypedPublisher[MarkObservation],
+    stats: _Stats,
+) -> None:
+    opened = False
+    source: FrameSource | None = None
+    last_frame = time.monotonic()
+    next_due = time.monotonic()
+    while not ctx.stopping.is_set():
+        if not opened:
+            try:
+                source = holder.open()
+            except SourceError as exc:
+                ctx.set_status(HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES)
+                ctx.log.warning(
+                    "vision source unavailable, retrying",
+                    source=settings.source,
+                    error=str(exc),
+                    retry_in_s=settings.retry_s,
+                )
+                ctx.wait(settings.retry_s)
+                continue
+            opened = True
+            debounce.reset()  # a reopened source starts a new scene
+            last_frame = next_due = time.monotonic()
+            ctx.set_status(HealthStatus.OK, error=None, alternatives=None, source=settings.source)
+            ctx.log.info("vision source open", source=settings.source)
+        assert source is not None
+        try:
+            frame = source.read(timeout=0.5)
+        except EndOfStream:
+            ctx.log.info("vision source finished", source=settings.source, frames=stats.frames)
+            ctx.update_detail(finished=True)
+            source.close()
+            while not ctx.wait(1.0):
+                pass
+            return
+        except SourceError as exc:
+            ctx.set_status(HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES)
+            ctx.log.warning("vision source failed, reopening", source=settings.source, error=str(exc))
+            source.close()
+            opened = False
+            ctx.wait(settings.retry_s)
+            continue
+        now = time.monotonic()
+        if frame is None:
+            silent = now - last_frame
+            if silent > settings.stall_s:
+                ctx.set_status(
+                    HealthStatus.DEGRADED,
+                    error=f"no frames from {settings.source} for {silent:.1f} s",
+                    alternatives=ALTERNATIVES,
+                )
+            if silent > 3 * settings.stall_s:
+                ctx.log.warning(
+                    "vision source silent, reopening", source=settings.source, silent_s=round(silent, 1)
+                )
+                source.close()
+                opened = False
+            continue
+        if ctx.status is not HealthStatus.OK:
+            ctx.set_status(HealthStatus.OK, error=None, alternatives=None)
+        last_frame = now
+        t0 = time.perf_counter()
+        try:
+            found = detector.detect(frame.image)
+        except ValueError as exc:
+            ctx.log.warning("frame skipped", frame=frame.index, error=str(exc))
+            continue
+        stats.add(time.perf_counter() - t0)
+        confirmed = debounce.update(found)
+        pub.put(
+            MarkObservation(stamp=frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
+        )
+        if stats.frames % 15 == 0:
+            ctx.update_detail(
+                frames=stats.frames,
+                fps=round(stats.fps, 1),
+                detect_ms_mean=round(1000 * stats.detect_s / stats.frames, 2),
+            )
+        cap = settings.fps or source.default_fps
+        if cap:
+            next_due = max(next_due + 1.0 / cap, time.monotonic() - 1.0 / cap)
+            delay = next_due - time.monotonic()
+            if delay > 0 and ctx.wait(delay):
+                return

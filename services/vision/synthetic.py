@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import string
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -26,8 +26,21 @@ Box = tuple[int, int, int, int]
 Rng = np.random.Generator
 
 SKIMAGE_BACKGROUNDS: tuple[str, ...] = (
-    "astronaut", "brick", "camera", "chelsea", "coffee", "coins", "grass", "gravel",
-    "moon", "page", "text", "rocket", "clock", "hubble_deep_field", "immunohistochemistry",
+    "astronaut",
+    "brick",
+    "camera",
+    "chelsea",
+    "coffee",
+    "coins",
+    "grass",
+    "gravel",
+    "moon",
+    "page",
+    "text",
+    "rocket",
+    "clock",
+    "hubble_deep_field",
+    "immunohistochemistry",
 )
 DISTRACTORS: tuple[str, ...] = ("square", "disc", "text", "face", "cable", "texture", "card")
 
@@ -59,14 +72,23 @@ class Variation:
         return replace(self, **changes)  # type: ignore[arg-type]
 
 
-MILD = Variation(size=(60.0, 160.0), rotation_deg=0.0, tilt_deg=0.0, light=0.0, dim=(1.0, 1.0),
-                 blur=0.0, noise=2.0, jpeg=(0, 0), distractors=(0, 0))
+MILD = Variation(
+    size=(60.0, 160.0),
+    rotation_deg=0.0,
+    tilt_deg=0.0,
+    light=0.0,
+    dim=(1.0, 1.0),
+    blur=0.0,
+    noise=2.0,
+    jpeg=(0, 0),
+    distractors=(0, 0),
+)
 """A clean scene: one variation at a time is added to this in the tests."""
 
 
 @dataclass
 class Scene:
-    """One sampled scene: everything but the per-frame noise is fixed, so a held card stays put."""
+    """One sampled scene: everything but the sensor noise is fixed, so a held card stays put."""
 
     background: np.ndarray  # BGR, distractors drawn, before lighting
     shape: Shape | None
@@ -84,14 +106,19 @@ class Scene:
     jpeg: int
     skew: float = 0.0  # hand-drawn irregularity: X arm angle offset (deg)
     hand: bool = True
-    extras: dict[str, float] = field(default_factory=dict)
 
 
 class SceneGenerator:
     """Renders labelled frames. Deterministic for a given seed."""
 
-    def __init__(self, width: int = 640, height: int = 480, seed: int = 0,
-                 variation: Variation = Variation(), use_skimage: bool = True) -> None:
+    def __init__(
+        self,
+        width: int = 640,
+        height: int = 480,
+        seed: int = 0,
+        variation: Variation = Variation(),
+        use_skimage: bool = True,
+    ) -> None:
         self.width = width
         self.height = height
         self.variation = variation
@@ -108,13 +135,13 @@ class SceneGenerator:
         v, rng = self.variation, self.rng
         size = float(math.exp(rng.uniform(math.log(v.size[0]), math.log(v.size[1]))))
         size = min(size, 0.9 * min(self.width, self.height))
-        card = (rng.uniform(1.5, 2.1), 0.0)
+        card = (rng.uniform(1.7, 2.3), 0.0)
         card = (card[0], card[0] * rng.uniform(1.0, 1.35))
         tilt_mag = rng.uniform(0, v.tilt_deg)
         tilt_dir = rng.uniform(0, 2 * math.pi)
-        margin = 0.62 * size
-        cx = rng.uniform(margin, self.width - margin) if self.width > 2 * margin else self.width / 2
-        cy = rng.uniform(margin, self.height - margin) if self.height > 2 * margin else self.height / 2
+        rotation = float(rng.uniform(-v.rotation_deg, v.rotation_deg))
+        tilt = (tilt_mag * math.cos(tilt_dir), tilt_mag * math.sin(tilt_dir))
+        (cx, cy), size = self._place(size, rotation, tilt)
         paper_level = int(rng.integers(205, 256))
         tint = rng.integers(-12, 6, size=3)
         return Scene(
@@ -122,9 +149,9 @@ class SceneGenerator:
             shape=shape,
             size=size,
             stroke=float(rng.uniform(0.11, 0.19)),
-            rotation_deg=float(rng.uniform(-v.rotation_deg, v.rotation_deg)),
-            tilt=(tilt_mag * math.cos(tilt_dir), tilt_mag * math.sin(tilt_dir)),
-            center=(float(cx), float(cy)),
+            rotation_deg=rotation,
+            tilt=tilt,
+            center=(cx, cy),
             card=card,
             paper=tuple(int(np.clip(paper_level + t, 0, 255)) for t in tint),  # type: ignore[arg-type]
             ink=tuple(int(x) for x in rng.integers(0, 60, size=3)),  # type: ignore[arg-type]
@@ -136,16 +163,35 @@ class SceneGenerator:
             hand=bool(rng.random() < 0.6),
         )
 
-    def render(self, scene: Scene, jitter: float = 0.0) -> tuple[np.ndarray, list[Label]]:
-        """Render `scene`; `jitter` moves the card by up to that many pixels (a hand is never still)."""
+    def _place(
+        self, size: float, rotation: float, tilt: tuple[float, float]
+    ) -> tuple[tuple[float, float], float]:
+        """A card centre that keeps the whole mark inside the frame; shrinks a mark that cannot fit."""
+        for attempt in range(60):
+            if attempt and attempt % 10 == 0:
+                size *= 0.9
+            c = (float(self.rng.uniform(0, self.width)), float(self.rng.uniform(0, self.height)))
+            h_mat = _card_homography(1.2 * size, 1.2 * size, c, 1.0, rotation, tilt)
+            corners = cv2.perspectiveTransform(
+                np.array(
+                    [[[0, 0]], [[1.2 * size, 0]], [[1.2 * size, 1.2 * size]], [[0, 1.2 * size]]], np.float64
+                ),
+                h_mat,
+            ).reshape(-1, 2)
+            if (
+                corners.min() >= 2
+                and corners[:, 0].max() <= self.width - 2
+                and corners[:, 1].max() <= self.height - 2
+            ):
+                return c, size
+        return (self.width / 2, self.height / 2), size
+
+    def render(self, scene: Scene) -> tuple[np.ndarray, list[Label]]:
+        """Render `scene` (the same scene twice differs only in sensor noise)."""
         img = scene.background.copy()
         labels: list[Label] = []
         if scene.shape is not None:
-            center = scene.center
-            if jitter:
-                center = (center[0] + self.rng.uniform(-jitter, jitter),
-                          center[1] + self.rng.uniform(-jitter, jitter))
-            box = self._draw_card(img, scene, center)
+            box = self._draw_card(img, scene, scene.center)
             if box is not None:
                 labels.append(Label(scene.shape, box))
         out = cv2.multiply(img.astype(np.float32), cv2.merge([scene.light] * 3))
@@ -153,11 +199,12 @@ class SceneGenerator:
         if scene.noise > 0:
             noise = self.rng.standard_normal(out.shape, dtype=np.float32)
             out = cv2.scaleAdd(noise, scene.noise, out)
-        frame = np.clip(out, 0, 255, out=out).astype(np.uint8)
+        frame: np.ndarray = np.clip(out, 0, 255, out=out).astype(np.uint8)
         if scene.jpeg:
             ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, scene.jpeg])
-            if ok:
-                frame = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+            decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR) if ok else None
+            if decoded is not None:
+                frame = np.asarray(decoded)
         return frame, labels
 
     # ------------------------------------------------------------------ background and clutter
@@ -169,7 +216,7 @@ class SceneGenerator:
             big = cv2.resize(src, None, fx=scale, fy=scale, interpolation=cv2.INTER_LINEAR)
             y0 = int(rng.integers(0, big.shape[0] - h + 1))
             x0 = int(rng.integers(0, big.shape[1] - w + 1))
-            img = np.ascontiguousarray(big[y0:y0 + h, x0:x0 + w])
+            img = np.ascontiguousarray(big[y0 : y0 + h, x0 : x0 + w])
             if rng.random() < 0.5:
                 img = np.ascontiguousarray(img[:, ::-1])
         else:
@@ -190,7 +237,9 @@ class SceneGenerator:
             if rng.random() < 0.5:
                 cv2.fillPoly(img, [pts], colour, cv2.LINE_AA)
             else:
-                cv2.polylines(img, [pts], True, colour, max(2, int(size * rng.uniform(0.08, 0.2))), cv2.LINE_AA)
+                cv2.polylines(
+                    img, [pts], True, colour, max(2, int(size * rng.uniform(0.08, 0.2))), cv2.LINE_AA
+                )
         elif kind == "disc":
             cv2.circle(img, (int(cx), int(cy)), int(size / 2), colour, -1, cv2.LINE_AA)
         elif kind == "text":
@@ -223,10 +272,19 @@ class SceneGenerator:
         else:
             word = "".join(rng.choice(list("AOXVTKQDRB"), size=int(rng.integers(3, 6))))
             scale = side / (40 * len(word))
-            cv2.putText(card, word, (int(side * 0.05), int(c + 10 * scale)), cv2.FONT_HERSHEY_SIMPLEX,
-                        scale, ink, max(1, int(2 * scale)), cv2.LINE_AA)
-        h_mat = _card_homography(side, side, (cx, cy), 1.0, rng.uniform(-180, 180),
-                                 (rng.uniform(-30, 30), rng.uniform(-30, 30)))
+            cv2.putText(
+                card,
+                word,
+                (int(side * 0.05), int(c + 10 * scale)),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                scale,
+                ink,
+                max(1, int(2 * scale)),
+                cv2.LINE_AA,
+            )
+        h_mat = _card_homography(
+            side, side, (cx, cy), 1.0, rng.uniform(-180, 180), (rng.uniform(-30, 30), rng.uniform(-30, 30))
+        )
         _paste_warped(img, card, h_mat)
 
     def _draw_face(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
@@ -242,8 +300,17 @@ class SceneGenerator:
             e = (int(cx + dx * size), int(cy - 0.1 * size))
             cv2.ellipse(img, e, (int(size * 0.08), int(size * 0.05)), 0, 0, 360, (255, 255, 255), -1)
             cv2.circle(img, e, max(1, int(size * 0.035)), (40, 30, 20), -1, cv2.LINE_AA)
-        cv2.ellipse(img, (c[0], int(cy + 0.25 * size)), (int(size * 0.18), int(size * 0.07)), 0, 0, 180,
-                    (40, 40, 120), max(1, int(size * 0.03)), cv2.LINE_AA)
+        cv2.ellipse(
+            img,
+            (c[0], int(cy + 0.25 * size)),
+            (int(size * 0.18), int(size * 0.07)),
+            0,
+            0,
+            180,
+            (40, 40, 120),
+            max(1, int(size * 0.03)),
+            cv2.LINE_AA,
+        )
 
     def _lighting(self, strength: float) -> np.ndarray:
         rng, v = self.rng, self.variation
@@ -252,7 +319,7 @@ class SceneGenerator:
         gain = np.full((gh, gw), rng.uniform(*v.dim), np.float32)
         if strength > 0:
             ang = rng.uniform(0, 2 * math.pi)
-            ramp = (math.cos(ang) * (xx / gw - 0.5) + math.sin(ang) * (yy / gh - 0.5))
+            ramp = math.cos(ang) * (xx / gw - 0.5) + math.sin(ang) * (yy / gh - 0.5)
             gain *= 1.0 + strength * 0.9 * ramp
             # a soft shadow or a bright spot somewhere
             sx, sy, sr = rng.uniform(0, gw), rng.uniform(0, gh), rng.uniform(4, 12)
@@ -269,14 +336,18 @@ class SceneGenerator:
         cw, ch = scene.card[0] * s * k, scene.card[1] * s * k
         card = np.empty((int(ch), int(cw), 3), np.uint8)
         card[:] = scene.paper
-        mark_pts = _draw_mark(card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k,
-                              scene.ink, scene.skew)
+        mark_pts = _draw_mark(
+            card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k, scene.ink, scene.skew
+        )
         if scene.hand:
-            hc = (int(cw * self.rng.uniform(0.3, 0.7)), int(ch))
-            cv2.ellipse(card, hc, (int(cw * 0.16), int(ch * 0.14)), 0, 0, 360, (120, 150, 200), -1,
-                        cv2.LINE_AA)
-        h_mat = _card_homography(card.shape[1], card.shape[0], center, 1.0 / k, scene.rotation_deg,
-                                 scene.tilt)
+            # fingers holding a bottom corner of the card
+            hc = (int(cw * self.rng.choice([0.0, 1.0])), int(ch))
+            cv2.ellipse(
+                card, hc, (int(cw * 0.2), int(ch * 0.16)), 0, 0, 360, (120, 150, 200), -1, cv2.LINE_AA
+            )
+        h_mat = _card_homography(
+            card.shape[1], card.shape[0], center, 1.0 / k, scene.rotation_deg, scene.tilt
+        )
         _paste_warped(img, card, h_mat)
         proj = cv2.perspectiveTransform(mark_pts.reshape(-1, 1, 2).astype(np.float64), h_mat).reshape(-1, 2)
         x0, y0 = np.floor(proj.min(axis=0))
@@ -288,24 +359,39 @@ class SceneGenerator:
         return (x0, y0, x1 - x0, y1 - y0)
 
 
-def _draw_mark(card: np.ndarray, shape: Shape | None, c: tuple[float, float], s: float, t: float,
-               ink: tuple[int, int, int], skew: float) -> np.ndarray:
+def _draw_mark(
+    card: np.ndarray,
+    shape: Shape | None,
+    c: tuple[float, float],
+    s: float,
+    t: float,
+    ink: tuple[int, int, int],
+    skew: float,
+) -> np.ndarray:
     """Draw the mark (width `s`, stroke `t`) centred at `c`; return its outline points for the label."""
     cx, cy = c
     t = max(t, 1.5)
     if shape is Shape.O:
         r = (s - t) / 2
-        cv2.circle(card, (int(cx), int(cy)), int(round(r)), ink, int(round(t)), cv2.LINE_AA)
-        a = np.linspace(0, 2 * math.pi, 64, endpoint=False)
-        return np.stack([cx + (s / 2) * np.cos(a), cy + (s / 2) * np.sin(a)], axis=1)
+        cv2.circle(card, (int(cx), int(cy)), round(r), ink, round(t), cv2.LINE_AA)
+        ang = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+        return np.stack([cx + (s / 2) * np.cos(ang), cy + (s / 2) * np.sin(ang)], axis=1)
     if shape is Shape.TRIANGLE:
         a = s  # side
         r_out = a / math.sqrt(3)  # circumradius
-        verts = np.array([[cx + r_out * math.cos(math.radians(-90 + 120 * i)),
-                           cy + r_out * math.sin(math.radians(-90 + 120 * i))] for i in range(3)])
+        verts = np.array(
+            [
+                [
+                    cx + r_out * math.cos(math.radians(-90 + 120 * i)),
+                    cy + r_out * math.sin(math.radians(-90 + 120 * i)),
+                ]
+                for i in range(3)
+            ]
+        )
         # centroid at c; inner triangle inset by the stroke width
         inr = a / (2 * math.sqrt(3))
-        inner = c + (verts - c) * max(0.05, (inr - t) / inr)
+        centre = np.array(c)
+        inner = centre + (verts - centre) * max(0.05, (inr - t) / inr)
         cv2.fillPoly(card, [_fixed(verts)], ink, cv2.LINE_AA, shift=4)
         paper = tuple(int(x) for x in card[0, 0])
         cv2.fillPoly(card, [_fixed(inner)], paper, cv2.LINE_AA, shift=4)
@@ -313,15 +399,27 @@ def _draw_mark(card: np.ndarray, shape: Shape | None, c: tuple[float, float], s:
     if shape is Shape.X:
         h = s / 2 - t / 2
         pts = []
-        for ang in (45 + skew / 2, 135 - skew / 2):
-            dx, dy = h * math.cos(math.radians(ang)) * math.sqrt(2), h * math.sin(math.radians(ang)) * math.sqrt(2)
+        for bar in (45 + skew / 2, 135 - skew / 2):
+            dx, dy = (
+                h * math.cos(math.radians(bar)) * math.sqrt(2),
+                h * math.sin(math.radians(bar)) * math.sqrt(2),
+            )
             dx, dy = np.clip([dx, dy], -h, h)
             p0, p1 = (cx - dx, cy - dy), (cx + dx, cy + dy)
-            cv2.line(card, (int(p0[0] * 16), int(p0[1] * 16)), (int(p1[0] * 16), int(p1[1] * 16)), ink,
-                     int(round(t)), cv2.LINE_AA, shift=4)
+            cv2.line(
+                card,
+                (int(p0[0] * 16), int(p0[1] * 16)),
+                (int(p1[0] * 16), int(p1[1] * 16)),
+                ink,
+                round(t),
+                cv2.LINE_AA,
+                shift=4,
+            )
             for p in (p0, p1):
-                pts += [(p[0] + ox, p[1] + oy) for ox, oy in ((t / 2, t / 2), (-t / 2, -t / 2),
-                                                               (t / 2, -t / 2), (-t / 2, t / 2))]
+                pts += [
+                    (p[0] + ox, p[1] + oy)
+                    for ox, oy in ((t / 2, t / 2), (-t / 2, -t / 2), (t / 2, -t / 2), (-t / 2, t / 2))
+                ]
         return np.array(pts)
     return np.array([[cx, cy]])
 
@@ -330,8 +428,15 @@ def _fixed(pts: np.ndarray) -> np.ndarray:
     return np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2)
 
 
-def _card_homography(w: float, h: float, center: tuple[float, float], scale: float, rot_deg: float,
-                     tilt_deg: tuple[float, float], focal: float = 700.0) -> np.ndarray:
+def _card_homography(
+    w: float,
+    h: float,
+    center: tuple[float, float],
+    scale: float,
+    rot_deg: float,
+    tilt_deg: tuple[float, float],
+    focal: float = 700.0,
+) -> np.ndarray:
     """Homography taking card pixels to frame pixels: scale, rotate in plane, tilt in 3-D, project."""
     src = np.array([[0, 0], [w, 0], [w, h], [0, h]], np.float64)
     pts = (src - [w / 2, h / 2]) * scale
@@ -350,7 +455,9 @@ def _card_homography(w: float, h: float, center: tuple[float, float], scale: flo
 def _paste_warped(img: np.ndarray, patch: np.ndarray, h_mat: np.ndarray) -> None:
     """Warp `patch` by `h_mat` into `img`, blending along the anti-aliased patch edge."""
     ph, pw = patch.shape[:2]
-    corners = cv2.perspectiveTransform(np.array([[[0, 0]], [[pw, 0]], [[pw, ph]], [[0, ph]]], np.float64), h_mat)
+    corners = cv2.perspectiveTransform(
+        np.array([[[0, 0]], [[pw, 0]], [[pw, ph]], [[0, ph]]], np.float64), h_mat
+    )
     x0, y0 = np.floor(corners.reshape(-1, 2).min(axis=0)).astype(int)
     x1, y1 = np.ceil(corners.reshape(-1, 2).max(axis=0)).astype(int)
     x0, y0 = max(0, x0), max(0, y0)
@@ -359,8 +466,9 @@ def _paste_warped(img: np.ndarray, patch: np.ndarray, h_mat: np.ndarray) -> None
         return
     shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], np.float64) @ h_mat
     size = (x1 - x0, y1 - y0)
-    warped = cv2.warpPerspective(patch, shift, size, flags=cv2.INTER_AREA if np.abs(h_mat[0, 0]) < 0.6
-                                 else cv2.INTER_LINEAR)
+    warped = cv2.warpPerspective(
+        patch, shift, size, flags=cv2.INTER_AREA if np.abs(h_mat[0, 0]) < 0.6 else cv2.INTER_LINEAR
+    )
     mask = cv2.warpPerspective(np.full((ph, pw), 255, np.uint8), shift, size, flags=cv2.INTER_LINEAR)
     m = (mask.astype(np.float32) / 255.0)[..., None]
     roi = img[y0:y1, x0:x1]
@@ -371,18 +479,17 @@ def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int) -> None:
     h, w = patch.shape[:2]
     x0, y0, x1, y1 = max(0, x), max(0, y), min(img.shape[1], x + w), min(img.shape[0], y + h)
     if x1 > x0 and y1 > y0:
-        img[y0:y1, x0:x1] = patch[y0 - y:y1 - y, x0 - x:x1 - x]
+        img[y0:y1, x0:x1] = patch[y0 - y : y1 - y, x0 - x : x1 - x]
 
 
 def _motion_blur(img: np.ndarray, length: float, angle_deg: float) -> np.ndarray:
     if length < 1.5:
         return img
-    n = int(math.ceil(length)) | 1
+    n = math.ceil(length) | 1
     kernel = np.zeros((n, n), np.float32)
     c = n // 2
     dx, dy = math.cos(math.radians(angle_deg)) * length / 2, math.sin(math.radians(angle_deg)) * length / 2
-    cv2.line(kernel, (int(round(c - dx)), int(round(c - dy))), (int(round(c + dx)), int(round(c + dy))), 1.0, 1,
-             cv2.LINE_AA)
+    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1, cv2.LINE_AA)
     kernel /= kernel.sum()
     return cv2.filter2D(img, -1, kernel)
 
@@ -395,8 +502,7 @@ def _rotated_rect(cx: float, cy: float, w: float, h: float, ang: float) -> np.nd
 def _bezier(rng: Rng, w: int, h: int) -> np.ndarray:
     p = rng.uniform([-50, -50], [w + 50, h + 50], size=(4, 2))
     tt = np.linspace(0, 1, 40)[:, None]
-    curve = ((1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt ** 2 * p[2]
-             + tt ** 3 * p[3])
+    curve = (1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt**2 * p[2] + tt**3 * p[3]
     return np.round(curve).astype(np.int32).reshape(-1, 1, 2)
 
 
@@ -405,9 +511,16 @@ def _draw_text(img: np.ndarray, rng: Rng, org: tuple[int, int], colour: tuple[in
     for line in range(int(rng.integers(1, 4))):
         word = "".join(rng.choice(list(letters + "XOAXOV"), size=int(rng.integers(3, 9))))
         scale = float(rng.uniform(0.6, 2.5))
-        cv2.putText(img, word, (org[0], org[1] + int(line * 32 * scale)),
-                    int(rng.choice([cv2.FONT_HERSHEY_SIMPLEX, cv2.FONT_HERSHEY_DUPLEX, cv2.FONT_HERSHEY_TRIPLEX])),
-                    scale, colour, int(rng.integers(1, 5)), cv2.LINE_AA)
+        cv2.putText(
+            img,
+            word,
+            (org[0], org[1] + int(line * 32 * scale)),
+            int(rng.choice([cv2.FONT_HERSHEY_SIMPLEX, cv2.FONT_HERSHEY_DUPLEX, cv2.FONT_HERSHEY_TRIPLEX])),
+            scale,
+            colour,
+            int(rng.integers(1, 5)),
+            cv2.LINE_AA,
+        )
 
 
 def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
@@ -420,7 +533,10 @@ def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) 
     elif kind == 1:
         pat = ((xx + yy) // cell % 2) * 255
     else:
-        pat = rng.integers(0, 2, size=(s // cell + 1, s // cell + 1)).repeat(cell, 0).repeat(cell, 1)[:s, :s] * 255
+        pat = (
+            rng.integers(0, 2, size=(s // cell + 1, s // cell + 1)).repeat(cell, 0).repeat(cell, 1)[:s, :s]
+            * 255
+        )
     patch = np.repeat(pat.astype(np.uint8)[..., None], 3, axis=2)
     _paste(img, patch, int(cx - s / 2), int(cy - s / 2))
 
@@ -434,20 +550,25 @@ def _dark_or_any(rng: Rng) -> tuple[int, int, int]:
 def _procedural_background(rng: Rng, w: int, h: int) -> np.ndarray:
     """Low-frequency colour noise plus rectangles and stripes: a room-ish clutter without images."""
     small = rng.uniform(30, 220, size=(6, 8, 3)).astype(np.float32)
-    img = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    img: np.ndarray = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
     fine = rng.normal(0, 12, size=(h // 4, w // 4, 3)).astype(np.float32)
     img += cv2.resize(fine, (w, h), interpolation=cv2.INTER_LINEAR)
     img = np.clip(img, 0, 255).astype(np.uint8)
     for _ in range(int(rng.integers(3, 10))):
         x, y = int(rng.integers(0, w)), int(rng.integers(0, h))
-        cv2.rectangle(img, (x, y), (x + int(rng.integers(20, 200)), y + int(rng.integers(20, 200))),
-                      _dark_or_any(rng), -1)
+        cv2.rectangle(
+            img,
+            (x, y),
+            (x + int(rng.integers(20, 200)), y + int(rng.integers(20, 200))),
+            _dark_or_any(rng),
+            -1,
+        )
     return img
 
 
 def _load_backgrounds() -> list[np.ndarray]:
     try:
-        import skimage.data as data
+        from skimage import data
     except ImportError:
         log.info("scikit-image not importable: procedural backgrounds only")
         return []
@@ -455,21 +576,25 @@ def _load_backgrounds() -> list[np.ndarray]:
     for name in SKIMAGE_BACKGROUNDS:
         try:
             img = np.asarray(getattr(data, name)())
-        except Exception as exc:  # a sample that needs a download, or a changed API
+        except (AttributeError, OSError, ValueError) as exc:  # needs a download, or a changed API
             log.debug("skipping sample image", name=name, error=str(exc))
             continue
         if img.dtype != np.uint8:
             img = (img.astype(np.float32) * (255.0 / max(1.0, float(img.max())))).astype(np.uint8)
-        img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2BGR)
+        img = (
+            cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+            if img.ndim == 2
+            else cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2BGR)
+        )
         bank.append(img)
     return bank
 
 
 def _load_face() -> np.ndarray | None:
     try:
-        import skimage.data as data
+        from skimage import data
 
         img = np.asarray(data.astronaut())
-    except Exception:
+    except (ImportError, OSError, ValueError):
         return None
     return cv2.cvtColor(img[20:230, 150:330], cv2.COLOR_RGB2BGR)  # Eileen Collins's face

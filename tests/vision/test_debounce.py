@@ -1,0 +1,56 @@
+"""k-of-n debounce: confirmation delay, robustness to single noisy frames, release delay."""
+
+from __future__ import annotations
+
+import pytest
+
+from schemas.messages import Shape
+from services.vision.debounce import DebounceConfig, Debouncer
+from services.vision.detector import Detection
+
+X = Detection(Shape.X, 0.9, (10, 10, 40, 40))
+O_ = Detection(Shape.O, 0.8, (100, 10, 40, 40))
+
+
+def _run(deb: Debouncer, frames: list[list[Detection]]) -> list[set[Shape]]:
+    return [{d.shape for d in deb.update(f)} for f in frames]
+
+
+def test_confirmed_on_the_kth_frame_and_released_after_n_minus_k_plus_1_misses() -> None:
+    deb = Debouncer(DebounceConfig(3, 5))
+    out = _run(deb, [[X], [X], [X], [X], [], [], [], []])
+    assert out == [set(), set(), {Shape.X}, {Shape.X}, {Shape.X}, {Shape.X}, set(), set()]
+
+
+def test_single_noisy_frame_neither_raises_nor_drops_a_mark() -> None:
+    deb = Debouncer(DebounceConfig(3, 5))
+    assert _run(deb, [[O_], [], [], [O_], [], []]) == [set()] * 6  # flicker never confirms
+    deb.reset()
+    out = _run(deb, [[X], [X], [X], [], [X], [X]])
+    assert all(Shape.X in s for s in out[2:])  # one missed frame keeps it
+
+
+def test_shapes_are_independent_and_box_is_the_latest() -> None:
+    deb = Debouncer(DebounceConfig(2, 3))
+    moved = Detection(Shape.X, 0.7, (20, 20, 40, 40))
+    deb.update([X, O_])
+    out = deb.update([moved, O_])
+    assert {d.shape for d in out} == {Shape.X, Shape.O}
+    x = next(d for d in out if d.shape is Shape.X)
+    assert x.box == moved.box
+    assert x.confidence == pytest.approx(0.8)
+
+
+def test_one_of_one_passes_everything_through() -> None:
+    deb = Debouncer(DebounceConfig(1, 1))
+    assert _run(deb, [[X], [], [O_]]) == [{Shape.X}, set(), {Shape.O}]
+
+
+@pytest.mark.parametrize("text", ["3", "a/b", "0/5", "6/5", "3/5/7", ""])
+def test_bad_debounce_specs_are_rejected(text: str) -> None:
+    with pytest.raises(ValueError):
+        DebounceConfig.parse(text)
+
+
+def test_parse_round_trips() -> None:
+    assert str(DebounceConfig.parse("2/4")) == "2/4"

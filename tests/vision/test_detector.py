@@ -1,0 +1,143 @@
+"""The detector on generated frames: each variation alone, full clutter, non-marks, bad input."""
+
+from __future__ import annotations
+
+import zlib
+
+import cv2
+import numpy as np
+import pytest
+
+from schemas.messages import Shape
+from services.vision.detector import Detection, MarkDetector, box_overlap
+from services.vision.synthetic import MILD, SceneGenerator, Variation
+
+SHAPES = (Shape.X, Shape.O, Shape.TRIANGLE)
+PER_SHAPE = 8
+
+VARIATIONS: dict[str, Variation] = {
+    "clean": MILD,
+    "rotation": MILD.only(rotation_deg=180.0),
+    "tilt": MILD.only(tilt_deg=50.0, rotation_deg=180.0),
+    "small": MILD.only(size=(26.0, 40.0)),
+    "large": MILD.only(size=(250.0, 420.0)),
+    "uneven_light": MILD.only(light=1.0, dim=(0.45, 1.1)),
+    "motion_blur": MILD.only(blur=7.0),
+    "noise": MILD.only(noise=12.0),
+    "jpeg": MILD.only(jpeg=(30, 50)),
+    "clutter": MILD.only(distractors=(5, 8)),
+}
+
+
+@pytest.fixture(scope="module")
+def detector() -> MarkDetector:
+    return MarkDetector()
+
+
+def _correct(found: list[Detection], shape: Shape, box: tuple[int, int, int, int]) -> bool:
+    return any(d.shape == shape and box_overlap(d.box, box) >= 0.5 for d in found)
+
+
+@pytest.mark.parametrize("name", list(VARIATIONS))
+def test_each_variation_finds_every_shape(detector: MarkDetector, name: str) -> None:
+    gen = SceneGenerator(seed=zlib.crc32(name.encode()) % 1000, variation=VARIATIONS[name])
+    for shape in SHAPES:
+        hits = 0
+        for _ in range(PER_SHAPE):
+            img, labels = gen.frame(shape)
+            found = detector.detect(img)
+            hits += _correct(found, shape, labels[0].box)
+            # misclassified marks (stray detections elsewhere are the mark-free test's business)
+            wrong = [d for d in found if d.shape != shape and box_overlap(d.box, labels[0].box) > 0.2]
+            assert not wrong, f"{name}: {shape.value} mark also read as {wrong}"
+        assert hits >= PER_SHAPE - 1, f"{name}: found {hits}/{PER_SHAPE} {shape.value} marks"
+
+
+def test_mark_free_cluttered_frames_give_no_marks(detector: MarkDetector) -> None:
+    gen = SceneGenerator(seed=11, variation=Variation(distractors=(4, 8)))
+    frames = 60
+    false = sum(bool(detector.detect(gen.frame(None)[0])) for _ in range(frames))
+    assert false <= 2, f"{false}/{frames} mark-free frames produced a mark"
+
+
+def test_procedural_backgrounds_without_scikit_image(detector: MarkDetector) -> None:
+    gen = SceneGenerator(seed=3, variation=MILD.only(distractors=(2, 5)), use_skimage=False)
+    assert not gen.bank
+    img, labels = gen.frame(Shape.TRIANGLE)
+    assert _correct(detector.detect(img), Shape.TRIANGLE, labels[0].box)
+
+
+def _card(draw: str) -> np.ndarray:
+    """A white card on grey with one non-mark (or mark) drawn in the middle."""
+    img = np.full((480, 640, 3), 110, np.uint8)
+    cv2.rectangle(img, (170, 90), (470, 390), (235, 235, 235), -1)
+    ink = (30, 30, 30)
+    if draw == "square":
+        cv2.rectangle(img, (250, 170), (390, 310), ink, 18)
+    elif draw == "filled_square":
+        cv2.rectangle(img, (250, 170), (390, 310), ink, -1)
+    elif draw == "disc":
+        cv2.circle(img, (320, 240), 70, ink, -1, cv2.LINE_AA)
+    elif draw == "filled_triangle":
+        cv2.fillPoly(img, [np.array([[320, 170], [390, 300], [250, 300]], np.int32)], ink, cv2.LINE_AA)
+    elif draw == "word":
+        cv2.putText(img, "OXAO", (190, 260), cv2.FONT_HERSHEY_SIMPLEX, 2.6, ink, 9, cv2.LINE_AA)
+    elif draw == "ring":
+        cv2.circle(img, (320, 240), 60, ink, 18, cv2.LINE_AA)
+    elif draw == "cross":
+        cv2.line(img, (260, 180), (380, 300), ink, 20, cv2.LINE_AA)
+        cv2.line(img, (380, 180), (260, 300), ink, 20, cv2.LINE_AA)
+    return img
+
+
+@pytest.mark.parametrize("draw", ["square", "filled_square", "disc", "filled_triangle", "word"])
+def test_non_marks_on_a_card_are_rejected(detector: MarkDetector, draw: str) -> None:
+    assert detector.detect(_card(draw)) == []
+
+
+@pytest.mark.parametrize(("draw", "shape"), [("ring", Shape.O), ("cross", Shape.X)])
+def test_drawn_marks_on_a_card_are_found(detector: MarkDetector, draw: str, shape: Shape) -> None:
+    found = detector.detect(_card(draw))
+    assert [d.shape for d in found] == [shape]
+    x, y, w, h = found[0].box
+    assert abs(x + w / 2 - 320) < 8 and abs(y + h / 2 - 240) < 8
+    assert 0.5 <= found[0].confidence <= 1.0
+
+
+def test_faces_are_not_marks(detector: MarkDetector) -> None:
+    skimage_data = pytest.importorskip("skimage.data")
+    face = cv2.cvtColor(np.asarray(skimage_data.astronaut()), cv2.COLOR_RGB2BGR)
+    assert detector.detect(cv2.resize(face, (640, 480))) == []
+
+
+def test_grey_and_bgra_images_work(detector: MarkDetector) -> None:
+    img = _card("ring")
+    assert [d.shape for d in detector.detect(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))] == [Shape.O]
+    assert [d.shape for d in detector.detect(cv2.cvtColor(img, cv2.COLOR_BGR2BGRA))] == [Shape.O]
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        np.zeros((0, 0, 3), np.uint8),
+        np.zeros((48, 64, 3), np.float32),
+        np.zeros((48, 64, 2), np.uint8),
+        "img",
+    ],
+)
+def test_bad_images_raise_value_error(detector: MarkDetector, bad: object) -> None:
+    with pytest.raises(ValueError):
+        detector.detect(bad)  # type: ignore[arg-type]
+
+
+def test_tiny_image_is_fine(detector: MarkDetector) -> None:
+    assert detector.detect(np.full((8, 8, 3), 200, np.uint8)) == []
+
+
+def test_high_resolution_frames_are_scaled_and_boxes_mapped_back(detector: MarkDetector) -> None:
+    """A 1920x1440 frame with a mark filling most of it: found, box in the input's pixels."""
+    big = cv2.resize(_card("ring"), (1920, 1440), interpolation=cv2.INTER_CUBIC)
+    found = detector.detect(big)
+    assert [d.shape for d in found] == [Shape.O]
+    x, y, w, h = found[0].box
+    assert abs(x + w / 2 - 960) < 20 and abs(y + h / 2 - 720) < 20 and 390 < w < 440

@@ -1,0 +1,170 @@
+"""The vision service as a process on a real Zenoh router: video file end to end, synthetic scene
+driven by SceneCommand, a bad source, SIGTERM; and the `detect` command."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import cast
+
+import cv2
+import pytest
+
+from schemas.keys import Keys
+from schemas.messages import Health, HealthStatus, MarkObservation, SceneCommand, Shape
+from services.runtime import ServiceContext, decode
+from services.vision.synthetic import MILD, SceneGenerator
+from tests.conftest import ROOT, wait_for
+
+pytestmark = pytest.mark.system
+
+
+class Collector:
+    def __init__(self) -> None:
+        self.msgs: list[MarkObservation] = []
+        self.lock = threading.Lock()
+
+    def __call__(self, msg: MarkObservation) -> None:
+        with self.lock:
+            self.msgs.append(msg)
+
+    def snapshot(self) -> list[MarkObservation]:
+        with self.lock:
+            return list(self.msgs)
+
+    def shapes(self) -> list[set[Shape]]:
+        return [{m.shape for m in o.marks} for o in self.snapshot()]
+
+
+def _health(bus: ServiceContext) -> Health | None:
+    for r in bus.session.get(bus.keys.health("vision"), timeout=2.0):
+        if r.ok is not None:
+            return decode(r.ok.payload.to_bytes(), Health)
+    return None
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> int:
+    proc.send_signal(signal.SIGTERM)
+    return proc.wait(10)
+
+
+def test_video_file_end_to_end(
+    bus: ServiceContext, keys: Keys, start_service: Callable[..., subprocess.Popen[bytes]], tmp_path: Path
+) -> None:
+    gen = SceneGenerator(seed=5, variation=MILD)
+    scene_x, scene_none = gen.scene(Shape.X), gen.scene(None)
+    video = tmp_path / "marks.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), 30, (640, 480))
+    plan = [None] * 8 + [Shape.X] * 12 + [None] * 10
+    for shape in plan:
+        writer.write(gen.render(scene_x if shape else scene_none)[0])
+    writer.release()
+
+    got = Collector()
+    bus.subscribe(keys.vision_marks, MarkObservation, got)
+    t0 = time.time()
+    proc = start_service("vision", "--fps", "30", env={"HRI_VISION_SOURCE": str(video)})
+    wait_for(lambda: len(got.snapshot()) >= len(plan), timeout=30)
+    msgs = got.snapshot()
+    assert [m.frame for m in msgs] == list(range(1, len(plan) + 1))
+    assert all(t0 <= m.stamp <= time.time() for m in msgs)
+    shapes = got.shapes()
+    # X shown in frames 9..20: confirmed from its 3rd frame (3 of 5), gone on the 3rd frame without it
+    assert shapes[:10] == [set()] * 10
+    assert shapes[10:22] == [{Shape.X}] * 12
+    assert shapes[22:] == [set()] * 8
+    x = msgs[12].marks[0]
+    assert 0.5 <= x.confidence <= 1.0 and x.box[2] > 20
+    h = cast(
+        Health,
+        wait_for(lambda: (x := _health(bus)) is not None and x.detail.get("finished") and x, timeout=5),
+    )
+    assert h.status is HealthStatus.OK and h.published == len(plan)
+    assert proc.poll() is None  # a finished file leaves the service up
+    assert _stop(proc) == 0
+
+
+def test_synthetic_scene_follows_scene_commands(
+    bus: ServiceContext, keys: Keys, start_service: Callable[..., subprocess.Popen[bytes]]
+) -> None:
+    got = Collector()
+    bus.subscribe(keys.vision_marks, MarkObservation, got)
+    scene = bus.publisher(keys.vision_scene, SceneCommand)
+    proc = start_service("vision", env={"HRI_VISION_SOURCE": "synthetic:none", "HRI_VISION_FPS": "20"})
+    wait_for(lambda: len(got.snapshot()) >= 10, timeout=30)
+    assert all(s == set() for s in got.shapes())
+    for shape in (Shape.TRIANGLE, Shape.O, None):
+        scene.put(SceneCommand(shape=shape))
+        want = {shape} if shape else set()
+        n = len(got.snapshot())
+
+        def changed(n: int = n, want: set[Shape] = want) -> bool:
+            return len(got.snapshot()) > n + 5 and got.shapes()[-1] == want
+
+        wait_for(changed, timeout=10)
+    bus.session.put(keys.vision_scene, b'{"shape": "HEXAGON"}')
+    bus.session.put(keys.vision_scene, b"not json")
+    n = len(got.snapshot())
+    wait_for(lambda: len(got.snapshot()) > n + 5, timeout=10)
+    assert proc.poll() is None
+    h = _health(bus)
+    assert h is not None and h.rejected >= 2 and h.detail["debounce"] == "3/5"
+    assert _stop(proc) == 0
+
+
+@pytest.mark.parametrize("source", ["/no/such/video.mp4", "camera:/dev/video97"])
+def test_missing_source_degrades_and_keeps_running(
+    bus: ServiceContext, source: str, start_service: Callable[..., subprocess.Popen[bytes]]
+) -> None:
+    proc = start_service("vision", env={"HRI_VISION_SOURCE": source})
+    h = cast(
+        Health,
+        wait_for(
+            lambda: (x := _health(bus)) is not None and x.status is HealthStatus.DEGRADED and x, timeout=20
+        ),
+    )
+    assert source in h.detail["error"]
+    assert "synthetic:paper" in h.detail["alternatives"]
+    time.sleep(2.5)  # at least one retry
+    assert proc.poll() is None
+    assert _stop(proc) == 0
+    assert "retrying" in proc.log_path.read_text()  # type: ignore[attr-defined]
+
+
+def test_detect_command_prints_one_observation_per_image(tmp_path: Path) -> None:
+    gen = SceneGenerator(seed=9, variation=MILD)
+    paths = []
+    for i, shape in enumerate((Shape.O, None, Shape.TRIANGLE)):
+        p = tmp_path / f"img{i}.png"
+        cv2.imwrite(str(p), gen.frame(shape)[0])
+        paths.append(str(p))
+    out_dir = tmp_path / "seen"
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services.vision",
+            "detect",
+            *paths,
+            str(tmp_path / "nope.png"),
+            "--annotate",
+            str(out_dir),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert res.returncode == 1
+    assert "nope.png" in res.stderr
+    lines = [MarkObservation.model_validate(json.loads(x)) for x in res.stdout.splitlines()]
+    assert [o.frame for o in lines] == [0, 1, 2]
+    assert [[m.shape for m in o.marks] for o in lines] == [[Shape.O], [], [Shape.TRIANGLE]]
+    assert sorted(p.name for p in out_dir.iterdir()) == [f"img{i}.annotated.png" for i in range(3)]
