@@ -1,12 +1,134 @@
-"""The voice service process: joins the bus with its liveliness token and health queryable."""
+"""The voice service: utterances from a source -> recogniser -> one `VoiceCommand` per utterance.
+
+Publishes on `hri/<robot>/voice/command`. `command` is set only when the engine's acceptance test
+passed; otherwise it is null and `text` says what was heard. A source that cannot be opened (no
+PortAudio, no microphone, missing folder) turns health `degraded`, naming the source and the
+alternatives, and is retried every `retry_s`; the service keeps running. A file or folder source
+that has been read to the end leaves the service idle (health detail `source: finished`).
+"""
 
 from __future__ import annotations
 
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from schemas.messages import HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
+from services.voice.audio import AudioError
+from services.voice.engine import Engine, EngineError, make_engine
+from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 
 NAME = "voice"
 
 
-def serve(ctx: ServiceContext) -> None:
+@dataclass(frozen=True)
+class VoiceSettings:
+    source: str = "mic"
+    engine: str = "pocketsphinx"
+    vosk_model: str | None = None
+    lexicon: str | None = None
+    retry_s: float = 2.0
+
+    @classmethod
+    def from_env(cls) -> VoiceSettings:
+        return cls(
+            source=os.environ.get("HRI_VOICE_SOURCE") or "mic",
+            engine=os.environ.get("HRI_VOICE_ENGINE") or "pocketsphinx",
+            vosk_model=os.environ.get("HRI_VOSK_MODEL") or None,
+            lexicon=os.environ.get("HRI_VOICE_LEXICON") or None,
+        )
+
+
+@dataclass
+class _Stats:
+    utterances: int = 0
+    accepted: int = 0
+    rejected: int = 0
+    bad_audio: int = 0
+    decode_s: float = 0.0
+    audio_s: float = 0.0
+
+    def as_detail(self) -> dict[str, object]:
+        return {
+            "utterances": self.utterances, "accepted": self.accepted, "rejected_speech": self.rejected,
+            "bad_audio": self.bad_audio,
+            "real_time_factor": round(self.decode_s / self.audio_s, 4) if self.audio_s else None,
+        }
+
+
+def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
+    settings = settings or VoiceSettings.from_env()
+    ctx.update_detail(source=settings.source, engine=settings.engine)
+    # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
+    # SIGTERM always stops the service promptly.
+    listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
+    ctx.on_close(lambda: listener.join(timeout=3.0))
     while not ctx.wait(1.0):
         pass
+
+
+def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
+    engine = _engine_until_ready(ctx, settings)
+    if engine is None:
+        return
+    pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
+    stats = _Stats()
+
+    def on_bad_file(path: Path, exc: AudioError) -> None:
+        stats.bad_audio += 1
+        ctx.log.warning("bad audio skipped", file=str(path), error=str(exc))
+        ctx.update_detail(**stats.as_detail(), last_error=str(exc))
+
+    def handle(utt: Utterance) -> None:
+        try:
+            rec = engine.recognise(utt.pcm)
+        except (RuntimeError, ValueError) as exc:  # a decoder error on odd audio: skip it, keep listening
+            stats.bad_audio += 1
+            ctx.log.warning("decode failed", origin=utt.origin, error=str(exc))
+            return
+        stats.utterances += 1
+        stats.decode_s += rec.decode_s
+        stats.audio_s += rec.audio_s
+        if rec.command is None:
+            stats.rejected += 1
+        else:
+            stats.accepted += 1
+        msg = pub.put(rec.message(stamp=utt.stamp))
+        ctx.log.info("heard", origin=utt.origin, command=msg.command.value if msg.command else None,
+                     text=msg.text, confidence=msg.confidence, decode_ms=round(rec.decode_s * 1000, 1),
+                     latency_ms=round((time.time() - utt.stamp) * 1000, 1), **rec.detail)
+        ctx.update_detail(**stats.as_detail())
+
+    while not ctx.stopping.is_set():
+        try:
+            spec = SourceSpec.parse(settings.source)
+            for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file):
+                if ctx.status != HealthStatus.OK:
+                    ctx.set_status(HealthStatus.OK, source_error=None)
+                handle(utt)
+        except (SourceError, AudioError) as exc:
+            ctx.set_status(HealthStatus.DEGRADED, source_error=str(exc), alternatives=ALTERNATIVES)
+            ctx.log.warning("voice source unavailable, retrying", source=settings.source, error=str(exc),
+                            retry_in_s=settings.retry_s)
+            ctx.wait(settings.retry_s)
+            continue
+        if not ctx.stopping.is_set():
+            ctx.log.info("source finished", source=settings.source)
+            ctx.update_detail(source_state="finished")
+            ctx.stopping.wait()
+
+
+def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine | None:
+    """Build the engine; a missing model is reported as degraded health and retried."""
+    while not ctx.stopping.is_set():
+        try:
+            engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon)
+            ctx.log.info("engine ready", engine=engine.name)
+            return engine
+        except EngineError as exc:
+            ctx.set_status(HealthStatus.DEGRADED, engine_error=str(exc))
+            ctx.log.error("engine unavailable", engine=settings.engine, error=str(exc))
+            ctx.wait(max(settings.retry_s, 5.0))
+    return None

@@ -220,12 +220,14 @@ def noise_set(split: Split, seconds: float = 1.5) -> Iterator[Clip]:
 
 
 def recording(parts: list[Clip], gap_s: float = 1.0, noise_dbfs: float = -45.0, seed: int = 7) -> bytes:
-    """Clips joined by `gap_s` of low background noise: a long stream for the segmenter."""
+    """Clips joined by `gap_s` of silence, all over a continuous pink-noise background at `noise_dbfs`:
+    a long stream for the segmenter."""
     rng = np.random.default_rng(seed)
-    gap = int(gap_s * SAMPLE_RATE)
+    gap = np.zeros(int(gap_s * SAMPLE_RATE))
     chunks: list[np.ndarray] = []
     for clip in parts:
-        chunks.append(noise("pink", gap, rng) * 10 ** (noise_dbfs / 20))
+        chunks.append(gap)
         chunks.append(np.frombuffer(read_wav(clip.path), dtype="<i2").astype(np.float64) / 32768.0)
-    chunks.append(noise("pink", gap, rng) * 10 ** (noise_dbfs / 20))
-    return to_pcm(np.concatenate(chunks))
+    chunks.append(gap)
+    x = np.concatenate(chunks)
+    return to_pcm(x + noise("pink", x.size, rng) * 10 ** (noise_dbfs / 20))

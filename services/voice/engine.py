@@ -1,0 +1,63 @@
+"""What every recogniser returns, and how engines are chosen by name."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from schemas.messages import Command, VoiceCommand
+
+
+@dataclass(frozen=True)
+class Recognition:
+    """One decoded utterance: the accepted command (or None), what was heard, and why."""
+
+    command: Command | None
+    text: str
+    confidence: float
+    engine: str
+    decode_s: float = 0.0
+    audio_s: float = 0.0
+    detail: dict[str, Any] = field(default_factory=dict)
+    """Engine-specific evidence: raw scores and the rule that accepted or rejected."""
+
+    def message(self, stamp: float | None = None) -> VoiceCommand:
+        msg = VoiceCommand(command=self.command, text=self.text, confidence=round(self.confidence, 4),
+                           engine=self.engine)
+        if stamp is not None:
+            msg.stamp = stamp
+        return msg
+
+
+class Engine(Protocol):
+    name: str
+
+    def recognise(self, pcm: bytes) -> Recognition:
+        """Decode one utterance of 16 kHz, 16-bit mono PCM."""
+        ...
+
+
+class EngineError(RuntimeError):
+    """An engine that cannot start (missing model, bad configuration)."""
+
+
+ENGINES = ("pocketsphinx", "vosk")
+
+
+def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str | None = None) -> Engine:
+    """Build an engine by name; `EngineError` says what is missing."""
+    from services.voice.lexicon import Lexicon, LexiconError
+
+    try:
+        lexicon = Lexicon.load(lexicon_path) if lexicon_path else None
+    except LexiconError as exc:
+        raise EngineError(str(exc)) from None
+    if name == "pocketsphinx":
+        from services.voice.engine_pocketsphinx import PocketsphinxEngine, PsConfig
+
+        return PocketsphinxEngine(PsConfig(), lexicon=lexicon)
+    if name == "vosk":
+        from services.voice.engine_vosk import VoskEngine
+
+        return VoskEngine.from_path(vosk_model, lexicon=lexicon)
+    raise EngineError(f"unknown engine {name!r}: use one of {', '.join(ENGINES)}")

@@ -1,0 +1,125 @@
+"""Cut a live 16 kHz PCM stream into utterances with pocketsphinx's `Endpointer` (WebRTC-style VAD)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from pocketsphinx import Endpointer
+
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+
+
+@dataclass(frozen=True)
+class SegmenterConfig:
+    window_s: float = 0.3
+    """Length of the VAD decision window."""
+    ratio: float = 0.9
+    """Fraction of the window that must be speech (or silence) to switch state."""
+    vad_mode: int = 1
+    """Aggressiveness 0 (loose) .. 3 (strict)."""
+    max_utterance_s: float = 6.0
+    """An utterance is cut here even if speech goes on (a stuck VAD never blocks decoding)."""
+    min_utterance_s: float = 0.15
+    """Shorter bursts (clicks) are dropped."""
+    pre_roll_s: float = 0.25
+    """Audio kept before the VAD's speech start: the VAD misses weak onsets such as the /s/ of "stop"."""
+    post_roll_s: float = 0.15
+    """Audio kept after the VAD's speech end (as far as it has arrived)."""
+
+
+@dataclass(frozen=True)
+class Segment:
+    pcm: bytes
+    start_s: float
+    """Offset of the first sample in the stream, seconds."""
+    end_s: float
+
+
+@dataclass
+class Segmenter:
+    """Feed PCM of any length; get back the utterances that ended within it."""
+
+    config: SegmenterConfig = field(default_factory=SegmenterConfig)
+
+    def __post_init__(self) -> None:
+        self._ep = Endpointer(
+            window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,
+            sample_rate=SAMPLE_RATE,
+        )
+        self._frame = self._ep.frame_bytes
+        self._pending = b""
+        self._speech: list[bytes] = []
+        self._start = 0.0
+        self._consumed = 0  # bytes handed to the endpointer
+        self._history = bytearray()  # the most recent raw audio, for pre- and post-roll
+        self._history_start = 0  # stream offset (bytes) of _history[0]
+
+    @property
+    def frame_bytes(self) -> int:
+        return int(self._frame)
+
+    @property
+    def in_speech(self) -> bool:
+        return bool(self._speech)
+
+    def feed(self, pcm: bytes) -> list[Segment]:
+        out: list[Segment] = []
+        data = self._pending + pcm
+        n = len(data) // self._frame * self._frame
+        self._pending = data[n:]
+        for i in range(0, n, self._frame):
+            self._remember(data[i : i + self._frame])
+            self._consumed += self._frame
+            speech = self._ep.process(data[i : i + self._frame])
+            seg = self._after(speech)
+            if seg is not None:
+                out.append(seg)
+        return out
+
+    def flush(self) -> list[Segment]:
+        """End of stream: the utterance in progress, if any, ends here."""
+        tail = self._pending + b"\0" * ((-len(self._pending)) % self._frame)
+        self._pending = b""
+        if tail:
+            self._remember(tail)
+            self._consumed += len(tail)
+        speech = self._ep.end_stream(tail) if tail else None
+        if speech is not None:
+            if not self._speech:
+                self._start = self._ep.speech_start
+            self._speech.append(speech)
+        seg = self._emit()
+        return [seg] if seg is not None else []
+
+    def _after(self, speech: bytes | None) -> Segment | None:
+        if speech is None:
+            return None
+        if not self._speech:
+            self._start = float(self._ep.speech_start)
+        self._speech.append(speech)
+        too_long = sum(map(len, self._speech)) >= self.config.max_utterance_s * SAMPLE_RATE * SAMPLE_WIDTH
+        if not self._ep.in_speech or too_long:
+            return self._emit()
+        return None
+
+    def _remember(self, frame: bytes) -> None:
+        self._history += frame
+        keep = int((self.config.max_utterance_s + self.config.pre_roll_s + 2.0) * SAMPLE_RATE) * SAMPLE_WIDTH
+        if len(self._history) > keep:
+            drop = len(self._history) - keep
+            del self._history[:drop]
+            self._history_start += drop
+
+    def _emit(self) -> Segment | None:
+        if not self._speech:
+            return None
+        vad_bytes = sum(map(len, self._speech))
+        self._speech = []
+        rate = SAMPLE_RATE * SAMPLE_WIDTH
+        if vad_bytes / rate < self.config.min_utterance_s:
+            return None
+        start = max(self._history_start, int((self._start - self.config.pre_roll_s) * SAMPLE_RATE) * SAMPLE_WIDTH)
+        end = int((self._start + vad_bytes / rate + self.config.post_roll_s) * SAMPLE_RATE) * SAMPLE_WIDTH
+        end = min(end, self._history_start + len(self._history))
+        pcm = bytes(self._history[start - self._history_start : end - self._history_start])
+        return Segment(pcm, start / rate, end / rate)

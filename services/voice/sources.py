@@ -1,0 +1,290 @@
+"""Where utterances come from: a microphone, WAV file(s), a spool folder, or raw PCM on stdin.
+
+Every source yields `Utterance`s of 16 kHz, 16-bit, mono PCM. Streams (microphone, stdin, long
+WAV files) are cut into utterances by the VAD `Segmenter`; a short WAV file is one utterance.
+
+Source specs (`HRI_VOICE_SOURCE`):
+
+- `mic` or `mic:<device>`: a sounddevice input (PortAudio), device by index or name.
+- `<file>.wav`: one WAV file; `<dir>`: every `*.wav` in it, by name.
+- `watch:<dir>`: a spool folder. WAVs already there are decoded first (oldest first), then each
+  new one as it appears (polled every 50 ms). Names ending in `.tmp` are ignored: writers should
+  write `x.wav.tmp` and rename it to `x.wav`. A file whose header does not yet cover its data is
+  retried until its size has been stable for 0.5 s. Consumed files are left in place (remembered
+  by name, size and mtime) unless `consume="delete"`.
+- `stdin`: raw 16 kHz, 16-bit little-endian mono PCM on standard input.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import queue
+import select
+import sys
+import time
+import wave
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import BinaryIO, Literal
+
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
+from services.voice.segmenter import Segmenter, SegmenterConfig
+
+ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir>, stdin"
+CHUNK_S = 0.03
+
+
+class SourceError(RuntimeError):
+    """A source that cannot be opened (missing device, PortAudio, file or folder)."""
+
+
+@dataclass(frozen=True)
+class Utterance:
+    pcm: bytes
+    origin: str
+    """File name, or `<source>@<offset>s` for streams."""
+    stamp: float = field(default_factory=time.time)
+    """UNIX time the utterance was captured (stream: when its speech ended; file: when it was found)."""
+
+    @property
+    def seconds(self) -> float:
+        return duration_s(self.pcm)
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    kind: Literal["mic", "file", "folder", "watch", "stdin"]
+    target: str = ""
+
+    @classmethod
+    def parse(cls, spec: str) -> SourceSpec:
+        spec = spec.strip()
+        if spec == "mic":
+            return cls("mic")
+        if spec.startswith("mic:"):
+            return cls("mic", spec[4:])
+        if spec == "stdin":
+            return cls("stdin")
+        if spec.startswith("watch:"):
+            if not spec[6:]:
+                raise SourceError(f"watch: needs a folder, e.g. watch:/tmp/spool (sources: {ALTERNATIVES})")
+            return cls("watch", spec[6:])
+        if not spec:
+            raise SourceError(f"empty voice source; use one of: {ALTERNATIVES}")
+        path = Path(spec)
+        if path.is_dir():
+            return cls("folder", spec)
+        if path.suffix.lower() == ".wav" or path.exists():
+            return cls("file", spec)
+        raise SourceError(f"{spec!r} is neither a WAV file nor a folder; sources: {ALTERNATIVES}")
+
+    def __str__(self) -> str:
+        return {"mic": f"mic:{self.target}" if self.target else "mic", "stdin": "stdin",
+                "watch": f"watch:{self.target}"}.get(self.kind, self.target)
+
+
+Stop = Callable[[], bool]
+"""Returns True when the source should stop."""
+
+
+def stream_utterances(
+    chunks: Iterator[bytes], origin: str, config: SegmenterConfig | None = None
+) -> Iterator[Utterance]:
+    """VAD-cut a stream of PCM chunks into utterances."""
+    seg = Segmenter(config or SegmenterConfig())
+    for chunk in chunks:
+        for s in seg.feed(chunk):
+            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
+    for s in seg.flush():
+        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
+
+
+def trim_to_speech(pcm: bytes, config: SegmenterConfig | None = None) -> bytes:
+    """The span of a short recording from the VAD's first speech to its last (with pre- and post-roll);
+    the whole recording if the VAD finds none. Long silences around a word hurt decoding."""
+    seg = Segmenter(config or SegmenterConfig())
+    step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
+    found = [s for i in range(0, len(pcm), step) for s in seg.feed(pcm[i : i + step])] + seg.flush()
+    if not found:
+        return pcm
+    rate = SAMPLE_RATE * SAMPLE_WIDTH
+    start = max(0, int(found[0].start_s * SAMPLE_RATE) * SAMPLE_WIDTH)
+    end = min(len(pcm), int(found[-1].end_s * SAMPLE_RATE) * SAMPLE_WIDTH)
+    return pcm[start:end] if end - start >= 0.1 * rate else pcm
+
+
+def file_utterances(path: Path, *, max_whole_s: float = 5.0) -> Iterator[Utterance]:
+    """A short WAV is one utterance (trimmed to its speech); a longer one is a recording cut by the VAD."""
+    pcm = read_wav(path)
+    if duration_s(pcm) <= max_whole_s:
+        yield Utterance(trim_to_speech(pcm), path.name)
+        return
+    step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
+    yield from stream_utterances((pcm[i : i + step] for i in range(0, len(pcm), step)), path.name)
+
+
+def folder_files(folder: Path) -> list[Path]:
+    if not folder.is_dir():
+        raise SourceError(f"{folder}: no such folder (sources: {ALTERNATIVES})")
+    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".wav")
+
+
+def _complete(path: Path) -> bool:
+    """True when the WAV header's data length is all there (so a half-written file waits)."""
+    try:
+        with wave.open(str(path), "rb") as w:
+            want = w.getnframes() * w.getsampwidth() * w.getnchannels()
+            return want > 0 and len(w.readframes(w.getnframes())) >= want
+    except (wave.Error, EOFError, OSError):
+        return False
+
+
+@dataclass
+class SpoolWatcher:
+    """Finds new complete WAV files in a folder, oldest first."""
+
+    folder: Path
+    consume: Literal["keep", "delete"] = "keep"
+    settle_s: float = 0.5
+    _seen: set[tuple[str, int, int]] = field(default_factory=set)
+    _sizes: dict[str, tuple[int, float]] = field(default_factory=dict)
+
+    def ready(self) -> list[Path]:
+        if not self.folder.is_dir():
+            raise SourceError(f"spool folder {self.folder} does not exist (sources: {ALTERNATIVES})")
+        found: list[tuple[int, str, Path]] = []
+        now = time.monotonic()
+        for entry in os.scandir(self.folder):
+            if not entry.is_file() or entry.name.endswith(".tmp") or not entry.name.lower().endswith(".wav"):
+                continue
+            st = entry.stat()
+            key = (entry.name, st.st_size, st.st_mtime_ns)
+            if key in self._seen:
+                continue
+            path = Path(entry.path)
+            if not _complete(path):
+                size, since = self._sizes.get(entry.name, (-1, now))
+                if size != st.st_size:
+                    self._sizes[entry.name] = (st.st_size, now)
+                    continue
+                if now - since < self.settle_s:
+                    continue
+            self._sizes.pop(entry.name, None)
+            found.append((st.st_mtime_ns, entry.name, path))
+        return [p for _, _, p in sorted(found)]
+
+    def done(self, path: Path) -> None:
+        try:
+            st = path.stat()
+        except OSError:
+            return
+        self._seen.add((path.name, st.st_size, st.st_mtime_ns))
+        if self.consume == "delete":
+            path.unlink(missing_ok=True)
+
+
+def watch_utterances(
+    folder: Path, stop: Stop, *, poll_s: float = 0.05, consume: Literal["keep", "delete"] = "keep",
+    on_error: Callable[[Path, AudioError], None] | None = None,
+) -> Iterator[Utterance]:
+    watcher = SpoolWatcher(folder, consume)
+    while not stop():
+        for path in watcher.ready():
+            found = time.time()
+            try:
+                for utt in file_utterances(path):
+                    yield Utterance(utt.pcm, utt.origin, found)
+            except AudioError as exc:
+                if on_error is not None:
+                    on_error(path, exc)
+            finally:
+                watcher.done(path)
+        time.sleep(poll_s)
+
+
+def stdin_chunks(stream: BinaryIO, stop: Stop, poll_s: float = 0.2) -> Iterator[bytes]:
+    """Chunks of a byte stream until EOF or `stop()`. A real file descriptor is polled with `select`
+    so that a silent pipe never blocks shutdown."""
+    step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
+    try:
+        fd: int | None = stream.fileno()
+    except (AttributeError, OSError, io.UnsupportedOperation):
+        fd = None
+    while not stop():
+        if fd is None:
+            data = stream.read(step)
+        else:
+            ready, _, _ = select.select([fd], [], [], poll_s)
+            if not ready:
+                continue
+            data = os.read(fd, step)
+        if not data:
+            return
+        yield data
+
+
+def mic_chunks(device: str, stop: Stop) -> Iterator[bytes]:
+    """Raw PCM from a PortAudio input; `SourceError` names the problem and the alternatives."""
+    try:
+        import sounddevice as sd  # lazily: needs the system PortAudio library
+    except (ImportError, OSError) as exc:
+        raise SourceError(f"microphone unavailable: {exc} (install PortAudio: apt-get install "
+                          f"libportaudio2; or use another source: {ALTERNATIVES})") from None
+    dev: int | str | None = int(device) if device.isdigit() else (device or None)
+    chunks: queue.Queue[bytes] = queue.Queue(maxsize=200)
+
+    def callback(indata: bytes, frames: int, t: object, status: object) -> None:
+        try:
+            chunks.put_nowait(bytes(indata))
+        except queue.Full:  # the decoder fell behind: drop the oldest audio rather than block PortAudio
+            pass
+
+    try:
+        stream = sd.RawInputStream(samplerate=SAMPLE_RATE, channels=1, dtype="int16", device=dev,
+                                   blocksize=int(CHUNK_S * SAMPLE_RATE), callback=callback)
+        stream.start()
+    except (sd.PortAudioError, ValueError) as exc:  # no such device, no input channels
+        raise SourceError(f"microphone {device or 'default'!r} cannot be opened: {exc} "
+                          f"(sources: {ALTERNATIVES})") from None
+    try:
+        while not stop():
+            try:
+                yield chunks.get(timeout=0.2)
+            except queue.Empty:
+                if not stream.active:
+                    raise SourceError(f"microphone {device or 'default'!r} stopped delivering audio")
+    finally:
+        stream.stop()
+        stream.close()
+
+
+def utterances(
+    spec: SourceSpec, stop: Stop, *, stdin: BinaryIO | None = None,
+    on_error: Callable[[Path, AudioError], None] | None = None,
+    segmenter: SegmenterConfig | None = None,
+) -> Iterator[Utterance]:
+    """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open."""
+    if spec.kind == "mic":
+        yield from stream_utterances(mic_chunks(spec.target, stop), str(spec), segmenter)
+    elif spec.kind == "stdin":
+        yield from stream_utterances(stdin_chunks(stdin or sys.stdin.buffer, stop), "stdin", segmenter)
+    elif spec.kind == "file":
+        path = Path(spec.target)
+        if not path.is_file():
+            raise SourceError(f"{path}: no such WAV file (sources: {ALTERNATIVES})")
+        yield from file_utterances(path)
+    elif spec.kind == "folder":
+        for path in folder_files(Path(spec.target)):
+            if stop():
+                return
+            try:
+                yield from file_utterances(path)
+            except AudioError as exc:
+                if on_error is None:
+                    raise
+                on_error(path, exc)
+    else:
+        yield from watch_utterances(Path(spec.target), stop, on_error=on_error)
+

@@ -1,0 +1,114 @@
+"""The voice service as a process on a real Zenoh router: spool folder in, VoiceCommand out; no mic -> degraded."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from schemas.messages import Health, HealthStatus, VoiceCommand
+from services.runtime import ServiceContext, decode
+from services.voice import synth
+from tests.conftest import ROOT, service_env, wait_for
+
+pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+
+
+def health(bus: ServiceContext) -> Health | None:
+    for reply in bus.session.get(bus.keys.health("voice"), timeout=2.0):
+        if reply.ok is not None:
+            return decode(reply.ok.payload.to_bytes(), Health)
+    return None
+
+
+def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_path: Path) -> None:
+    spool = tmp_path / "spool"
+    spool.mkdir()
+    heard: list[VoiceCommand] = []
+    lock = threading.Lock()
+
+    def on_cmd(msg: VoiceCommand) -> None:
+        with lock:
+            heard.append(msg)
+
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, on_cmd)
+    # one file already waiting before the service starts, and a bad one that must not stop it
+    (spool / "0-bad.wav").write_text("not audio at all")
+    stop = synth.speech_clip("stop", "en-us", 150)
+    (spool / "1-stop.wav").write_bytes(stop.path.read_bytes())
+    proc = start_service("voice", env={"HRI_VOICE_SOURCE": f"watch:{spool}"})
+    wait_for(lambda: heard, timeout=30)
+    with lock:
+        first = heard[0]
+    assert first.command is not None and first.command.value == "stop"
+    assert first.confidence >= 0.5
+    assert first.engine == "pocketsphinx"
+
+    # a new file written atomically while the service runs: published with low latency
+    table = synth.speech_clip("table", "en-us", 150)
+    tmp = spool / "2-table.wav.tmp"
+    tmp.write_bytes(table.path.read_bytes())
+    t0 = time.time()
+    tmp.replace(spool / "2-table.wav")
+    wait_for(lambda: len(heard) >= 2, timeout=10)
+    latency = time.time() - t0
+    with lock:
+        second = heard[1]
+    assert second.command is None or second.command.value != "go"
+    assert second.stamp >= t0 - 0.01
+    assert latency < 2.0
+    # the bad file is reported once its size has settled, and skipped
+    h = wait_for(lambda: (x := health(bus)) is not None and x.detail.get("bad_audio") == 1 and x, timeout=5)
+    assert isinstance(h, Health)
+    assert "not a PCM WAV" in h.detail["last_error"]
+    assert h.detail["utterances"] == 2
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(15) == 0
+
+
+def test_missing_microphone_is_degraded_not_fatal(bus: ServiceContext, start_service) -> None:
+    proc = start_service("voice", env={"HRI_VOICE_SOURCE": "mic:no-such-device-42"})
+
+    def degraded() -> Health | None:
+        h = health(bus)
+        return h if h is not None and h.status == HealthStatus.DEGRADED else None
+
+    h = wait_for(degraded, timeout=20)
+    assert isinstance(h, Health)
+    assert "no-such-device-42" in h.detail["source_error"] or "PortAudio" in h.detail["source_error"]
+    assert "watch:<dir>" in h.detail["alternatives"]
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(15) == 0
+    log = Path(proc.log_path).read_text()  # type: ignore[attr-defined]
+    assert "retrying" in log
+    json.dumps(h.detail)  # the detail stays JSON
+
+
+def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_endpoint: str, robot_id: str,
+                                                  tmp_path: Path) -> None:
+    heard: list[VoiceCommand] = []
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
+    pcm = synth.recording([synth.speech_clip(w, "en-us", 150) for w in ("stop", "yes")], gap_s=1.0)
+    log = open(tmp_path / "voice.log", "wb")  # noqa: SIM115 - closed below
+    proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
+                            stdout=log, stderr=subprocess.STDOUT,
+                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"))
+    try:
+        assert proc.stdin is not None
+        proc.stdin.write(pcm)
+        proc.stdin.flush()  # the pipe stays open: the service must not wait for EOF to stop
+        wait_for(lambda: len(heard) >= 2, timeout=30)
+        assert [m.command.value if m.command else None for m in heard[:2]] == ["stop", "yes"]
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        log.close()
