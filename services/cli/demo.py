@@ -17,6 +17,7 @@ from pathlib import Path
 import zenoh
 from rich.console import Console
 from rich.table import Table
+from rich.markup import escape
 from rich.text import Text
 
 from schemas.keys import Keys
@@ -24,7 +25,8 @@ from services.cli.launcher import Launcher
 from services.cli.recorder import Event, Recorder, describe
 from services.cli.runner import ScenarioRunner, StepResult
 from services.cli.scenario import Scenario
-from services.runtime import ServiceContext, client_config
+from services.cli.utterance import DEFAULT_VOICE
+from services.runtime import ServiceContext, client_config, configure_logging
 
 _COLOURS = {"voice": "cyan", "vision": "magenta", "reasoner": "bold yellow", "motion": "green", "speech": "blue"}
 
@@ -46,7 +48,7 @@ class Timeline:
 
     def event(self, e: Event) -> None:
         source, text = describe(e)
-        self.line(e.t, source, text)
+        self.line(e.t, source, escape(text))
 
     def line(self, t: float, source: str, text: str, style: str | None = None) -> None:
         stamp = f"{t - self.t0:7.2f}"
@@ -79,9 +81,10 @@ def problems(results: list[StepResult]) -> list[str]:
     return [f"step {r.index} ({r.step.label()}): {'; '.join(r.problems)}" for r in results if not r.ok]
 
 
-def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = "en-us",
+def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAULT_VOICE,
              console: Console | None = None) -> int:
     console = console or Console()
+    configure_logging("warning")  # the timeline is the output; service logs go to services.log
     out = out.resolve()
     if out.exists():
         shutil.rmtree(out)  # a fresh robot: no danger latched by an earlier run

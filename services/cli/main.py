@@ -15,6 +15,7 @@ from schemas.messages import Command, Mark, MarkObservation, SceneCommand, Shape
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
+from services.cli.utterance import DEFAULT_VOICE
 from services.runtime.cli import ConnectOption, RobotOption
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__)
@@ -84,7 +85,7 @@ def demo(
     out: Annotated[Path, typer.Option(help="Folder for the spoken WAVs, the timeline and the service logs "
                                            "(emptied first)")] = Path("hri-demo"),
     port: Annotated[int, typer.Option(help="Router port on 127.0.0.1 (0: a free one)")] = 0,
-    voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = "en-us",
+    voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = DEFAULT_VOICE,
     list_scenarios: Annotated[bool, typer.Option("--list", help="List the built-in scenarios and exit")] = False,
 ) -> None:
     """Run a scenario (default: the paper's experiment) on the simulated robot, with a live timeline.

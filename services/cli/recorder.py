@@ -23,6 +23,10 @@ from schemas.messages import (
 from services.runtime import ServiceContext
 
 
+SENT_ENGINE = "scenario-send"
+"""`VoiceCommand.engine` of commands a scenario publishes directly (no recogniser involved)."""
+
+
 @dataclass(frozen=True)
 class Event:
     t: float  # monotonic time of receipt
@@ -36,6 +40,8 @@ def describe(event: Event) -> tuple[str, str]:
     match event.kind:
         case "heard":
             what = m.command.value if m.command else "(nothing)"
+            if m.engine == SENT_ENGINE:
+                return "voice", f"sent {what}  (published directly: the recogniser was bypassed)"
             return "voice", f'heard "{m.text}" -> {what}  confidence {m.confidence:.2f}  [{m.engine}]'
         case "seen":
             shapes = ", ".join(f"{k.shape.value} {k.confidence:.2f}" for k in m.marks) or "no mark"

@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from schemas.messages import Decision, MotionGoal, MotionState, Posture, SceneCommand, SpeechState, VoiceCommand
-from services.cli.recorder import Recorder
+from services.cli.recorder import SENT_ENGINE, Recorder
 from services.cli.scenario import Scenario, Step
-from services.cli.utterance import speak_into
+from services.cli.utterance import DEFAULT_VOICE, speak_into
 from services.runtime import ServiceContext
 
 SETTLE_S = 8.0  # longest a motion may take to finish before the next step
@@ -35,12 +35,13 @@ class StepResult:
 
 
 class ScenarioRunner:
-    def __init__(self, ctx: ServiceContext, recorder: Recorder, spool: Path, *, voice: str = "en-us") -> None:
+    def __init__(self, ctx: ServiceContext, recorder: Recorder, spool: Path, *, voice: str = DEFAULT_VOICE) -> None:
         self.ctx = ctx
         self.rec = recorder
         self.spool = spool
         self.voice = voice
         self._scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
+        self._voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
 
     # ------------------------------------------------------------------ readiness
     def wait_ready(self, timeout: float = 90.0) -> list[str]:
@@ -70,8 +71,12 @@ class ScenarioRunner:
         t0 = time.monotonic()
         known_goals = set(self.rec.goal_ids)
         exp = step.expect
-        if step.say is not None:
-            speak_into(self.spool, step.say, voice=self.voice)
+        if step.say is not None or step.send is not None:
+            if step.say is not None:
+                speak_into(self.spool, step.say, voice=self.voice)
+            else:
+                self._voice.put(VoiceCommand(command=step.send, text=step.send.value, confidence=1.0,
+                                             engine=SENT_ENGINE))
             res.heard = self.rec.wait(lambda: next(iter(self.rec.since(t0, "heard")), None), step.timeout)
             if res.heard is None:
                 res.problems.append("the voice service published nothing")
@@ -97,7 +102,7 @@ class ScenarioRunner:
         if exp is not None:
             self._check(res, t0, known_goals)
         else:
-            self._settle(SETTLE_S)
+            self._settle(t0, known_goals)
         res.goals = [g for g in self.rec.since(t0, "goal") if g.goal_id not in known_goals]
         res.said = [s.text for s in self.rec.since(t0, "say")]
         res.seconds = time.monotonic() - t0
@@ -145,27 +150,32 @@ class ScenarioRunner:
             if not spoken:
                 p.append(f'the robot did not say "{exp.said}"')
         if exp.posture is not None:
-            ok = self.rec.wait(lambda: self._settled_in(exp.posture), res.step.timeout)
+            ok = self.rec.wait(lambda: self._settled_in(exp.posture, self._new_goals(t0, known_goals)),
+                               res.step.timeout)
             res.posture = self.rec.latest_state.posture if self.rec.latest_state else None
             if not ok:
                 p.append(f"posture {res.posture.value if res.posture else 'unknown'}, expected {exp.posture.value}")
         else:
-            self._settle(SETTLE_S)
+            self._settle(t0, known_goals)
 
     def _new_goals(self, t0: float, known: set[str]) -> list[MotionGoal]:
         return [g for g in self.rec.since(t0, "goal") if g.goal_id not in known]
 
-    def _settled_in(self, posture: Posture) -> bool:
+    def _settled_in(self, posture: Posture, new_goals: list[MotionGoal]) -> bool:
+        """In `posture` and idle (or walking), with the motion service past the step's last goal."""
         s: MotionState | None = self.rec.latest_state
-        return s is not None and s.posture == posture and (s.action is None or posture == Posture.WALKING)
+        if s is None or s.posture != posture or (s.action is not None and posture != Posture.WALKING):
+            return False
+        return not new_goals or s.goal_id == new_goals[-1].goal_id
 
-    def _settle(self, timeout: float) -> None:
-        """Wait until the robot is idle (or steadily walking) and not speaking."""
+    def _settle(self, t0: float, known_goals: set[str], timeout: float = SETTLE_S) -> None:
+        """Wait until the robot has taken up the step's goals, is idle (or steadily walking) and silent."""
 
         def idle() -> bool:
             s = self.rec.latest_state
+            if s is None or not self._settled_in(s.posture, self._new_goals(t0, known_goals)):
+                return False
             speaking = [e.msg for e in self.rec.events if e.kind == "speaking"]
-            talking = bool(speaking) and isinstance(speaking[-1], SpeechState) and speaking[-1].speaking
-            return s is not None and (s.action is None or s.posture == Posture.WALKING) and not talking
+            return not (speaking and isinstance(speaking[-1], SpeechState) and speaking[-1].speaking)
 
         self.rec.wait(idle, timeout)

@@ -10,6 +10,8 @@
       - say: go
         expect: {verdict: refuse, reason: danger_sign, said: "Sorry, I cannot do it."}
       - wait: 1.0                       # a pause, in seconds
+      - send: go                        # a VoiceCommand published directly, as `hri send command`
+                                        # would: the recogniser is bypassed, and the timeline says so
 
 Every field of `expect` is optional; a step without `expect` only has to happen.
 """
@@ -47,6 +49,9 @@ class Step(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     say: str | None = Field(default=None, description="words spoken to the robot")
+    send: Command | None = Field(
+        default=None, description="a command published as a VoiceCommand, bypassing the recogniser"
+    )
     show: str | None = Field(default=None, description="X, O, TRIANGLE or none")
     wait: float | None = Field(default=None, ge=0, le=600)
     expect: Expect | None = None
@@ -55,9 +60,9 @@ class Step(BaseModel):
 
     @model_validator(mode="after")
     def _one_kind(self) -> Self:
-        kinds = [k for k in ("say", "show", "wait") if getattr(self, k) is not None]
+        kinds = [k for k in ("say", "send", "show", "wait") if getattr(self, k) is not None]
         if len(kinds) != 1:
-            raise ValueError(f"a step has exactly one of say, show, wait (got {kinds or 'none'})")
+            raise ValueError(f"a step has exactly one of say, send, show, wait (got {kinds or 'none'})")
         if self.show is not None and self.show.upper() not in {s.value for s in Shape} | {"NONE"}:
             raise ValueError(f"show must be X, O, TRIANGLE or none, not {self.show!r}")
         if self.say is not None and not self.say.strip():
@@ -75,6 +80,8 @@ class Step(BaseModel):
     def label(self) -> str:
         if self.say is not None:
             return f'say "{self.say}"'
+        if self.send is not None:
+            return f"send {self.send.value}"
         if self.show is not None:
             return f"show {self.show.upper() if self.shape else 'nothing'}"
         return f"wait {self.wait:g} s"

@@ -16,13 +16,16 @@ from pathlib import Path
 import numpy as np
 
 RATE = 16_000
+DEFAULT_VOICE = "en-us+f1"
+"""espeak-ng voice of the demo: the one on which the voice service recognises stand, down, yes, no
+and stop at 120 and 150 words a minute (on plain en-us it hears "down" as "no")."""
 
 
 class SpeechSynthesisError(RuntimeError):
     pass
 
 
-def synthesise(text: str, *, voice: str = "en-us", speed: int = 150) -> np.ndarray:
+def synthesise(text: str, *, voice: str = DEFAULT_VOICE, speed: int = 150) -> np.ndarray:
     """16 kHz mono int16 samples of `text` spoken by espeak-ng."""
     exe = shutil.which("espeak-ng")
     if exe is None:
@@ -61,7 +64,7 @@ def write_wav(path: Path, samples: np.ndarray, *, pad_s: float = 0.3, seed: int 
         w.writeframes(audio.tobytes())
 
 
-def speak_into(spool: Path, text: str, *, voice: str = "en-us", speed: int = 150) -> Path:
+def speak_into(spool: Path, text: str, *, voice: str = DEFAULT_VOICE, speed: int = 150) -> Path:
     """Drop one utterance into `spool`, atomically (written under a .tmp name, then renamed)."""
     spool.mkdir(parents=True, exist_ok=True)
     name = f"{uuid.uuid4().hex[:12]}.wav"
