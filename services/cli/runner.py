@@ -82,7 +82,7 @@ class ScenarioRunner:
                 res.problems.append("the voice service published nothing")
             else:
                 res.decision = self.rec.wait(lambda: self._decision_for(t0, res.heard), step.timeout)
-                if res.decision is None and (exp is None or exp.heard is not None or exp.verdict is not None):
+                if res.decision is None and exp is not None and (exp.verdict or exp.reason or exp.situation):
                     res.problems.append("the reasoner made no decision")
         elif step.show is not None:
             self._scene.put(SceneCommand(shape=step.shape))

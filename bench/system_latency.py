@@ -1,0 +1,160 @@
+"""End-to-end figures across the five real processes on the simulated OP2.
+
+    python bench/system_latency.py [--commands 20] [--stops 8]
+
+- command -> servo: a `VoiceCommand` published (as the voice service would) to the first SYNC_WRITE on
+  the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
+  service when the driver writes it), alternating "yes" (nod) and "no" (shake) while standing;
+- X shown -> halted: the synthetic camera starts showing an X while the robot walks; time to the
+  first frame reported with the confirmed X, to the first servo write of the `stop` goal, and to the
+  robot standing still in double support (walking ends at the next half-cycle boundary);
+- spoken -> heard: a synthesised WAV dropped in the voice spool to its `VoiceCommand`;
+- the resident memory (RSS) of the launcher with its router and the five services.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import zenoh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from schemas import Action, Keys, Posture, SceneCommand, Shape, VoiceCommand  # noqa: E402
+from schemas.keys import SERVICES  # noqa: E402
+from services.cli.demo import free_port  # noqa: E402
+from services.cli.launcher import Launcher  # noqa: E402
+from services.cli.recorder import Recorder  # noqa: E402
+from services.cli.runner import ScenarioRunner  # noqa: E402
+from services.cli.utterance import speak_into  # noqa: E402
+from services.runtime import ServiceContext, client_config  # noqa: E402
+
+
+def rss_mib(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+def pcts(xs: list[float]) -> str:
+    xs = sorted(xs)
+    if not xs:
+        return "no samples"
+    p = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]  # noqa: E731
+    return f"p50 {p(0.5) * 1000:7.1f} ms   p99 {p(0.99) * 1000:7.1f} ms   (n={len(xs)}, max {xs[-1] * 1000:.1f} ms)"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--commands", type=int, default=20)
+    ap.add_argument("--stops", type=int, default=8)
+    ap.add_argument("--utterances", type=int, default=8)
+    args = ap.parse_args()
+    out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
+    (out / "spool").mkdir()
+    env = {"HRI_STATE_DIR": str(out / "state"), "HRI_SPEECH_OUT": str(out / "speech"),
+           "HRI_VISION_SOURCE": "synthetic:none", "HRI_VOICE_SOURCE": f"watch:{out / 'spool'}",
+           "HRI_MOTION_SIM": "1", "HRI_LOG_LEVEL": "warning"}
+    log = (out / "services.log").open("w")
+    launcher = Launcher(port=free_port(), robot="bench", env=env, sink=lambda n, line: log.write(f"{n} | {line}\n"))
+    launcher.start()
+    ctx = ServiceContext("bench", zenoh.open(client_config([launcher.endpoint])), Keys("bench"))
+    rec = Recorder(ctx)
+    runner = ScenarioRunner(ctx, rec, out / "spool")
+    voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
+    scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
+
+    def say(word: str) -> float:
+        stamp = time.time()
+        voice.put(VoiceCommand(command=word, text=word, confidence=0.99, engine="bench", stamp=stamp))
+        return stamp
+
+    def settle(posture: Posture, timeout: float = 15.0) -> bool:
+        return bool(rec.wait(lambda: (s := rec.latest_state) and s.posture == posture and
+                             (s.action is None or posture == Posture.WALKING), timeout))
+
+    try:
+        missing = runner.wait_ready(90)
+        if missing:
+            raise SystemExit(f"robot did not come up: {missing}; logs in {out / 'services.log'}")
+        time.sleep(2.0)
+        say("stand")
+        settle(Posture.STANDING)
+
+        cmd_lat: list[float] = []
+        for i in range(args.commands):
+            word, action = ("yes", Action.NOD) if i % 2 == 0 else ("no", Action.SHAKE_HEAD)
+            t_mono = time.monotonic()
+            stamp = say(word)
+            goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == action), None), 5)
+            state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
+                                                    if s.goal_id == goal.goal_id and s.first_write), None), 5)
+            if state:
+                cmd_lat.append(state.first_write - stamp)
+            settle(Posture.STANDING)
+
+        seen_lat, stop_write_lat, halted_lat = [], [], []
+        for _ in range(args.stops):
+            scene.put(SceneCommand(shape=Shape.O))
+            time.sleep(0.6)
+            scene.put(SceneCommand(shape=None))
+            say("go")
+            if not settle(Posture.WALKING):
+                continue
+            time.sleep(1.0)
+            t_mono = time.monotonic()
+            shown = time.time()
+            scene.put(SceneCommand(shape=Shape.X))
+            obs = rec.wait(lambda: next((o for o in rec.since(t_mono, "seen")
+                                         if any(m.shape == Shape.X for m in o.marks)), None), 5)
+            goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == Action.STOP), None), 5)
+            stop_state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
+                                                         if s.goal_id == goal.goal_id and s.first_write), None), 5)
+            halted = rec.wait(lambda: next((e for e in rec.events if e.t >= t_mono and e.kind == "motion"
+                                            and e.msg.posture == Posture.STANDING and e.msg.action is None), None), 5)
+            if obs:
+                seen_lat.append(obs.stamp - shown)
+            if stop_state:
+                stop_write_lat.append(stop_state.first_write - shown)
+            if halted:
+                halted_lat.append(halted.msg.stamp - shown)
+            scene.put(SceneCommand(shape=None))
+            time.sleep(0.5)
+
+        heard_lat = []
+        for i in range(args.utterances):
+            t_mono = time.monotonic()
+            t_wall = time.time()
+            speak_into(out / "spool", "yes" if i % 2 == 0 else "no")
+            heard = rec.wait(lambda: next(iter(rec.since(t_mono, "heard")), None), 10)
+            if heard:
+                heard_lat.append(heard.stamp - t_wall)
+            settle(Posture.STANDING)
+
+        pids = {n: launcher.pid(n) for n in SERVICES}
+        rss = {n: rss_mib(p) for n, p in pids.items() if p}
+        rss["launcher+router"] = rss_mib(os.getpid())
+    finally:
+        ctx.close()
+        launcher.stop()
+        log.close()
+
+    print(f"command published -> first servo write carrying it:  {pcts(cmd_lat)}")
+    print(f"X shown -> frame reported with confirmed X:           {pcts(seen_lat)}")
+    print(f"X shown -> first servo write of the stop goal:        {pcts(stop_write_lat)}")
+    print(f"X shown -> standing still (double support):           {pcts(halted_lat)}")
+    print(f"WAV in spool -> VoiceCommand published:               {pcts(heard_lat)}")
+    print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in rss.items())
+          + f"; total {sum(rss.values()):.0f}")
+    print(f"(the bench process hosts the launcher and router; logs in {out / 'services.log'})")
+
+
+if __name__ == "__main__":
+    main()

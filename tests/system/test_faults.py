@@ -1,0 +1,90 @@
+"""Faults across real processes: killed services, a restarted reasoner, a vanished reasoner, garbage."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+from schemas import Action, Posture
+from schemas.keys import SERVICES
+from tests.system.conftest import Robot
+
+
+def _kill(robot: Robot, name: str) -> int:
+    pid = robot.launcher.pid(name)
+    assert pid is not None
+    os.kill(pid, signal.SIGKILL)
+    return pid
+
+
+def _wait_restarted(robot: Robot, name: str, old: int) -> None:
+    assert robot.rec.wait(lambda: robot.launcher.pid(name) not in (None, old), timeout=20)
+    assert robot.rec.wait(lambda: (h := robot.health(name)) is not None and h.detail.get("pid") != old,
+                          timeout=30), f"{name} did not come back"
+
+
+def test_restarted_reasoner_still_refuses_go_after_an_x(robot: Robot) -> None:
+    robot.play([
+        {"say": "stand", "expect": {"posture": "standing"}},
+        {"show": "X", "expect": {"situation": "danger"}},
+        {"show": "none"},
+    ])
+    old = _kill(robot, "reasoner")
+    _wait_restarted(robot, "reasoner", old)
+    t0 = time.monotonic()
+    robot.play([{"send": "go", "expect": {"verdict": "refuse", "reason": "danger_sign", "no_action": True}}])
+    assert not [g for g in robot.rec.since(t0, "goal") if g.action is Action.WALK_FORWARD]
+    assert robot.launcher.restarts("reasoner") == 1
+
+
+def test_motion_stops_walking_when_the_reasoner_is_gone(robot: Robot) -> None:
+    robot.play([{"send": "go", "expect": {"posture": "walking"}}])
+    robot.launcher._restart = False  # the reasoner must stay dead for this test
+    _kill(robot, "reasoner")
+    t_kill = time.monotonic()
+    stopped = robot.rec.wait(lambda: (s := robot.rec.latest_state) and s.posture is not Posture.WALKING and
+                             s.action is None, timeout=10)
+    assert stopped, "motion kept walking without a reasoner"
+    assert time.monotonic() - t_kill < 3.0
+
+
+def test_killing_each_service_never_lets_the_robot_walk_in_danger(robot: Robot) -> None:
+    robot.play([
+        {"say": "stand", "expect": {"posture": "standing"}},
+        {"show": "X", "expect": {"situation": "danger"}},
+        {"show": "none"},
+    ])
+    t0 = time.monotonic()
+    for name in SERVICES:
+        old = _kill(robot, name)
+        # Ask to walk while the service is down and again once it is back.
+        robot.play([{"send": "go", "timeout": 3}])
+        _wait_restarted(robot, name, old)
+        robot.play([{"send": "go", "expect": {"verdict": "refuse", "reason": "danger_sign"}}])
+    assert not [g for g in robot.rec.since(t0, "goal") if g.action is Action.WALK_FORWARD]
+    assert not robot.walking_states_since(t0)
+    assert all(robot.launcher.restarts(n) == 1 for n in SERVICES)
+    # And safety still releases: an O lets it walk again.
+    robot.play([{"show": "O", "expect": {"situation": "safe"}}, {"send": "go", "expect": {"posture": "walking"}}])
+
+
+GARBAGE = [b"not json", b"{}", b"[]", b"null", b'{"command": "fly"}', b"\x00\xff" * 64, b"{" * 10_000,
+           b'{"marks": [{"shape": "X", "confidence": 7, "box": [0, 0, 1, 1]}]}']
+
+
+def test_garbage_on_every_key_leaves_every_service_running(robot: Robot) -> None:
+    k = robot.ctx.keys
+    keys = [k.vision_marks, k.voice_command, k.reasoner_decision, k.motion_goal, k.motion_state, k.speech_say,
+            k.speech_state, k.vision_scene]
+    before = robot.pids()
+    for key in keys:
+        for payload in GARBAGE:
+            robot.ctx.session.put(key, payload)
+    time.sleep(2.0)
+    assert robot.pids() == before
+    for name in ("vision", "reasoner", "motion", "speech"):
+        h = robot.health(name)
+        assert h is not None and h.rejected >= 1, (name, h)
+    # Still working afterwards.
+    robot.play([{"say": "stand", "expect": {"verdict": "obey", "posture": "standing"}}])
