@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
-import socket
 import statistics
 import time
 
 import zenoh
 
 from schemas import Keys, VoiceCommand
-from services.cli.router import Router, loopback_endpoint
+from services.cli.router import Router, free_port, loopback_endpoint
 from services.runtime import ServiceContext, client_config
 
 
@@ -75,12 +74,6 @@ def run(count: int, rate: float, endpoint: str, robot: str) -> tuple[list[float]
     pub.join(30)
     sub.join(30)
     return lat, times
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def pct(values: list[float], q: float) -> float:

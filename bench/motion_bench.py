@@ -19,7 +19,6 @@ import json
 import os
 import random
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -34,16 +33,11 @@ import zenoh
 
 from schemas.keys import Keys
 from schemas.messages import Action, Health, MotionGoal, MotionState, Posture
+from services.cli.router import free_port
 from services.runtime import ServiceContext, client_config, decode
 
 ROOT = Path(__file__).resolve().parents[1]
 TICK = os.sysconf("SC_CLK_TCK")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def cpu_seconds(pid: int, *, children: bool = True) -> float:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -36,23 +35,8 @@ sys.path.insert(0, str(ROOT))
 
 from schemas.keys import Keys  # noqa: E402
 from schemas.messages import Command, Decision, Health, MotionGoal, MotionState, Posture, VoiceCommand  # noqa: E402
+from services.cli.router import free_port, wait_listening  # noqa: E402
 from services.runtime import ServiceContext, client_config, decode  # noqa: E402
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def _wait_port(port: int, timeout: float = 10.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
-        time.sleep(0.05)
-    raise RuntimeError(f"router did not listen on {port}")
 
 
 class Collector:
@@ -150,7 +134,7 @@ def main(
     log_level: str = typer.Option("warning", help="HRI_LOG_LEVEL of the reasoner under test"),
 ) -> None:
     """Print decision latency p50/p99 and the sustained input rate of the reasoner."""
-    port = _free_port()
+    port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     robot = f"bench{os.getpid()}"
     procs: list[subprocess.Popen[bytes]] = []
@@ -161,7 +145,7 @@ def main(
         try:
             procs.append(subprocess.Popen([sys.executable, "-m", "services.cli.router", "--port", str(port)],
                                           cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-            _wait_port(port)
+            wait_listening(port)
             procs.append(subprocess.Popen([sys.executable, "-m", "services.reasoner"], cwd=ROOT, env=env,
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
             ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))

@@ -17,7 +17,6 @@ import json
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -35,6 +34,7 @@ sys.path.insert(0, str(ROOT))
 
 from schemas.keys import Keys  # noqa: E402
 from schemas.messages import Health, SpeechRequest, SpeechState  # noqa: E402
+from services.cli.router import free_port, wait_listening  # noqa: E402
 from services.runtime import ServiceContext, client_config, decode  # noqa: E402
 from services.speech.config import SpeechConfig  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
@@ -56,22 +56,6 @@ def bench_synth(text: str, n: int) -> dict[str, float]:
     return {**stats(times), "audio_s": round(duration, 3)}
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def wait_port(port: int, timeout: float = 15.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
-        time.sleep(0.05)
-    raise RuntimeError(f"router did not listen on port {port}")
-
-
 def bench_bus(text: str, n: int) -> dict[str, object]:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
@@ -84,7 +68,7 @@ def bench_bus(text: str, n: int) -> dict[str, object]:
     try:
         procs.append(subprocess.Popen([sys.executable, "-m", "services.cli.router", "--port", str(port)],
                                       cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        wait_port(port)
+        wait_listening(port)
         ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))
         try:
             events: dict[tuple[str | None, bool], float] = {}

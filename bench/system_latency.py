@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import tempfile
 import time
@@ -28,9 +27,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from schemas import Action, Keys, Posture, SceneCommand, Shape, VoiceCommand  # noqa: E402
 from schemas.keys import SERVICES  # noqa: E402
-from services.cli.demo import free_port  # noqa: E402
 from services.cli.launcher import Launcher  # noqa: E402
 from services.cli.recorder import Recorder  # noqa: E402
+from services.cli.router import free_port  # noqa: E402
 from services.cli.runner import ScenarioRunner  # noqa: E402
 from services.cli.utterance import speak_into  # noqa: E402
 from services.runtime import ServiceContext, client_config  # noqa: E402

@@ -12,7 +12,6 @@ import argparse
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -26,16 +25,11 @@ import zenoh
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from schemas.keys import Keys
-from schemas.messages import VoiceCommand
-from services.runtime import ServiceContext, client_config
-from services.voice import synth
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+from schemas.keys import Keys  # noqa: E402
+from schemas.messages import VoiceCommand  # noqa: E402
+from services.cli.router import free_port  # noqa: E402
+from services.runtime import ServiceContext, client_config  # noqa: E402
+from services.voice import synth  # noqa: E402
 
 
 def main() -> int:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -17,15 +16,10 @@ import pytest
 import zenoh
 
 from schemas.keys import Keys
+from services.cli.router import free_port, wait_listening
 from services.runtime import ServiceContext, client_config
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def wait_for(predicate: Callable[[], object], timeout: float = 10.0, interval: float = 0.02) -> object:
@@ -40,16 +34,6 @@ def wait_for(predicate: Callable[[], object], timeout: float = 10.0, interval: f
         time.sleep(interval)
 
 
-def _wait_port(port: int, timeout: float = 10.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
-        time.sleep(0.05)
-    raise RuntimeError(f"router did not listen on port {port}")
-
-
 @pytest.fixture(scope="session")
 def router_endpoint() -> Iterator[str]:
     """A zenoh-python router on a free loopback port, in its own process."""
@@ -61,7 +45,7 @@ def router_endpoint() -> Iterator[str]:
         stderr=subprocess.DEVNULL,
     )
     try:
-        _wait_port(port)
+        wait_listening(port)
         yield f"tcp/127.0.0.1:{port}"
     finally:
         proc.send_signal(signal.SIGTERM)

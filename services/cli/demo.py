@@ -9,32 +9,26 @@ and checks every outcome against the scenario. Exit status 0 means the robot beh
 from __future__ import annotations
 
 import shutil
-import socket
 import threading
 import time
 from pathlib import Path
 
 import zenoh
 from rich.console import Console
-from rich.table import Table
 from rich.markup import escape
+from rich.table import Table
 from rich.text import Text
 
 from schemas.keys import Keys
 from services.cli.launcher import Launcher
 from services.cli.recorder import Event, Recorder, describe
+from services.cli.router import free_port
 from services.cli.runner import ScenarioRunner, StepResult
 from services.cli.scenario import Scenario
 from services.cli.utterance import DEFAULT_VOICE
 from services.runtime import ServiceContext, client_config, configure_logging
 
 _COLOURS = {"voice": "cyan", "vision": "magenta", "reasoner": "bold yellow", "motion": "green", "speech": "blue"}
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 class Timeline:

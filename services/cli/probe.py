@@ -15,7 +15,7 @@ from rich.console import Console
 from rich.table import Table
 
 from schemas.keys import SERVICES, Keys
-from schemas.messages import Health, HealthStatus, Header
+from schemas.messages import Header, Health, HealthStatus
 from services.runtime import BusSettings, DecodeError, decode, encode, encoding_for, open_session
 from services.runtime.logs import get_logger
 

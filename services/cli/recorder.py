@@ -22,7 +22,6 @@ from schemas.messages import (
 )
 from services.runtime import ServiceContext
 
-
 SENT_ENGINE = "scenario-send"
 """`VoiceCommand.engine` of commands a scenario publishes directly (no recogniser involved)."""
 

@@ -6,7 +6,9 @@
 from __future__ import annotations
 
 import signal
+import socket
 import threading
+import time
 from types import FrameType
 
 import typer
@@ -19,6 +21,24 @@ DEFAULT_PORT = 7447
 
 def loopback_endpoint(port: int) -> str:
     return f"tcp/127.0.0.1:{port}"
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nobody listens on right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def wait_listening(port: int, timeout: float = 15.0) -> None:
+    """Block until something accepts connections on 127.0.0.1:`port` (a router coming up)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.05)
+    raise RuntimeError(f"nothing listens on 127.0.0.1:{port} after {timeout:g} s")
 
 
 class Router:

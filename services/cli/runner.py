@@ -7,7 +7,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from schemas.messages import Decision, MotionGoal, MotionState, Posture, SceneCommand, SpeechState, VoiceCommand
+from schemas.messages import (
+    Decision,
+    MotionGoal,
+    MotionState,
+    Posture,
+    SceneCommand,
+    SpeechState,
+    VoiceCommand,
+)
 from services.cli.recorder import SENT_ENGINE, Recorder
 from services.cli.scenario import Scenario, Step
 from services.cli.utterance import DEFAULT_VOICE, speak_into

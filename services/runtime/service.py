@@ -22,7 +22,7 @@ import zenoh
 from pydantic import BaseModel
 
 from schemas.keys import Keys
-from schemas.messages import Health, HealthStatus, Header
+from schemas.messages import Header, Health, HealthStatus
 from services.runtime.codec import DecodeError, decode, encode, encoding_for
 from services.runtime.config import BusSettings, ConfigError
 from services.runtime.logs import get_logger

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from schemas.keys import SERVICES
-from tests.conftest import ROOT, free_port, service_env, wait_for
+from services.cli.router import free_port
+from tests.conftest import ROOT, service_env, wait_for
 
 ZENOH_CLI = str(Path(sys.executable).with_name("zenoh"))
 

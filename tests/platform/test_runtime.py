@@ -12,8 +12,9 @@ import pytest
 import zenoh
 
 from schemas import Health, HealthStatus, Keys, MarkObservation, VoiceCommand
+from services.cli.router import free_port
 from services.runtime import BusSettings, ConfigError, ServiceContext, client_config, decode
-from tests.conftest import ROOT, alive_services, free_port, service_env, wait_for
+from tests.conftest import ROOT, alive_services, service_env, wait_for
 
 
 @pytest.fixture

@@ -17,10 +17,10 @@ from schemas import Health, Keys, MotionState, Posture
 from schemas.keys import SERVICES
 from services.cli.launcher import Launcher
 from services.cli.recorder import Recorder
+from services.cli.router import free_port
 from services.cli.runner import ScenarioRunner
 from services.cli.scenario import Scenario
 from services.runtime import ServiceContext, client_config, decode
-from tests.conftest import free_port
 
 pytestmark = pytest.mark.system
 

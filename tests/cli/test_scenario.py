@@ -1,0 +1,64 @@
+"""Scenario files: the built-in ones load, bad ones are refused with a message naming the problem."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from schemas import Command, Shape
+from services.cli.scenario import ScenarioError, builtin_names, load
+from tests.conftest import ROOT
+
+
+def test_builtin_scenarios_load() -> None:
+    assert {"paper", "danger"} <= set(builtin_names())
+    paper = load("paper")
+    labels = [s.label() for s in paper.steps]
+    assert labels[0] == 'say "stand"' and labels[-1] == 'say "down"'
+    assert [s.shape for s in paper.steps if s.show] == [Shape.X, None, Shape.O, None]
+    assert sum(s.send is Command.GO for s in paper.steps) == 2
+
+
+def test_a_scenario_file_by_path(tmp_path: Path) -> None:
+    f = tmp_path / "mine.yaml"
+    f.write_text("name: mine\nsteps:\n  - say: stand\n    expect: {verdict: obey, posture: standing}\n  - wait: 1\n")
+    s = load(f)
+    assert s.name == "mine" and s.steps[0].expect.posture.value == "standing" and s.steps[1].wait == 1
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("name: x\nsteps: []\n", "steps"),
+        ("name: x\nsteps:\n  - say: stand\n    show: X\n", "exactly one of say, send, show, wait"),
+        ("name: x\nsteps:\n  - show: SQUARE\n", "show must be X, O, TRIANGLE or none"),
+        ("name: x\nsteps:\n  - send: dance\n", "steps.0.send"),
+        ("name: x\nsteps:\n  - say: go\n    expect: {verdict: maybe}\n", "verdict"),
+        ("name: x\nsteps:\n  - say: go\n    expect: {colour: red}\n", "colour"),
+        ("name: x\nsteps:\n  - wait: 1\n    expect: {verdict: obey}\n", "a wait step can only expect"),
+        ("name: [unclosed\n", "not valid YAML"),
+    ],
+)
+def test_bad_scenarios_are_refused_clearly(tmp_path: Path, text: str, message: str) -> None:
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    with pytest.raises(ScenarioError, match="bad.yaml") as err:
+        load(f)
+    assert message in str(err.value)
+
+
+def test_unknown_scenario_names_the_choices() -> None:
+    with pytest.raises(ScenarioError, match="paper"):
+        load("no-such-scenario")
+
+
+def test_demo_refuses_a_bad_scenario_before_starting_anything(tmp_path: Path) -> None:
+    f = tmp_path / "bad.yaml"
+    f.write_text("name: x\nsteps:\n  - show: SQUARE\n")
+    out = subprocess.run([sys.executable, "-m", "services.cli", "demo", "--scenario", str(f), "--out",
+                          str(tmp_path / "out")], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "show must be" in out.stderr
+    assert not (tmp_path / "out").exists()
