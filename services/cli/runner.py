@@ -53,15 +53,21 @@ class ScenarioRunner:
 
     # ------------------------------------------------------------------ readiness
     def wait_ready(self, timeout: float = 90.0) -> list[str]:
-        """Wait for motion state and camera frames; returns what is still missing (empty when ready)."""
-        ok = self.rec.wait(lambda: self.rec.latest_state is not None and self.rec.latest_marks is not None,
-                           timeout)
+        """Wait for a working servo bus with a known posture, and camera frames.
+
+        Returns what is still missing after `timeout` (empty when ready).
+        """
+
+        def bus_ready() -> bool:
+            s = self.rec.latest_state
+            return s is not None and s.bus_ok and s.posture != Posture.UNKNOWN
+
+        self.rec.wait(lambda: bus_ready() and self.rec.latest_marks is not None, timeout)
         missing = []
-        if not ok:
-            if self.rec.latest_state is None:
-                missing.append("motion state")
-            if self.rec.latest_marks is None:
-                missing.append("vision frames")
+        if not bus_ready():
+            missing.append("motion state with a working servo bus")
+        if self.rec.latest_marks is None:
+            missing.append("vision frames")
         return missing
 
     def run(self, scenario: Scenario, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
@@ -95,8 +101,13 @@ class ScenarioRunner:
         elif step.show is not None:
             self._scene.put(SceneCommand(shape=step.shape))
             want = {step.shape.value} if step.shape else set()
-            seen = self.rec.wait(lambda: any({m.shape.value for m in o.marks} == want
-                                             for o in self.rec.since(t0, "seen")), step.timeout)
+            shown_at = time.time()
+
+            def shows_it() -> bool:  # a frame taken after the card went up, with exactly these marks
+                latest = self.rec.latest_marks
+                return latest is not None and latest.stamp >= shown_at and {m.shape.value for m in latest.marks} == want
+
+            seen = self.rec.wait(shows_it, step.timeout)
             if not seen:
                 res.problems.append(f"vision never reported {sorted(want) or 'no mark'}")
             elif exp is not None and (exp.situation or exp.verdict or exp.action):

@@ -172,6 +172,7 @@ class Op2Bus:
         for _ in range(attempts - 1):
             if result == COMM_SUCCESS:
                 break
+            self._discard_input()  # a late answer to the last ping must not pass for the next one
             model, result, _ = self._call(self._ph.ping, self._port, CM740_ID)
         if result != COMM_SUCCESS:
             raise NoAnswer(
@@ -302,4 +303,12 @@ class Op2Bus:
             # the SDK indexes reply data without checking its length: a late or stray status
             # packet (e.g. after a timeout) can be shorter than the one it expects
             self._port.is_using = False
+            self._discard_input()
             raise ReplyMismatch(f"unexpected reply on {self.port_name}") from None
+
+    def _discard_input(self) -> None:
+        """Drop bytes already received (stray or late status packets) so the next reply lines up."""
+        try:
+            self._port.ser.reset_input_buffer()
+        except (*PORT_ERRORS, AttributeError):
+            pass
