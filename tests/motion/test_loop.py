@@ -7,6 +7,7 @@ import itertools
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -54,13 +55,13 @@ class Rig:
         wait_for(lambda: self.probe.states and self.probe.last.posture == posture, timeout)
 
 
-@pytest.fixture
-def rig() -> Iterator[Rig]:
+@contextmanager
+def running_loop(**settings: float) -> Iterator[tuple[Rig, threading.Thread]]:
+    """A simulated bus and a control loop on it (in a thread), stopped and checked on exit."""
     sim = SimBus().start()
     probe = Probe()
-    settings = MotionSettings(port=sim.path, sim=False, retry_s=0.3)
     loop = ControlLoop(
-        settings,
+        MotionSettings(port=sim.path, sim=False, retry_s=0.3, **settings),
         log=get_logger("motion-test"),
         port=lambda: sim.path,
         publish=probe.publish,
@@ -69,12 +70,18 @@ def rig() -> Iterator[Rig]:
     thread = threading.Thread(target=loop.run, daemon=True)
     thread.start()
     try:
-        yield Rig(sim, loop, probe)
+        yield Rig(sim, loop, probe), thread
     finally:
         loop.stop()
         thread.join(5)
         sim.stop()
-        assert not thread.is_alive()
+    assert not thread.is_alive()
+
+
+@pytest.fixture
+def rig() -> Iterator[Rig]:
+    with running_loop() as (rig, _thread):
+        yield rig
 
 
 def test_stand_nod_sit_reach_their_poses_on_the_servos(rig: Rig) -> None:
@@ -180,19 +187,8 @@ def test_missing_servo_at_start_is_named_and_retried() -> None:
 
 
 def test_a_bus_that_stays_down_is_a_failure_and_recovers() -> None:
-    sim = SimBus().start()
-    probe = Probe()
-    settings = MotionSettings(port=sim.path, retry_s=0.3, bus_down_s=0.6)
-    loop = ControlLoop(
-        settings,
-        log=get_logger("motion-test"),
-        port=lambda: sim.path,
-        publish=probe.publish,
-        health=probe.on_health,
-    )
-    thread = threading.Thread(target=loop.run, daemon=True)
-    thread.start()
-    try:
+    with running_loop(bus_down_s=0.6) as (rig, thread):
+        sim, probe = rig.sim, rig.probe
         wait_for(lambda: probe.states and probe.last.posture == Posture.SITTING, 5)
         sim.set_power(False)  # the servos go quiet
         sim.silence(200)  # and so does the CM-740: nothing answers
@@ -207,8 +203,4 @@ def test_a_bus_that_stays_down_is_a_failure_and_recovers() -> None:
         wait_for(lambda: probe.health[-1][0] == HealthStatus.OK, 5)
         wait_for(lambda: probe.last.posture == Posture.SITTING and probe.states[-1][1], 2)
         assert sim.powered and all(sim.torque().values())
-    finally:
-        loop.stop()
-        thread.join(5)
-        sim.stop()
     assert not thread.is_alive()
