@@ -86,7 +86,8 @@ def rig() -> Iterator[Rig]:
 
 def test_stand_nod_sit_reach_their_poses_on_the_servos(rig: Rig) -> None:
     rig.posture_is(Posture.SITTING)
-    assert rig.sim.powered and all(rig.sim.torque().values())
+    # torque goes out as a SYNC_WRITE (no status reply): give the simulator its wire time
+    wait_for(lambda: rig.sim.powered and all(rig.sim.torque().values()), 1)
     rig.goal(Action.STAND_UP, "up")
     wait_for(lambda: rig.probe.last.first_write is not None, 2)
     assert rig.probe.last.goal_id == "up"
@@ -202,5 +203,5 @@ def test_a_bus_that_stays_down_is_a_failure_and_recovers() -> None:
         sim.revive(200)  # the driver powers the servos again and re-checks them
         wait_for(lambda: probe.health[-1][0] == HealthStatus.OK, 5)
         wait_for(lambda: probe.last.posture == Posture.SITTING and probe.states[-1][1], 2)
-        assert sim.powered and all(sim.torque().values())
+        wait_for(lambda: sim.powered and all(sim.torque().values()), 1)
     assert not thread.is_alive()

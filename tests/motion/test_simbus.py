@@ -18,7 +18,7 @@ from services.motion.driver import ADDR_PRESENT_POSITION, Op2BulkRead, Op2Bus, W
 from services.motion.joints import CM740_ID, CM740_MODEL, JOINT_IDS, MX28_MODEL, SIT
 from services.motion.protocol import ErrorBit, Instruction, PacketReader, instruction_packet, status_packet
 from services.motion.simbus import SimBus
-from tests.conftest import ROOT
+from tests.conftest import ROOT, wait_for
 
 
 @pytest.fixture
@@ -175,8 +175,7 @@ def test_torque_sync_write_and_power_cycle(sim: SimBus, port: WaitingPortHandler
     for jid in JOINT_IDS:
         group.addParam(jid, [1])
     assert group.txPacket() == COMM_SUCCESS
-    time.sleep(0.01)
-    assert all(sim.torque().values())
+    wait_for(lambda: all(sim.torque().values()), 1)  # no status reply to a SYNC_WRITE: allow wire time
     assert PH.write1ByteTxRx(port, CM740_ID, 24, 0) == (COMM_SUCCESS, 0)
     assert not any(sim.torque().values())
     assert PH.ping(port, 1)[1] == COMM_RX_TIMEOUT
