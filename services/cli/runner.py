@@ -9,6 +9,7 @@ from pathlib import Path
 
 from schemas.messages import (
     Decision,
+    Health,
     MotionGoal,
     MotionState,
     Posture,
@@ -19,7 +20,7 @@ from schemas.messages import (
 from services.cli.recorder import SENT_ENGINE, Recorder
 from services.cli.scenario import Scenario, Step
 from services.cli.utterance import DEFAULT_VOICE, speak_into
-from services.runtime import ServiceContext
+from services.runtime import DecodeError, ServiceContext, decode
 
 SETTLE_S = 8.0  # longest a motion may take to finish before the next step
 GAP_S = 0.3  # pause between steps, as a person would leave
@@ -62,13 +63,31 @@ class ScenarioRunner:
             s = self.rec.latest_state
             return s is not None and s.bus_ok and s.posture != Posture.UNKNOWN
 
+        deadline = time.monotonic() + timeout
         self.rec.wait(lambda: bus_ready() and self.rec.latest_marks is not None, timeout)
+        reasoner_ready = False
+        while not reasoner_ready and time.monotonic() < deadline:
+            reasoner_ready = self._reasoner_ready()
+            if not reasoner_ready:
+                time.sleep(0.2)
         missing = []
         if not bus_ready():
             missing.append("motion state with a working servo bus")
         if self.rec.latest_marks is None:
             missing.append("vision frames")
+        if not reasoner_ready:
+            missing.append("a reasoner ready for input")
         return missing
+
+    def _reasoner_ready(self) -> bool:
+        """The reasoner's health says `ready` once its agent is restored and it listens to every input."""
+        for reply in self.ctx.session.get(self.ctx.keys.health("reasoner"), timeout=1.0):
+            if reply.ok is not None:
+                try:
+                    return bool(decode(reply.ok.payload.to_bytes(), Health).detail.get("ready"))
+                except DecodeError:
+                    return False
+        return False
 
     def run(self, scenario: Scenario, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
         results = []

@@ -59,6 +59,7 @@ class ReasonerOptions:
 
 def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     options = options or ReasonerOptions.from_env()
+    ctx.update_detail(ready=False)  # until the agent is restored and every subscription declared
     keys = ctx.keys
     store = StateStore(options.state_dir or default_state_dir(ctx.robot), ctx.log)
     memory = store.load()

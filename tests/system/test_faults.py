@@ -20,8 +20,10 @@ def _kill(robot: Robot, name: str) -> int:
 
 def _wait_restarted(robot: Robot, name: str, old: int) -> None:
     assert robot.rec.wait(lambda: robot.launcher.pid(name) not in (None, old), timeout=20)
-    assert robot.rec.wait(lambda: (h := robot.health(name)) is not None and h.detail.get("pid") != old,
-                          timeout=30), f"{name} did not come back"
+    # Health answers as soon as the session is up; the reasoner says `ready` once it also listens.
+    assert robot.rec.wait(lambda: (h := robot.health(name)) is not None and h.detail.get("pid") != old
+                          and h.detail.get("ready", True), timeout=30), f"{name} did not come back"
+    time.sleep(0.5)  # the new subscriptions reach the router
 
 
 def test_restarted_reasoner_still_refuses_go_after_an_x(robot: Robot) -> None:
