@@ -1,8 +1,9 @@
 """The simulated OP2 bus as a child process of the motion service (`python -m services.motion.simbus`).
 
 A separate process keeps the simulator off the service's GIL, as real servos would be. It is
-started with subprocess (never fork after a Zenoh session exists), watches its parent, and is
-restarted if it dies.
+started with subprocess, whose fork is followed at once by exec: like multiprocessing's spawn start
+method, the child inherits nothing of the service's Zenoh session (a plain fork would hang it). It
+watches its parent, and is restarted if it dies.
 """
 
 from __future__ import annotations

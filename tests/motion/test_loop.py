@@ -56,12 +56,17 @@ class Rig:
 
 
 @contextmanager
-def running_loop(**settings: float) -> Iterator[tuple[Rig, threading.Thread]]:
-    """A simulated bus and a control loop on it (in a thread), stopped and checked on exit."""
+def running_loop(
+    silent: tuple[int, ...] = (), **settings: float
+) -> Iterator[tuple[Rig, threading.Thread]]:
+    """A simulated bus (with `silent` IDs not answering from the start) and a control loop on it
+    (in a thread), stopped and checked on exit."""
     sim = SimBus().start()
+    for jid in silent:
+        sim.silence(jid)
     probe = Probe()
     loop = ControlLoop(
-        MotionSettings(port=sim.path, sim=False, retry_s=0.3, **settings),
+        MotionSettings(**{"port": sim.path, "sim": False, "retry_s": 0.3, **settings}),
         log=get_logger("motion-test"),
         port=lambda: sim.path,
         publish=probe.publish,
@@ -160,19 +165,8 @@ def test_silent_servo_stops_the_walk_and_is_named(rig: Rig) -> None:
 
 
 def test_missing_servo_at_start_is_named_and_retried() -> None:
-    sim = SimBus().start()
-    sim.silence(17)
-    probe = Probe()
-    loop = ControlLoop(
-        MotionSettings(port=sim.path, retry_s=0.2),
-        log=get_logger("motion-test"),
-        port=lambda: sim.path,
-        publish=probe.publish,
-        health=probe.on_health,
-    )
-    thread = threading.Thread(target=loop.run, daemon=True)
-    thread.start()
-    try:
+    with running_loop(silent=(17,), retry_s=0.2) as (rig, _thread):
+        sim, probe = rig.sim, rig.probe
         wait_for(lambda: probe.health, 5)
         status, detail = probe.health[-1]
         assert status == HealthStatus.DEGRADED
@@ -181,10 +175,6 @@ def test_missing_servo_at_start_is_named_and_retried() -> None:
         sim.revive(17)
         wait_for(lambda: probe.health[-1][0] == HealthStatus.OK, 5)
         wait_for(lambda: probe.last.posture == Posture.SITTING, 2)
-    finally:
-        loop.stop()
-        thread.join(5)
-        sim.stop()
 
 
 def test_a_bus_that_stays_down_is_a_failure_and_recovers() -> None:
