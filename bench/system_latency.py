@@ -16,23 +16,15 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
-import zenoh
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from schemas import Action, Keys, Posture, SceneCommand, Shape, VoiceCommand  # noqa: E402
-from schemas.keys import SERVICES  # noqa: E402
-from services.cli.launcher import Launcher  # noqa: E402
-from services.cli.recorder import Recorder  # noqa: E402
-from services.cli.router import free_port  # noqa: E402
-from services.cli.runner import ScenarioRunner  # noqa: E402
-from services.cli.utterance import speak_into  # noqa: E402
-from services.runtime import ServiceContext, client_config  # noqa: E402
+from schemas import Action, Posture, SceneCommand, Shape, VoiceCommand
+from schemas.keys import SERVICES
+from services.cli.simrobot import SimulatedRobot, simulated_robot
+from services.cli.utterance import speak_into
 
 
 def rss_mib(pid: int) -> float:
@@ -50,23 +42,21 @@ def pcts(xs: list[float]) -> str:
     return f"p50 {p(0.5) * 1000:7.1f} ms   p99 {p(0.99) * 1000:7.1f} ms   (n={len(xs)}, max {xs[-1] * 1000:.1f} ms)"
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--commands", type=int, default=20)
-    ap.add_argument("--stops", type=int, default=8)
-    ap.add_argument("--utterances", type=int, default=8)
-    args = ap.parse_args()
-    out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
-    (out / "spool").mkdir()
-    env = {"HRI_STATE_DIR": str(out / "state"), "HRI_SPEECH_OUT": str(out / "speech"),
-           "HRI_VISION_SOURCE": "synthetic:none", "HRI_VOICE_SOURCE": f"watch:{out / 'spool'}",
-           "HRI_MOTION_SIM": "1", "HRI_LOG_LEVEL": "warning"}
-    log = (out / "services.log").open("w")
-    launcher = Launcher(port=free_port(), robot="bench", env=env, sink=lambda n, line: log.write(f"{n} | {line}\n"))
-    launcher.start()
-    ctx = ServiceContext("bench", zenoh.open(client_config([launcher.endpoint])), Keys("bench"))
-    rec = Recorder(ctx)
-    runner = ScenarioRunner(ctx, rec, out / "spool")
+@dataclass
+class Figures:
+    """Samples in seconds, and resident memory per process in MiB."""
+
+    cmd: list[float]
+    seen: list[float]
+    stop_write: list[float]
+    halted: list[float]
+    heard: list[float]
+    rss: dict[str, float]
+
+
+def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
+    """Drive the robot through the three experiments and read its memory."""
+    launcher, ctx, rec, runner, out = sim.launcher, sim.ctx, sim.rec, sim.runner, sim.out
     voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
     scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
 
@@ -79,79 +69,85 @@ def main() -> None:
         return bool(rec.wait(lambda: (s := rec.latest_state) and s.posture == posture and
                              (s.action is None or posture == Posture.WALKING), timeout))
 
-    try:
-        missing = runner.wait_ready(90)
-        if missing:
-            raise SystemExit(f"robot did not come up: {missing}; logs in {out / 'services.log'}")
-        time.sleep(2.0)
-        say("stand")
+    missing = runner.wait_ready(90)
+    if missing:
+        raise SystemExit(f"robot did not come up: {missing}; logs in {out / 'services.log'}")
+    time.sleep(2.0)
+    say("stand")
+    settle(Posture.STANDING)
+
+    cmd_lat: list[float] = []
+    for i in range(args.commands):
+        word, action = ("yes", Action.NOD) if i % 2 == 0 else ("no", Action.SHAKE_HEAD)
+        t_mono = time.monotonic()
+        stamp = say(word)
+        goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == action), None), 5)
+        state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
+                                                if s.goal_id == goal.goal_id and s.first_write), None), 5)
+        if state:
+            cmd_lat.append(state.first_write - stamp)
         settle(Posture.STANDING)
 
-        cmd_lat: list[float] = []
-        for i in range(args.commands):
-            word, action = ("yes", Action.NOD) if i % 2 == 0 else ("no", Action.SHAKE_HEAD)
-            t_mono = time.monotonic()
-            stamp = say(word)
-            goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == action), None), 5)
-            state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
-                                                    if s.goal_id == goal.goal_id and s.first_write), None), 5)
-            if state:
-                cmd_lat.append(state.first_write - stamp)
-            settle(Posture.STANDING)
+    seen_lat, stop_write_lat, halted_lat = [], [], []
+    for _ in range(args.stops):
+        scene.put(SceneCommand(shape=Shape.O))
+        time.sleep(0.6)
+        scene.put(SceneCommand(shape=None))
+        say("go")
+        if not settle(Posture.WALKING):
+            continue
+        time.sleep(1.0)
+        t_mono = time.monotonic()
+        shown = time.time()
+        scene.put(SceneCommand(shape=Shape.X))
+        obs = rec.wait(lambda: next((o for o in rec.since(t_mono, "seen")
+                                     if any(m.shape == Shape.X for m in o.marks)), None), 5)
+        goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == Action.STOP), None), 5)
+        stop_state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
+                                                     if s.goal_id == goal.goal_id and s.first_write), None), 5)
+        halted = rec.wait(lambda: next((e for e in rec.events if e.t >= t_mono and e.kind == "motion"
+                                        and e.msg.posture == Posture.STANDING and e.msg.action is None), None), 5)
+        if obs:
+            seen_lat.append(obs.stamp - shown)
+        if stop_state:
+            stop_write_lat.append(stop_state.first_write - shown)
+        if halted:
+            halted_lat.append(halted.msg.stamp - shown)
+        scene.put(SceneCommand(shape=None))
+        time.sleep(0.5)
 
-        seen_lat, stop_write_lat, halted_lat = [], [], []
-        for _ in range(args.stops):
-            scene.put(SceneCommand(shape=Shape.O))
-            time.sleep(0.6)
-            scene.put(SceneCommand(shape=None))
-            say("go")
-            if not settle(Posture.WALKING):
-                continue
-            time.sleep(1.0)
-            t_mono = time.monotonic()
-            shown = time.time()
-            scene.put(SceneCommand(shape=Shape.X))
-            obs = rec.wait(lambda: next((o for o in rec.since(t_mono, "seen")
-                                         if any(m.shape == Shape.X for m in o.marks)), None), 5)
-            goal = rec.wait(lambda: next((g for g in rec.since(t_mono, "goal") if g.action == Action.STOP), None), 5)
-            stop_state = goal and rec.wait(lambda: next((s for s in rec.since(t_mono, "motion")
-                                                         if s.goal_id == goal.goal_id and s.first_write), None), 5)
-            halted = rec.wait(lambda: next((e for e in rec.events if e.t >= t_mono and e.kind == "motion"
-                                            and e.msg.posture == Posture.STANDING and e.msg.action is None), None), 5)
-            if obs:
-                seen_lat.append(obs.stamp - shown)
-            if stop_state:
-                stop_write_lat.append(stop_state.first_write - shown)
-            if halted:
-                halted_lat.append(halted.msg.stamp - shown)
-            scene.put(SceneCommand(shape=None))
-            time.sleep(0.5)
+    heard_lat = []
+    for i in range(args.utterances):
+        t_mono = time.monotonic()
+        t_wall = time.time()
+        speak_into(out / "spool", "yes" if i % 2 == 0 else "no")
+        heard = rec.wait(lambda: next(iter(rec.since(t_mono, "heard")), None), 10)
+        if heard:
+            heard_lat.append(heard.stamp - t_wall)
+        settle(Posture.STANDING)
 
-        heard_lat = []
-        for i in range(args.utterances):
-            t_mono = time.monotonic()
-            t_wall = time.time()
-            speak_into(out / "spool", "yes" if i % 2 == 0 else "no")
-            heard = rec.wait(lambda: next(iter(rec.since(t_mono, "heard")), None), 10)
-            if heard:
-                heard_lat.append(heard.stamp - t_wall)
-            settle(Posture.STANDING)
+    pids = {n: launcher.pid(n) for n in SERVICES}
+    rss = {n: rss_mib(p) for n, p in pids.items() if p}
+    rss["launcher+router"] = rss_mib(os.getpid())
+    return Figures(cmd_lat, seen_lat, stop_write_lat, halted_lat, heard_lat, rss)
 
-        pids = {n: launcher.pid(n) for n in SERVICES}
-        rss = {n: rss_mib(p) for n, p in pids.items() if p}
-        rss["launcher+router"] = rss_mib(os.getpid())
-    finally:
-        ctx.close()
-        launcher.stop()
-        log.close()
 
-    print(f"command published -> first servo write carrying it:  {pcts(cmd_lat)}")
-    print(f"X shown -> frame reported with confirmed X:           {pcts(seen_lat)}")
-    print(f"X shown -> first servo write of the stop goal:        {pcts(stop_write_lat)}")
-    print(f"X shown -> standing still (double support):           {pcts(halted_lat)}")
-    print(f"WAV in spool -> VoiceCommand published:               {pcts(heard_lat)}")
-    print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in rss.items())
-          + f"; total {sum(rss.values()):.0f}")
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--commands", type=int, default=20)
+    ap.add_argument("--stops", type=int, default=8)
+    ap.add_argument("--utterances", type=int, default=8)
+    args = ap.parse_args()
+    out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
+    with simulated_robot(out, robot="bench", participant="bench", env={"HRI_LOG_LEVEL": "warning"}) as sim:
+        f = measure(sim, args)
+    print(f"command published -> first servo write carrying it:  {pcts(f.cmd)}")
+    print(f"X shown -> frame reported with confirmed X:           {pcts(f.seen)}")
+    print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}")
+    print(f"X shown -> standing still (double support):           {pcts(f.halted)}")
+    print(f"WAV in spool -> VoiceCommand published:               {pcts(f.heard)}")
+    print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in f.rss.items())
+          + f"; total {sum(f.rss.values()):.0f}")
     print(f"(the bench process hosts the launcher and router; logs in {out / 'services.log'})")
 
 

@@ -13,20 +13,18 @@ import threading
 import time
 from pathlib import Path
 
-import zenoh
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
-from schemas.keys import Keys
-from services.cli.launcher import Launcher
-from services.cli.recorder import Event, Recorder, describe
+from services.cli.recorder import Event, describe
 from services.cli.router import free_port
-from services.cli.runner import ScenarioRunner, StepResult
+from services.cli.runner import StepResult
 from services.cli.scenario import Scenario
+from services.cli.simrobot import simulated_robot
 from services.cli.utterance import DEFAULT_VOICE
-from services.runtime import ServiceContext, client_config, configure_logging
+from services.runtime import configure_logging
 
 _COLOURS = {"voice": "cyan", "vision": "magenta", "reasoner": "bold yellow", "motion": "green", "speech": "blue"}
 
@@ -82,64 +80,34 @@ def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAU
     out = out.resolve()
     if out.exists():
         shutil.rmtree(out)  # a fresh robot: no danger latched by an earlier run
-    (out / "spool").mkdir(parents=True)
     port = port or free_port()
-    robot = "op2"
-    env = {
-        "HRI_ROBOT": robot,
-        "HRI_STATE_DIR": str(out / "state"),
-        "HRI_SPEECH_OUT": str(out / "speech"),
-        "HRI_VISION_SOURCE": "synthetic:none",
-        "HRI_VOICE_SOURCE": f"watch:{out / 'spool'}",
-        "HRI_MOTION_SIM": "1",
-    }
-    logfile = (out / "services.log").open("w")
-    log_lock = threading.Lock()
-
-    def sink(name: str, line: str) -> None:
-        with log_lock:
-            logfile.write(f"{name:<8} | {line}\n")
-            logfile.flush()
-
+    out.mkdir(parents=True)
     timeline = Timeline(console, out / "timeline.txt")
     console.rule(f"[bold]hri demo: {scenario.name}")
     if scenario.description:
         console.print(scenario.description.strip(), highlight=False)
     console.print(f"router tcp/127.0.0.1:{port}   output {out}   (watch live: hri spy --connect "
                   f"tcp/127.0.0.1:{port})", highlight=False)
-    launcher = Launcher(port=port, env=env, sink=sink)
     results: list[StepResult] = []
-    ctx: ServiceContext | None = None
     try:
-        launcher.start()
-        ctx = ServiceContext("demo", zenoh.open(client_config([launcher.endpoint])), Keys(robot))
-        recorder = Recorder(ctx, timeline.event)
-        runner = ScenarioRunner(ctx, recorder, out / "spool", voice=voice)
-        timeline.line(time.monotonic(), "demo", "waiting for the five services ...", "bold")
-        missing = runner.wait_ready()
-        if missing:
-            console.print(f"[red]the robot did not come up: no {', '.join(missing)}; see {out / 'services.log'}")
-            return 2
-        timeline.line(time.monotonic(), "demo", "robot ready", "bold")
-
-        def on_step(r: StepResult) -> None:
-            mark = "[green]ok[/]" if r.ok else "[red]FAIL: " + "; ".join(r.problems) + "[/]"
-            timeline.line(time.monotonic(), "demo", f"step {r.index} {r.step.label()}: {mark}", "bold")
-
-        for i, step in enumerate(scenario.steps, 1):
-            timeline.line(time.monotonic(), "demo", f"step {i}: {step.label()}", "bold white")
-            result = runner.run_step(i, step)
-            results.append(result)
-            on_step(result)
+        with simulated_robot(out, port=port, voice=voice, on_event=timeline.event) as robot:
+            timeline.line(time.monotonic(), "demo", "waiting for the five services ...", "bold")
+            missing = robot.runner.wait_ready()
+            if missing:
+                console.print(f"[red]the robot did not come up: no {', '.join(missing)}; see {robot.log_path}")
+                return 2
+            timeline.line(time.monotonic(), "demo", "robot ready", "bold")
+            for i, step in enumerate(scenario.steps, 1):
+                timeline.line(time.monotonic(), "demo", f"step {i}: {step.label()}", "bold white")
+                result = robot.runner.run_step(i, step)
+                results.append(result)
+                mark = "[green]ok[/]" if result.ok else "[red]FAIL: " + "; ".join(result.problems) + "[/]"
+                timeline.line(time.monotonic(), "demo", f"step {i} {step.label()}: {mark}", "bold")
     except KeyboardInterrupt:
         console.print("[yellow]interrupted")
         return 130
     finally:
-        if ctx is not None:
-            ctx.close()
-        launcher.stop()
         timeline.close()
-        logfile.close()
     console.print(summary(results, f"{scenario.name}: {sum(r.ok for r in results)}/{len(results)} steps as expected"))
     for line in problems(results):
         console.print(f"[red]{line}", highlight=False)

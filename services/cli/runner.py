@@ -81,13 +81,18 @@ class ScenarioRunner:
 
     def _reasoner_ready(self) -> bool:
         """The reasoner's health says `ready` once its agent is restored and it listens to every input."""
-        for reply in self.ctx.session.get(self.ctx.keys.health("reasoner"), timeout=1.0):
+        health = self.health("reasoner", timeout=1.0)
+        return health is not None and bool(health.detail.get("ready"))
+
+    def health(self, service: str, timeout: float = 2.0) -> Health | None:
+        """A service's answer on its health queryable (None: no answer, or not a valid `Health`)."""
+        for reply in self.ctx.session.get(self.ctx.keys.health(service), timeout=timeout):
             if reply.ok is not None:
                 try:
-                    return bool(decode(reply.ok.payload.to_bytes(), Health).detail.get("ready"))
+                    return decode(reply.ok.payload.to_bytes(), Health)
                 except DecodeError:
-                    return False
-        return False
+                    return None
+        return None
 
     def run(self, scenario: Scenario, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
         results = []
