@@ -75,6 +75,7 @@ class Recorder:
         self._last_motion: tuple[Any, ...] | None = None
         self.latest_marks: MarkObservation | None = None
         self.latest_state: MotionState | None = None
+        self.latest_speech: SpeechState | None = None
         self.goal_ids: set[str] = set()
         k = ctx.keys
         ctx.subscribe(k.voice_command, VoiceCommand, lambda m: self._add("heard", m))
@@ -83,7 +84,7 @@ class Recorder:
         ctx.subscribe(k.motion_goal, MotionGoal, self._on_goal)
         ctx.subscribe(k.motion_state, MotionState, self._on_state)
         ctx.subscribe(k.speech_say, SpeechRequest, lambda m: self._add("say", m))
-        ctx.subscribe(k.speech_state, SpeechState, lambda m: self._add("speaking", m))
+        ctx.subscribe(k.speech_state, SpeechState, self._on_speech)
 
     def _on_marks(self, m: MarkObservation) -> None:
         shapes = tuple(sorted(k.shape.value for k in m.marks))
@@ -111,6 +112,11 @@ class Recorder:
             self._cond.notify_all()
         if changed:
             self._add("motion", m)
+
+    def _on_speech(self, m: SpeechState) -> None:
+        with self._cond:
+            self.latest_speech = m
+        self._add("speaking", m)
 
     def _add(self, kind: str, msg: BaseModel) -> None:
         event = Event(time.monotonic(), kind, msg)

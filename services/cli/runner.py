@@ -14,7 +14,6 @@ from schemas.messages import (
     MotionState,
     Posture,
     SceneCommand,
-    SpeechState,
     VoiceCommand,
 )
 from services.cli.recorder import SENT_ENGINE, Recorder
@@ -218,7 +217,6 @@ class ScenarioRunner:
             s = self.rec.latest_state
             if s is None or not self._settled_in(s.posture, self._new_goals(t0, known_goals)):
                 return False
-            speaking = [e.msg for e in self.rec.events if e.kind == "speaking"]
-            return not (speaking and isinstance(speaking[-1], SpeechState) and speaking[-1].speaking)
+            return not (self.rec.latest_speech is not None and self.rec.latest_speech.speaking)
 
         self.rec.wait(idle, timeout)
