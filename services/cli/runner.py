@@ -63,7 +63,9 @@ class ScenarioRunner:
             return s is not None and s.bus_ok and s.posture != Posture.UNKNOWN
 
         deadline = time.monotonic() + timeout
-        self.rec.wait(lambda: bus_ready() and self.rec.latest_marks is not None, timeout)
+        # Vision is the only subscriber of the scene key: until that subscription reaches this session
+        # a `show` step would be dropped, even though marks already flow.
+        self.rec.wait(lambda: bus_ready() and self.rec.latest_marks is not None and self._scene.matched, timeout)
         reasoner_ready = False
         while not reasoner_ready and time.monotonic() < deadline:
             reasoner_ready = self._reasoner_ready()
@@ -74,6 +76,8 @@ class ScenarioRunner:
             missing.append("motion state with a working servo bus")
         if self.rec.latest_marks is None:
             missing.append("vision frames")
+        elif not self._scene.matched:
+            missing.append("vision listening for scene commands")
         if not reasoner_ready:
             missing.append("a reasoner ready for input")
         return missing

@@ -70,6 +70,11 @@ class TypedPublisher(Generic[H]):
         self._ctx.counters.bump("published")
         return msg
 
+    @property
+    def matched(self) -> bool:
+        """Whether the bus knows of a subscriber for this key right now (Zenoh matching status)."""
+        return bool(self._pub.matching_status.matching)
+
 
 class ServiceContext:
     """One service's view of the bus. Built by `run_service`; also usable directly in tests."""

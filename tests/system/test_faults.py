@@ -80,12 +80,23 @@ def test_garbage_on_every_key_leaves_every_service_running(robot: Robot) -> None
     keys = [k.vision_marks, k.voice_command, k.reasoner_decision, k.motion_goal, k.motion_state, k.speech_say,
             k.speech_state, k.vision_scene]
     before = robot.pids()
-    for key in keys:
-        for payload in GARBAGE:
-            robot.ctx.session.put(key, payload)
-    time.sleep(2.0)
+    counted = ("vision", "reasoner", "motion", "speech")
+
+    def all_rejected() -> bool:
+        return all((h := robot.health(name)) is not None and h.rejected >= 1 for name in counted)
+
+    # Zenoh makes no promise for a put made before a subscription has propagated, so keep sending
+    # until every service has counted a rejection (or give up and show each one's health).
+    deadline = time.monotonic() + 15
+    while True:
+        for key in keys:
+            for payload in GARBAGE:
+                robot.ctx.session.put(key, payload)
+        time.sleep(1.0)
+        if all_rejected() or time.monotonic() > deadline:
+            break
     assert robot.pids() == before
-    for name in ("vision", "reasoner", "motion", "speech"):
+    for name in counted:
         h = robot.health(name)
         assert h is not None and h.rejected >= 1, (name, h)
     # Still working afterwards.
