@@ -15,7 +15,7 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
    X: no hole, exactly four deep convexity defects clustered at the centre, four arms of similar
    length, the solidity of a bar cross;
 4. context: a clear light margin around the mark (0.3 of its extent, at most 2 % ink, clearly
-   brighter than the ink); a ring's or triangle's hole empty and as bright as the margin (a large
+   brighter than the ink, and plain: its grey-level spread small next to the ink's contrast); a ring's or triangle's hole empty and as bright as the margin (a large
    filled disc, hollowed by the local threshold, is not a ring); not a letter inside a word (two
    same-height neighbours on its baseline or cap line);
 5. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
@@ -49,6 +49,8 @@ class DetectorConfig:
     min_hole_contrast: float = 0.7  # hole brightness above ink, relative to the margin's
     max_surround_ink: float = 0.02  # fraction of the margin that may be ink
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
+    min_contrast: float = 35.0  # margin mean minus ink mean, grey levels: print on paper, not a shadow
+    max_margin_texture: float = 0.25  # margin grey std / (margin - ink): a card is plain, gravel is not
     min_confidence: float = 0.5
     max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
@@ -184,9 +186,14 @@ class MarkDetector:
             return None
         if cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.max_surround_ink * ring_n:
             return None
-        paper = cv2.mean(g_roi, mask=ring)[0]
+        paper_mean, paper_std = cv2.meanStdDev(g_roi, mask=ring)
+        paper, texture = float(paper_mean[0][0]), float(paper_std[0][0])
         ink = cv2.mean(g_roi, mask=comp)[0]
-        if paper < 20 or ink > cfg.max_contrast_ratio * paper:
+        if paper < 20 or ink > cfg.max_contrast_ratio * paper or paper - ink < cfg.min_contrast:
+            return None
+        # ink-like shapes turn up in textures (gravel, bark, hair) whose surroundings vary almost as
+        # much as the 'ink' differs from them; the card around a printed mark is plain by comparison
+        if texture > cfg.max_margin_texture * (paper - ink):
             return None
         if blob.holes:
             # a hole is paper: empty of other ink and about as bright as the margin (a big filled
