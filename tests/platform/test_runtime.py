@@ -30,7 +30,7 @@ def test_typed_messages_arrive_validated_and_numbered(bus: ServiceContext, peer:
     bus.subscribe(bus.keys.voice_command, VoiceCommand, got.append)
     bus.session.declare_subscriber(bus.keys.voice_command, lambda s: encodings.append(str(s.encoding)))
     pub = peer.publisher(peer.keys.voice_command, VoiceCommand)
-    time.sleep(0.3)
+    wait_for(lambda: pub.matched)
     for word in ("stand", "go"):
         pub.put(VoiceCommand(command=word, text=word, confidence=0.9, engine="test"))
     wait_for(lambda: len(got) == 2)
@@ -43,7 +43,8 @@ def test_typed_messages_arrive_validated_and_numbered(bus: ServiceContext, peer:
 def test_bad_payloads_are_counted_and_dropped(bus: ServiceContext, peer: ServiceContext) -> None:
     got: list[MarkObservation] = []
     bus.subscribe(bus.keys.vision_marks, MarkObservation, got.append)
-    time.sleep(0.3)
+    probe = peer.publisher(peer.keys.vision_marks, MarkObservation)
+    wait_for(lambda: probe.matched)
     for garbage in (b"not json", b"{}", b'{"marks":[{"shape":"STAR","confidence":1,"box":[0,0,1,1]}]}',
                     b"\xff\xfe", b'{"marks": "X"}'):
         peer.session.put(peer.keys.vision_marks, garbage)
@@ -62,7 +63,7 @@ def test_a_failing_callback_is_counted_not_fatal(bus: ServiceContext, peer: Serv
 
     bus.subscribe(bus.keys.voice_command, VoiceCommand, explode)
     pub = peer.publisher(peer.keys.voice_command, VoiceCommand)
-    time.sleep(0.3)
+    wait_for(lambda: pub.matched)
     pub.put(VoiceCommand(command="go", confidence=1))
     pub.put(VoiceCommand(command="go", confidence=1))
     wait_for(lambda: len(calls) == 2)
@@ -78,7 +79,7 @@ def test_latest_only_subscriber_skips_to_the_newest(bus: ServiceContext, peer: S
 
     bus.subscribe(bus.keys.vision_marks, MarkObservation, slow, latest_only=True)
     pub = peer.publisher(peer.keys.vision_marks, MarkObservation)
-    time.sleep(0.3)
+    wait_for(lambda: pub.matched)
     for frame in range(1, 51):
         pub.put(MarkObservation(frame=frame))
     wait_for(lambda: seen and seen[-1] == 50, timeout=5)
@@ -87,7 +88,8 @@ def test_latest_only_subscriber_skips_to_the_newest(bus: ServiceContext, peer: S
 
 def test_health_queryable_and_liveliness(bus: ServiceContext, peer: ServiceContext) -> None:
     peer.set_status(HealthStatus.DEGRADED, device="camera:0 missing")
-    replies = list(bus.session.get(bus.keys.health("peer"), timeout=2))
+    # the queryable is declared with the context; retry until the declaration has reached the router
+    replies = wait_for(lambda: list(bus.session.get(bus.keys.health("peer"), timeout=1)))
     health = decode(replies[0].ok.payload.to_bytes(), Health)
     assert health.service == "peer" and health.status is HealthStatus.DEGRADED
     assert health.detail["device"] == "camera:0 missing"
