@@ -110,9 +110,12 @@ class AgentDriver:
             return
         self._ready.set()
         try:
+            # with a debugger listener, wake often enough to answer it promptly
+            idle_wait = 0.05 if self._config.debugger_port is not None else 1.0
             while not self._stop.is_set():
-                self._wake.wait(1.0)
+                self._wake.wait(idle_wait)
                 self._wake.clear()
+                self._agent.serve_remote()
                 self._run_commands()
                 if self._agent.pending():
                     self._busy_since = time.monotonic()
