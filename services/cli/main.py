@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import threading
 from pathlib import Path
 from typing import Annotated
@@ -23,6 +24,8 @@ send_app = typer.Typer(add_completion=False, no_args_is_help=True,
                        help="Publish one valid message as a service would, for testing by hand.")
 app.add_typer(send_app, name="send")
 console = Console()
+if not console.is_terminal and "COLUMNS" not in os.environ:
+    console = Console(width=120)  # piped or logged (CI): rich would wrap the tables at 80 columns
 
 
 @app.command()
