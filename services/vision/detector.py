@@ -15,9 +15,10 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
    X: no hole, exactly four deep convexity defects clustered at the centre, four arms of similar
    length, the solidity of a bar cross;
 4. context: a clear light margin around the mark (0.3 of its extent, at most 2 % ink, clearly
-   brighter than the ink, and plain: its grey-level spread small next to the ink's contrast); a ring's or triangle's hole empty and as bright as the margin (a large
-   filled disc, hollowed by the local threshold, is not a ring); not a letter inside a word (two
-   same-height neighbours on its baseline or cap line);
+   brighter than the ink, and plain: its grey-level spread small next to the ink's contrast); a
+   ring's or triangle's hole empty and as bright as the margin (a large filled disc, hollowed by
+   the local threshold, is not a ring); not a letter inside a word (two same-height neighbours on
+   its baseline or cap line);
 5. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
 A filled disc, a square (outline or filled) or a filled triangle is not a mark. By construction an
