@@ -186,9 +186,9 @@ class SoarAgent:
                 detail = self._kernel.GetLastErrorDescription()
                 raise AgentLoadError(f"cannot create the Soar agent: {detail}")
             self._load()
-            # One callback per decision cycle: every Python callback crosses to the kernel's thread
-            # and costs about as much as the decision itself. Output is read at the start of the
-            # next input phase (right after the output phase) and after each run.
+            # One callback per decision cycle (a Python callback costs about as much as a decision):
+            # output is read at the start of the next input phase (right after the output phase)
+            # and after each run.
             self._callback = self._guard(self._input_phase)
             self._agent.RegisterForRunEvent(sml.smlEVENT_BEFORE_INPUT_PHASE, self._callback, None)
             self._start(memory or Memory())
