@@ -34,7 +34,7 @@ import zenoh
 from schemas.keys import Keys
 from schemas.messages import Action, Health, MotionGoal, MotionState, Posture
 from services.cli.router import free_port
-from services.runtime import ServiceContext, client_config, decode
+from services.runtime import ServiceContext, client_config
 
 ROOT = Path(__file__).resolve().parents[1]
 TICK = os.sysconf("SC_CLK_TCK")
@@ -110,10 +110,10 @@ class Bench:
         return self.goals.put(MotionGoal(action=action, goal_id=goal_id, stamp=time.time()))
 
     def health(self) -> Health:
-        for reply in self.ctx.session.get(self.ctx.keys.health("motion"), timeout=3.0):
-            if reply.ok is not None:
-                return decode(reply.ok.payload.to_bytes(), Health)
-        raise TimeoutError("no health reply")
+        health = self.ctx.query_health("motion", timeout=3.0)
+        if health is None:
+            raise TimeoutError("no health reply")
+        return health
 
 
 def main(

@@ -34,9 +34,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from schemas.keys import Keys  # noqa: E402
-from schemas.messages import Command, Decision, Health, MotionGoal, MotionState, Posture, VoiceCommand  # noqa: E402
+from schemas.messages import Command, Decision, MotionGoal, MotionState, Posture, VoiceCommand  # noqa: E402
 from services.cli.router import free_port, wait_listening  # noqa: E402
-from services.runtime import ServiceContext, client_config, decode  # noqa: E402
+from services.runtime import ServiceContext, client_config  # noqa: E402
 
 
 class Collector:
@@ -62,13 +62,6 @@ class Collector:
         with self._lock:
             self.goals.clear()
             self.decisions = 0
-
-
-def _health(ctx: ServiceContext) -> Health | None:
-    for reply in ctx.session.get(ctx.keys.health("reasoner"), timeout=1.0):
-        if reply.ok is not None:
-            return decode(reply.ok.payload.to_bytes(), Health)
-    return None
 
 
 def _pct(values: list[float], p: float) -> float:
@@ -115,7 +108,7 @@ def measure_rate(ctx: ServiceContext, col: Collector, rate: int, seconds: float)
             time.sleep(target - now)
         pub.put(VoiceCommand(command=_words(i), text="", confidence=0.9))
         if now >= next_probe:
-            h = _health(ctx)
+            h = ctx.query_health("reasoner", timeout=1.0)
             if h is not None:
                 max_backlog = max(max_backlog, int(h.detail.get("backlog", 0)))
             next_probe = now + 0.5
@@ -151,7 +144,7 @@ def main(
             ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))
             try:
                 deadline = time.monotonic() + 30
-                while not ((h := _health(ctx)) and h.detail.get("ready")):
+                while not ((h := ctx.query_health("reasoner", timeout=1.0)) and h.detail.get("ready")):
                     if time.monotonic() > deadline:
                         raise RuntimeError("the reasoner did not become ready")
                     time.sleep(0.1)

@@ -33,9 +33,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from schemas.keys import Keys  # noqa: E402
-from schemas.messages import Health, SpeechRequest, SpeechState  # noqa: E402
+from schemas.messages import SpeechRequest, SpeechState  # noqa: E402
 from services.cli.router import free_port, wait_listening  # noqa: E402
-from services.runtime import ServiceContext, client_config, decode  # noqa: E402
+from services.runtime import ServiceContext, client_config  # noqa: E402
 from services.speech.config import SpeechConfig  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
 
@@ -99,10 +99,7 @@ def bench_bus(text: str, n: int) -> dict[str, object]:
                 wait_event((f"b{i}", False))
                 if i:
                     e2e.append((started - t0) * 1000)
-            health = None
-            for reply in ctx.session.get(ctx.keys.health("speech"), timeout=2.0):
-                if reply.ok is not None:
-                    health = decode(reply.ok.payload.to_bytes(), Health)
+            health = ctx.query_health("speech")
         finally:
             ctx.close()
     finally:

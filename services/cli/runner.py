@@ -19,7 +19,7 @@ from schemas.messages import (
 from services.cli.recorder import SENT_ENGINE, Recorder
 from services.cli.scenario import Scenario, Step
 from services.cli.utterance import DEFAULT_VOICE, speak_into
-from services.runtime import DecodeError, ServiceContext, decode
+from services.runtime import ServiceContext
 
 SETTLE_S = 8.0  # longest a motion may take to finish before the next step
 GAP_S = 0.3  # pause between steps, as a person would leave
@@ -89,13 +89,7 @@ class ScenarioRunner:
 
     def health(self, service: str, timeout: float = 2.0) -> Health | None:
         """A service's answer on its health queryable (None: no answer, or not a valid `Health`)."""
-        for reply in self.ctx.session.get(self.ctx.keys.health(service), timeout=timeout):
-            if reply.ok is not None:
-                try:
-                    return decode(reply.ok.payload.to_bytes(), Health)
-                except DecodeError:
-                    return None
-        return None
+        return self.ctx.query_health(service, timeout)
 
     def run(self, scenario: Scenario, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
         results = []

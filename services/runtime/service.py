@@ -237,6 +237,19 @@ class ServiceContext:
     def _answer_health(self, query: zenoh.Query) -> None:
         query.reply(self.keys.health(self.name), encode(self.health()), encoding=encoding_for(Health))
 
+    def query_health(self, service: str, timeout: float = 2.0) -> Health | None:
+        """Ask another service on the bus for its `Health`: None when nobody answers within
+        `timeout` seconds or the answer is not a valid `Health` (logged)."""
+        for reply in self.session.get(self.keys.health(service), timeout=timeout):
+            if reply.ok is None:
+                continue
+            try:
+                return decode(reply.ok.payload.to_bytes(), Health)
+            except DecodeError as exc:
+                self.log.warning("invalid health reply", service=service, error=str(exc))
+                return None
+        return None
+
     # ------------------------------------------------------------------ lifecycle
     def wait(self, timeout: float | None = None) -> bool:
         """Sleep up to `timeout` seconds; True once the service is asked to stop."""

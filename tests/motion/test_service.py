@@ -15,7 +15,7 @@ import pytest
 
 from schemas.messages import Action, Health, HealthStatus, MotionGoal, MotionState, Posture
 from services.motion.simbus import SimBus
-from services.runtime import ServiceContext, decode
+from services.runtime import ServiceContext
 from tests.conftest import wait_for
 
 Start = Callable[..., subprocess.Popen[bytes]]
@@ -44,13 +44,6 @@ class StateLog:
         return wait_for(check, timeout)  # type: ignore[return-value]
 
 
-def health(bus: ServiceContext) -> Health | None:
-    for reply in bus.session.get(bus.keys.health("motion"), timeout=2.0):
-        if reply.ok is not None:
-            return decode(reply.ok.payload.to_bytes(), Health)
-    return None
-
-
 def send(bus: ServiceContext, action: Action, goal_id: str, *, age: float = 0.0) -> MotionGoal:
     pub = getattr(bus, "_goal_pub", None)
     if pub is None:
@@ -74,7 +67,7 @@ def test_simulated_robot_stands_walks_and_stops_when_the_reasoner_goes(
 ) -> None:
     proc = start_service("motion", env={"HRI_MOTION_SIM": "1"})
     states.wait(lambda s: s.posture == Posture.SITTING and s.bus_ok, 20)
-    h = health(bus)
+    h = bus.query_health("motion")
     assert h is not None and h.status == HealthStatus.OK and h.detail["sim"] is True
     sim_pid = h.detail["sim_pid"]
     assert Path(f"/proc/{sim_pid}").exists()
@@ -114,7 +107,7 @@ def test_simulated_robot_stands_walks_and_stops_when_the_reasoner_goes(
     stamps = [t for t, _ in states.items if t > t_end]
     assert len(stamps) >= 4 and max(b - a for a, b in itertools.pairwise(stamps)) < 0.3
 
-    h = health(bus)
+    h = bus.query_health("motion")
     assert h is not None and h.detail["stale_goals"] == 1
     assert h.detail["loop"]["period_ms_p50"] == pytest.approx(8.0, abs=1.0)
     assert stop(proc) == 0
@@ -144,7 +137,7 @@ def test_walk_stops_without_renewal_and_bad_payloads_are_harmless(
     states.wait(lambda s: s.action == Action.STOP, 2)
     assert 0.5 < time.time() - started < 1.2
     states.wait(lambda s: s.posture == Posture.STANDING, 2)
-    h = health(bus)
+    h = bus.query_health("motion")
     assert h is not None and h.rejected == 4 and h.detail["goals"]["watchdog_stops"] == 1
     assert proc.poll() is None
     assert stop(proc) == 0
@@ -159,7 +152,7 @@ def test_missing_port_is_degraded_with_a_hint_and_keeps_running(
     assert state.posture == Posture.UNKNOWN and not state.bus_ok
 
     def degraded() -> Health | None:
-        h = health(bus)
+        h = bus.query_health("motion")
         return h if h is not None and h.status == HealthStatus.DEGRADED else None
 
     h = wait_for(degraded, 10)
@@ -189,7 +182,7 @@ def test_silent_servo_on_a_real_port_is_reported(
     states.wait(lambda s: not s.bus_ok, 3)
 
     def degraded() -> Health | None:
-        h = health(bus)
+        h = bus.query_health("motion")
         return h if h is not None and h.status == HealthStatus.DEGRADED else None
 
     h = wait_for(degraded, 5)
@@ -214,12 +207,12 @@ def test_a_crashed_simulator_is_restarted(
 ) -> None:
     proc = start_service("motion", env={"HRI_MOTION_SIM": "1"})
     states.wait(lambda s: s.posture == Posture.SITTING and s.bus_ok, 20)
-    h = health(bus)
+    h = bus.query_health("motion")
     assert h is not None
     first = h.detail["sim_pid"]
     os.kill(first, signal.SIGKILL)
     states.wait(lambda s: not s.bus_ok, 3)
     states.wait(lambda s: s.bus_ok and s.posture == Posture.SITTING, 10)
-    h = health(bus)
+    h = bus.query_health("motion")
     assert h is not None and h.status == HealthStatus.OK and h.detail["sim_pid"] != first
     assert stop(proc) == 0

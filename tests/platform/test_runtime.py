@@ -7,13 +7,14 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import cast
 
 import pytest
 import zenoh
 
 from schemas import Health, HealthStatus, Keys, MarkObservation, VoiceCommand
 from services.cli.router import free_port
-from services.runtime import BusSettings, ConfigError, ServiceContext, client_config, decode
+from services.runtime import BusSettings, ConfigError, ServiceContext, client_config
 from tests.conftest import ROOT, alive_services, service_env, wait_for
 
 
@@ -89,13 +90,22 @@ def test_latest_only_subscriber_skips_to_the_newest(bus: ServiceContext, peer: S
 def test_health_queryable_and_liveliness(bus: ServiceContext, peer: ServiceContext) -> None:
     peer.set_status(HealthStatus.DEGRADED, device="camera:0 missing")
     # the queryable is declared with the context; retry until the declaration has reached the router
-    replies = wait_for(lambda: list(bus.session.get(bus.keys.health("peer"), timeout=1)))
-    health = decode(replies[0].ok.payload.to_bytes(), Health)
+    health = cast(Health, wait_for(lambda: bus.query_health("peer", timeout=1)))
     assert health.service == "peer" and health.status is HealthStatus.DEGRADED
     assert health.detail["device"] == "camera:0 missing"
     assert wait_for(lambda: {"peer", "tester"} <= alive_services(bus))
     peer.close()
     wait_for(lambda: "peer" not in alive_services(bus), timeout=5)
+
+
+def test_query_health_is_none_without_a_valid_answer(bus: ServiceContext, peer: ServiceContext) -> None:
+    assert bus.query_health("nobody", timeout=0.3) is None
+    liar = peer.session.declare_queryable(peer.keys.health("liar"), lambda q: q.reply(q.key_expr, b"not json"))
+    try:
+        wait_for(lambda: any(r.ok is not None for r in bus.session.get(bus.keys.health("liar"), timeout=1)))
+        assert bus.query_health("liar", timeout=1) is None
+    finally:
+        liar.undeclare()
 
 
 def test_settings_from_environment(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

@@ -30,7 +30,7 @@ from schemas.messages import (
     SpeechRequest,
     VoiceCommand,
 )
-from services.runtime import ServiceContext, decode
+from services.runtime import ServiceContext
 from tests.conftest import ROOT, service_env, wait_for
 
 M = TypeVar("M", bound=BaseModel)
@@ -57,17 +57,10 @@ class Inbox(Generic[M]):
         return cast(M, wait_for(lambda: next((m for m in self.snapshot() if pred(m)), None), timeout))
 
 
-def health(bus: ServiceContext) -> Health | None:
-    for reply in bus.session.get(bus.keys.health("reasoner"), timeout=1.0):
-        if reply.ok is not None:
-            return decode(reply.ok.payload.to_bytes(), Health)
-    return None
-
-
 def wait_ready(bus: ServiceContext, proc: subprocess.Popen[bytes], timeout: float = 20.0) -> Health:
     def ready() -> Health | None:
         assert proc.poll() is None, Path(proc.log_path).read_text()  # type: ignore[attr-defined]
-        h = health(bus)
+        h = bus.query_health("reasoner", timeout=1.0)
         return h if h is not None and h.detail.get("ready") else None
 
     return wait_for(ready, timeout, interval=0.1)  # type: ignore[return-value]
@@ -155,7 +148,7 @@ def test_bad_payloads_and_unknown_speech(bus: ServiceContext, start_service, io)
     assert (d.command, d.verdict) == (None, "ignore")
     assert io["speech"].wait(lambda s: True).text == "Sorry, I did not understand."
     assert proc.poll() is None
-    h = cast(Health, wait_for(lambda: (h := health(bus)) is not None and h.rejected >= 6 and h))
+    h = cast(Health, wait_for(lambda: (h := bus.query_health("reasoner", timeout=1.0)) is not None and h.rejected >= 6 and h))
     assert h.status == "ok" and h.detail["callback_errors"] == 0
 
 

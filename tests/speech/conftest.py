@@ -11,8 +11,8 @@ from subprocess import Popen
 
 import pytest
 
-from schemas.messages import Health, SpeechRequest, SpeechState
-from services.runtime import ServiceContext, decode
+from schemas.messages import SpeechRequest, SpeechState
+from services.runtime import ServiceContext
 from tests.conftest import wait_for
 
 
@@ -63,13 +63,6 @@ def say(bus: ServiceContext) -> Callable[[str, str], SpeechRequest]:
         return pub.put(SpeechRequest(id=utterance_id, text=text))
 
     return send
-
-
-def health(bus: ServiceContext) -> Health | None:
-    for reply in bus.session.get(bus.keys.health("speech"), timeout=2.0):
-        if reply.ok is not None:
-            return decode(reply.ok.payload.to_bytes(), Health)
-    return None
 
 
 @pytest.fixture

@@ -14,7 +14,7 @@ from schemas.messages import HealthStatus, SpeechRequest
 from services.runtime import ServiceContext
 from services.speech.audio import wav_info
 from tests.conftest import wait_for
-from tests.speech.conftest import StateLog, health
+from tests.speech.conftest import StateLog
 from tests.speech.recognise import make_decoder, transcribe
 from tests.speech.test_roundtrip import REFUSAL, is_refusal
 
@@ -37,7 +37,7 @@ def test_request_is_spoken_into_a_wav_bracketed_by_states(
     # Folder output: "speaking" lasts the audio's real duration.
     assert info.duration_s - 0.1 <= end - start <= info.duration_s + 1.0
     assert is_refusal(transcribe(make_decoder(), wav))
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.status == HealthStatus.OK
     assert h.detail["spoken"] == 1 and h.detail["out"] == f"folder:{tmp_path / 'out'}"
     assert 0 < h.detail["ready_ms_last"] < 2000
@@ -66,7 +66,7 @@ def test_full_queue_drops_the_oldest_waiting(
     spoken = [i for s, i in states.events() if s]
     assert spoken == ["long", "q3", "q4"]
     assert not (tmp_path / "out" / "q0.wav").exists()
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.detail["dropped_full"] == 3 and h.detail["spoken"] == 3
 
 
@@ -82,7 +82,7 @@ def test_stale_requests_are_skipped_so_a_new_reply_does_not_wait(
     say("fresh", REFUSAL)
     wait_for(lambda: states.ended("fresh"), timeout=10)
     assert [i for s, i in states.events() if s] == ["long", "fresh"]
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.detail["dropped_stale"] == 2
 
 
@@ -101,7 +101,7 @@ def test_bad_payloads_and_text_are_rejected_and_the_service_keeps_going(
     wait_for(lambda: states.ended("ok"), timeout=10)
     assert proc.poll() is None
     assert states.events() == [(True, "ok"), (False, "ok")]
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.rejected == 6 and h.detail["rejected_text"] == 3
     log = proc.log_path.read_text()  # type: ignore[attr-defined]
     assert "empty text" in log and "text too long: 51 characters" in log and "no letters or digits" in log
@@ -116,7 +116,7 @@ def test_duplicate_ids_are_spoken_once(
     say("after", "No.")
     wait_for(lambda: states.ended("after"), timeout=10)
     assert [i for s, i in states.events() if s] == ["dup", "after"]
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.detail["duplicates"] == 1
 
 
@@ -131,7 +131,7 @@ def test_settings_come_from_the_environment(
     say("e1", REFUSAL)
     wait_for(lambda: states.ended("e1"), timeout=10)
     assert wav_info(out / "e1.wav").duration_s < 1.5  # 300 wpm: much shorter than at the default 175
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None
     assert (h.detail["voice"], h.detail["rate"], h.detail["volume"]) == ("en-gb", 300, 150)
 
@@ -152,15 +152,15 @@ def test_missing_espeak_ng_fails_health_with_install_command_and_recovers(
     path_dir = tmp_path / "bin"
     path_dir.mkdir()
     proc = speech(env={"PATH": str(path_dir)})
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.status == HealthStatus.FAILED
     assert "apt-get install espeak-ng" in h.detail["install"]
     assert "not found" in h.detail["engine_error"]
     say("lost", "Yes.")
-    wait_for(lambda: (health(bus) or h).detail.get("rejected_unavailable") == 1, timeout=5)
+    wait_for(lambda: (bus.query_health("speech") or h).detail.get("rejected_unavailable") == 1, timeout=5)
     assert proc.poll() is None and states.events() == []
     os.symlink("/usr/bin/espeak-ng", path_dir / "espeak-ng")  # installed while running: it retries
-    wait_for(lambda: (health(bus) or h).status == HealthStatus.OK, timeout=10, interval=0.2)
+    wait_for(lambda: (bus.query_health("speech") or h).status == HealthStatus.OK, timeout=10, interval=0.2)
     say("found", "Yes.")
     wait_for(lambda: states.ended("found"), timeout=10)
     assert "apt-get install espeak-ng" in proc.log_path.read_text()  # type: ignore[attr-defined]
@@ -172,7 +172,7 @@ def test_missing_sound_device_degrades_and_writes_wavs_instead(
     home = tmp_path / "state-home"
     start_service("speech", "--out", "device:nosuchpcm", env={"XDG_STATE_HOME": str(home)})
     wait_for(states.ready, timeout=20)
-    h = health(bus)
+    h = bus.query_health("speech")
     assert h is not None and h.status == HealthStatus.DEGRADED
     assert h.detail["device"] == "device:nosuchpcm" and "HRI_SPEECH_OUT=<folder>" in h.detail["alternatives"]
     say("d1", "Yes.")

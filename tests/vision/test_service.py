@@ -18,7 +18,7 @@ import pytest
 
 from schemas.keys import Keys
 from schemas.messages import Health, HealthStatus, MarkObservation, SceneCommand, Shape
-from services.runtime import ServiceContext, decode
+from services.runtime import ServiceContext
 from services.vision.synthetic import MILD, SceneGenerator
 from tests.conftest import ROOT, wait_for
 
@@ -40,13 +40,6 @@ class Collector:
 
     def shapes(self) -> list[set[Shape]]:
         return [{m.shape for m in o.marks} for o in self.snapshot()]
-
-
-def _health(bus: ServiceContext) -> Health | None:
-    for r in bus.session.get(bus.keys.health("vision"), timeout=2.0):
-        if r.ok is not None:
-            return decode(r.ok.payload.to_bytes(), Health)
-    return None
 
 
 def _stop(proc: subprocess.Popen[bytes]) -> int:
@@ -83,7 +76,7 @@ def test_video_file_end_to_end(
     assert 0.5 <= x.confidence <= 1.0 and x.box[2] > 20
     h = cast(
         Health,
-        wait_for(lambda: (x := _health(bus)) is not None and x.detail.get("finished") and x, timeout=5),
+        wait_for(lambda: (x := bus.query_health("vision")) is not None and x.detail.get("finished") and x, timeout=5),
     )
     assert h.status is HealthStatus.OK and h.published == len(plan)
     assert proc.poll() is None  # a finished file leaves the service up
@@ -113,7 +106,7 @@ def test_synthetic_scene_follows_scene_commands(
     n = len(got.snapshot())
     wait_for(lambda: len(got.snapshot()) > n + 5, timeout=10)
     assert proc.poll() is None
-    h = _health(bus)
+    h = bus.query_health("vision")
     assert h is not None and h.rejected >= 2 and h.detail["debounce"] == "3/5"
     assert _stop(proc) == 0
 
@@ -126,7 +119,7 @@ def test_missing_source_degrades_and_keeps_running(
     h = cast(
         Health,
         wait_for(
-            lambda: (x := _health(bus)) is not None and x.status is HealthStatus.DEGRADED and x, timeout=20
+            lambda: (x := bus.query_health("vision")) is not None and x.status is HealthStatus.DEGRADED and x, timeout=20
         ),
     )
     assert source in h.detail["error"]

@@ -13,18 +13,11 @@ from pathlib import Path
 import pytest
 
 from schemas.messages import Health, HealthStatus, VoiceCommand
-from services.runtime import ServiceContext, decode
+from services.runtime import ServiceContext
 from services.voice import synth
 from tests.conftest import ROOT, service_env, wait_for
 
 pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
-
-
-def health(bus: ServiceContext) -> Health | None:
-    for reply in bus.session.get(bus.keys.health("voice"), timeout=2.0):
-        if reply.ok is not None:
-            return decode(reply.ok.payload.to_bytes(), Health)
-    return None
 
 
 def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_path: Path) -> None:
@@ -64,7 +57,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert second.stamp >= t0 - 0.01
     assert latency < 2.0
     # the bad file is reported once its size has settled, and skipped
-    h = wait_for(lambda: (x := health(bus)) is not None and x.detail.get("bad_audio") == 1 and x, timeout=5)
+    h = wait_for(lambda: (x := bus.query_health("voice")) is not None and x.detail.get("bad_audio") == 1 and x, timeout=5)
     assert isinstance(h, Health)
     assert "not a PCM WAV" in h.detail["last_error"]
     assert h.detail["utterances"] == 2
@@ -76,7 +69,7 @@ def test_missing_microphone_is_degraded_not_fatal(bus: ServiceContext, start_ser
     proc = start_service("voice", env={"HRI_VOICE_SOURCE": "mic:no-such-device-42"})
 
     def degraded() -> Health | None:
-        h = health(bus)
+        h = bus.query_health("voice")
         return h if h is not None and h.status == HealthStatus.DEGRADED else None
 
     h = wait_for(degraded, timeout=20)
