@@ -18,10 +18,7 @@ from __future__ import annotations
 import json
 import os
 import random
-import signal
 import statistics
-import subprocess
-import sys
 import threading
 import time
 import uuid
@@ -31,12 +28,10 @@ from typing import Annotated, Any
 import typer
 import zenoh
 
-from schemas.keys import Keys
 from schemas.messages import Action, Health, MotionGoal, MotionState, Posture
-from services.cli.router import free_port
-from services.runtime import ServiceContext, client_config
+from services.cli.rig import service_rig
+from services.runtime import ServiceContext
 
-ROOT = Path(__file__).resolve().parents[1]
 TICK = os.sysconf("SC_CLK_TCK")
 
 
@@ -121,24 +116,11 @@ def main(
     walk: Annotated[float, typer.Option(help="Seconds walking")] = 10.0,
     goals: Annotated[int, typer.Option(help="Head-gesture goals for the latency figure")] = 40,
 ) -> None:
-    port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
     robot = f"bench{uuid.uuid4().hex[:6]}"
-    router = subprocess.Popen(
-        [sys.executable, "-m", "services.cli.router", "--port", str(port)],
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    env = dict(
-        os.environ, HRI_ZENOH_CONNECT=endpoint, HRI_ROBOT=robot, HRI_MOTION_SIM="1", HRI_LOG_LEVEL="warning"
-    )
-    time.sleep(1.0)
-    service = subprocess.Popen([sys.executable, "-m", "services.motion"], cwd=ROOT, env=env)
-    ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))
     result: dict[str, Any] = {"machine": {"cores": os.cpu_count(), "loadavg": os.getloadavg()}}
-    try:
-        bench = Bench(ctx)
+    with service_rig(robot, HRI_MOTION_SIM="1", HRI_LOG_LEVEL="warning") as rig:
+        service = rig.start("motion", output=None)
+        bench = Bench(rig.ctx)
         bench.wait(lambda s: s.posture == Posture.SITTING and s.bus_ok, 30)
         time.sleep(1.0)
         result["cpu_percent_idle"] = measure_cpu(service.pid, idle)
@@ -191,12 +173,6 @@ def main(
         result["tick_work_ms"] = {"p50": loop["work_ms_p50"], "p99": loop["work_ms_p99"]}
         result["bus"] = h.detail["bus"]
         print(json.dumps(result, indent=2))
-    finally:
-        ctx.close()
-        service.send_signal(signal.SIGTERM)
-        service.wait(10)
-        router.send_signal(signal.SIGTERM)
-        router.wait(10)
 
 
 if __name__ == "__main__":

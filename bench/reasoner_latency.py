@@ -18,9 +18,7 @@ Figures on a shared 2-core machine are noisy; run it a few times.
 from __future__ import annotations
 
 import os
-import signal
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -28,15 +26,13 @@ import time
 from pathlib import Path
 
 import typer
-import zenoh
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from schemas.keys import Keys  # noqa: E402
 from schemas.messages import Command, Decision, MotionGoal, MotionState, Posture, VoiceCommand  # noqa: E402
-from services.cli.router import free_port, wait_listening  # noqa: E402
-from services.runtime import ServiceContext, client_config  # noqa: E402
+from services.cli.rig import service_rig  # noqa: E402
+from services.runtime import ServiceContext  # noqa: E402
 
 
 class Collector:
@@ -127,55 +123,33 @@ def main(
     log_level: str = typer.Option("warning", help="HRI_LOG_LEVEL of the reasoner under test"),
 ) -> None:
     """Print decision latency p50/p99 and the sustained input rate of the reasoner."""
-    port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
-    robot = f"bench{os.getpid()}"
-    procs: list[subprocess.Popen[bytes]] = []
-    with tempfile.TemporaryDirectory() as state:
-        env = dict(os.environ, HRI_ZENOH_CONNECT=endpoint, HRI_ROBOT=robot, HRI_STATE_DIR=state,
-                   HRI_LOG_LEVEL=log_level)
-        env.pop("ZENOH_CONFIG", None)
-        try:
-            procs.append(subprocess.Popen([sys.executable, "-m", "services.cli.router", "--port", str(port)],
-                                          cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-            wait_listening(port)
-            procs.append(subprocess.Popen([sys.executable, "-m", "services.reasoner"], cwd=ROOT, env=env,
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-            ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))
-            try:
-                deadline = time.monotonic() + 30
-                while not ((h := ctx.query_health("reasoner", timeout=1.0)) and h.detail.get("ready")):
-                    if time.monotonic() > deadline:
-                        raise RuntimeError("the reasoner did not become ready")
-                    time.sleep(0.1)
-                col = Collector(ctx)
-                ctx.publisher(ctx.keys.motion_state, MotionState).put(MotionState(posture=Posture.STANDING))
-                time.sleep(0.3)
-                typer.echo(f"reasoner bench, {os.cpu_count()} CPUs, reasoner log level {log_level}")
-                measure_latency(ctx, col, count)
-                typer.echo("sustained input rate (VoiceCommand -> Decision + MotionGoal):")
-                best = 0
-                for rate in (int(r) for r in rates.split(",") if r.strip()):
-                    ratio, lag, backlog = measure_rate(ctx, col, rate, seconds)
-                    ok = ratio >= 0.97 and lag < 0.5
-                    best = rate if ok else best
-                    typer.echo(f"  {rate:6d}/s: decided {ratio * 100:5.1f} %, "
-                               f"lag after last {lag * 1000:7.1f} ms, "
-                               f"max backlog {backlog:5d}  {'sustained' if ok else 'falls behind'}")
-                    if not ok:
-                        break
-                    time.sleep(1.0)
-                typer.echo(f"highest sustained rate tried: {best}/s")
-            finally:
-                ctx.close()
-        finally:
-            for proc in reversed(procs):
-                proc.send_signal(signal.SIGTERM)
-            for proc in reversed(procs):
-                try:
-                    proc.wait(10)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
+    with tempfile.TemporaryDirectory() as state, \
+            service_rig(f"bench{os.getpid()}", HRI_STATE_DIR=state, HRI_LOG_LEVEL=log_level) as rig:
+        rig.start("reasoner")
+        ctx = rig.ctx
+        deadline = time.monotonic() + 30
+        while not ((h := ctx.query_health("reasoner", timeout=1.0)) and h.detail.get("ready")):
+            if time.monotonic() > deadline:
+                raise RuntimeError("the reasoner did not become ready")
+            time.sleep(0.1)
+        col = Collector(ctx)
+        ctx.publisher(ctx.keys.motion_state, MotionState).put(MotionState(posture=Posture.STANDING))
+        time.sleep(0.3)
+        typer.echo(f"reasoner bench, {os.cpu_count()} CPUs, reasoner log level {log_level}")
+        measure_latency(ctx, col, count)
+        typer.echo("sustained input rate (VoiceCommand -> Decision + MotionGoal):")
+        best = 0
+        for rate in (int(r) for r in rates.split(",") if r.strip()):
+            ratio, lag, backlog = measure_rate(ctx, col, rate, seconds)
+            ok = ratio >= 0.97 and lag < 0.5
+            best = rate if ok else best
+            typer.echo(f"  {rate:6d}/s: decided {ratio * 100:5.1f} %, "
+                       f"lag after last {lag * 1000:7.1f} ms, "
+                       f"max backlog {backlog:5d}  {'sustained' if ok else 'falls behind'}")
+            if not ok:
+                break
+            time.sleep(1.0)
+        typer.echo(f"highest sustained rate tried: {best}/s")
 
 
 if __name__ == "__main__":

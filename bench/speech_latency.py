@@ -16,8 +16,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import threading
@@ -27,15 +25,12 @@ from typing import Annotated
 
 import numpy as np
 import typer
-import zenoh
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from schemas.keys import Keys  # noqa: E402
 from schemas.messages import SpeechRequest, SpeechState  # noqa: E402
-from services.cli.router import free_port, wait_listening  # noqa: E402
-from services.runtime import ServiceContext, client_config  # noqa: E402
+from services.cli.rig import service_rig  # noqa: E402
 from services.speech.config import SpeechConfig  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
 
@@ -57,59 +52,37 @@ def bench_synth(text: str, n: int) -> dict[str, float]:
 
 
 def bench_bus(text: str, n: int) -> dict[str, object]:
-    port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
-    robot = f"bench{os.getpid()}"
     tmp = Path(tempfile.mkdtemp(prefix="speech-bench-"))
-    env = {**os.environ, "HRI_ZENOH_CONNECT": endpoint, "HRI_ROBOT": robot, "HRI_SPEECH_OUT": str(tmp)}
-    env.pop("ZENOH_CONFIG", None)
-    procs: list[subprocess.Popen[bytes]] = []
-    log = open(tmp / "speech.log", "wb")  # noqa: SIM115
-    try:
-        procs.append(subprocess.Popen([sys.executable, "-m", "services.cli.router", "--port", str(port)],
-                                      cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        wait_listening(port)
-        ctx = ServiceContext("bench", zenoh.open(client_config([endpoint])), Keys(robot))
-        try:
-            events: dict[tuple[str | None, bool], float] = {}
-            cond = threading.Condition()
+    log_path = tmp / "speech.log"
+    with open(log_path, "wb") as log, service_rig(f"bench{os.getpid()}", HRI_SPEECH_OUT=str(tmp)) as rig:
+        ctx = rig.ctx
+        events: dict[tuple[str | None, bool], float] = {}
+        cond = threading.Condition()
 
-            def on_state(msg: SpeechState) -> None:
-                with cond:
-                    events[(msg.id, msg.speaking)] = time.perf_counter()
-                    cond.notify_all()
+        def on_state(msg: SpeechState) -> None:
+            with cond:
+                events[(msg.id, msg.speaking)] = time.perf_counter()
+                cond.notify_all()
 
-            def wait_event(key: tuple[str | None, bool], timeout: float = 20.0) -> float:
-                with cond:
-                    if not cond.wait_for(lambda: key in events, timeout):
-                        log_path = tmp / "speech.log"
-                        raise RuntimeError(f"no SpeechState {key} within {timeout} s; see {log_path}")
-                    return events[key]
+        def wait_event(key: tuple[str | None, bool], timeout: float = 20.0) -> float:
+            with cond:
+                if not cond.wait_for(lambda: key in events, timeout):
+                    raise RuntimeError(f"no SpeechState {key} within {timeout} s; see {log_path}")
+                return events[key]
 
-            ctx.subscribe(ctx.keys.speech_state, SpeechState, on_state)
-            procs.append(subprocess.Popen([sys.executable, "-m", "services.speech"], cwd=ROOT, env=env,
-                                          stdout=log, stderr=subprocess.STDOUT))
-            wait_event((None, False), timeout=30)
-            pub = ctx.publisher(ctx.keys.speech_say, SpeechRequest)
-            e2e: list[float] = []
-            for i in range(n + 1):  # the first is a warm-up
-                t0 = time.perf_counter()
-                pub.put(SpeechRequest(id=f"b{i}", text=text))
-                started = wait_event((f"b{i}", True))
-                wait_event((f"b{i}", False))
-                if i:
-                    e2e.append((started - t0) * 1000)
-            health = ctx.query_health("speech")
-        finally:
-            ctx.close()
-    finally:
-        for p in reversed(procs):
-            p.send_signal(signal.SIGTERM)
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                p.kill()
-        log.close()
+        ctx.subscribe(ctx.keys.speech_state, SpeechState, on_state)
+        rig.start("speech", output=log)
+        wait_event((None, False), timeout=30)
+        pub = ctx.publisher(ctx.keys.speech_say, SpeechRequest)
+        e2e: list[float] = []
+        for i in range(n + 1):  # the first is a warm-up
+            t0 = time.perf_counter()
+            pub.put(SpeechRequest(id=f"b{i}", text=text))
+            started = wait_event((f"b{i}", True))
+            wait_event((f"b{i}", False))
+            if i:
+                e2e.append((started - t0) * 1000)
+        health = ctx.query_health("speech")
     shutil.rmtree(tmp, ignore_errors=True)  # kept above, with the service log, only when a step failed
     detail = health.detail if health else {}
     return {
