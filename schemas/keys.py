@@ -53,6 +53,21 @@ class Keys:
         return f"{self.prefix}/reasoner/soar"
 
     @property
+    def reasoner_explain(self) -> str:
+        """Queryable: the explanation of the latest decision (`Explanation`, JSON)."""
+        return f"{self.prefix}/reasoner/explain"
+
+    @property
+    def vision_preview(self) -> str:
+        """Low-rate preview image with boxes (`VisionPreview`), published only while subscribed."""
+        return f"{self.prefix}/vision/preview"
+
+    @property
+    def motion_joints(self) -> str:
+        """Present joint positions (`JointPositions`), about 25 Hz."""
+        return f"{self.prefix}/motion/joints"
+
+    @property
     def voice_command(self) -> str:
         return f"{self.prefix}/voice/command"
 

@@ -33,6 +33,12 @@ class Command(StrEnum):
     NO = "no"
     GO = "go"
     STOP = "stop"
+    WHY = "why"
+
+    @property
+    def moves_robot(self) -> bool:
+        """"why" asks for an explanation; it never moves the robot."""
+        return self is not Command.WHY
 
 
 class Action(StrEnum):
@@ -56,6 +62,7 @@ class Verdict(StrEnum):
     OBEY = "obey"
     REFUSE = "refuse"
     IGNORE = "ignore"
+    ASK = "ask"
 
 
 class Reason(StrEnum):
@@ -66,6 +73,7 @@ class Reason(StrEnum):
     NOT_UNDERSTOOD = "not_understood"
     ALREADY_DONE = "already_done"
     BUSY = "busy"
+    CONFIRM = "confirm"
 
 
 class Situation(StrEnum):
@@ -160,6 +168,47 @@ class Health(Header):
     detail: dict[str, Any] = Field(default_factory=dict)
 
 
+class Evidence(BaseModel):
+    """One thing the robot experienced that an explanation rests on."""
+
+    model_config = ConfigDict(extra="ignore")
+
+    kind: str = Field(description='"mark" (seen) or "command" (heard)')
+    what: str = Field(description="the mark's shape or the command word")
+    stamp: float = Field(ge=0.0, description="UNIX seconds when it was seen or heard")
+    ago_s: float | None = Field(default=None, ge=0.0, description="seconds before the explanation")
+    episode: NonNegInt | None = Field(default=None, description="Soar episodic-memory episode number")
+
+
+class Explanation(Header):
+    """The answer to "why": the latest decision, the condition behind it, and the evidence recalled."""
+
+    decision: Decision | None = Field(default=None, description="the decision explained (null: nothing yet)")
+    reason: Reason | None = None
+    text: str = Field(description="the sentence the robot says")
+    evidence: list[Evidence] = Field(default_factory=list)
+    episode: NonNegInt | None = Field(default=None, description="the episode retrieved from episodic memory")
+
+
+class VisionPreview(Header):
+    """A small JPEG of what the camera sees, with the marks found in it (a viewer's feed, low rate)."""
+
+    frame: NonNegInt = 0
+    width: NonNegInt = 0
+    height: NonNegInt = 0
+    jpeg: str = Field(description="base64 of the JPEG image")
+    marks: list[Mark] = Field(default_factory=list, description="boxes in the preview's own pixels")
+
+
+class JointPositions(Header):
+    """Present positions of the robot's joints, read from the servos (or the simulated bus)."""
+
+    ids: list[NonNegInt] = Field(description="Dynamixel ids, 1..20")
+    names: list[str] = Field(default_factory=list)
+    ticks: list[NonNegInt] = Field(default_factory=list, description="raw present positions, 0..4095")
+    radians: list[float] = Field(description="angle from the servo's centre (2048), radians")
+
+
 class SceneCommand(Header):
     """Simulator control, not robot data: what the synthetic camera scene holds up (null: nothing)."""
 
@@ -178,6 +227,9 @@ MODELS: dict[str, type[Header]] = {
         SpeechState,
         Health,
         SceneCommand,
+        Explanation,
+        VisionPreview,
+        JointPositions,
     )
 }
 """Every top-level message model by name (the name is the encoding schema on the wire)."""

@@ -58,11 +58,11 @@ def test_every_message_carries_stamp_and_seq() -> None:
 def test_enums_serialise_as_the_contract_strings() -> None:
     data = json.loads(SAMPLES[6].model_dump_json())
     assert data["verdict"] == "refuse" and data["reason"] == "danger_sign" and data["situation"] == "danger"
-    assert {c.value for c in Command} == {"stand", "down", "yes", "no", "go", "stop"}
+    assert {c.value for c in Command} == {"stand", "down", "yes", "no", "go", "stop", "why"}
     assert {a.value for a in Action} == {"stand_up", "sit_down", "nod", "shake_head", "walk_forward", "stop"}
     assert {p.value for p in Posture} == {"sitting", "standing", "walking", "moving", "unknown"}
-    assert {v.value for v in Verdict} == {"obey", "refuse", "ignore"}
-    assert {r.value for r in Reason} == {"ok", "danger_sign", "not_understood", "already_done", "busy"}
+    assert {v.value for v in Verdict} == {"obey", "refuse", "ignore", "ask"}
+    assert {r.value for r in Reason} == {"ok", "danger_sign", "not_understood", "already_done", "busy", "confirm"}
 
 
 @pytest.mark.parametrize(
