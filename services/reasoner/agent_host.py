@@ -13,6 +13,7 @@ runs breaks the other's Python callbacks (a segfault at its next run; checked).
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import re
 import threading
@@ -31,7 +32,7 @@ AGENT_DIR = Path(__file__).with_name("agent")
 KNOWLEDGE_FILE = AGENT_DIR / "knowledge.soar"
 
 POSTURES = ("sitting", "standing", "walking", "moving", "unknown")
-_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "ready": 4}
+_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "ready": 4, "timer": 5}
 """Within one output phase: motion first (safety latency), then persistence, then the rest."""
 
 _AGENT_NUMBERS = itertools.count(1)
@@ -66,7 +67,15 @@ class MarksInput:
     stamp: float | None = None
 
 
-Event = CommandInput | MarksInput
+@dataclass(frozen=True)
+class TimerInput:
+    """A timer the agent started (a ^timer output) has run out; `key` is the agent's own."""
+
+    key: int
+    stamp: float | None = None
+
+
+Event = CommandInput | MarksInput | TimerInput
 
 
 @dataclass(frozen=True)
@@ -116,7 +125,16 @@ class ReadyOutput:
     memory: Memory
 
 
-Output = MotionOutput | SayOutput | DecisionOutput | RememberOutput | ReadyOutput
+@dataclass(frozen=True)
+class TimerOutput:
+    """The agent asks for a ^timer input event with this key after `after_s` seconds. Handled by
+    the host itself (never passed to the output sink)."""
+
+    key: int
+    after_s: float
+
+
+Output = MotionOutput | SayOutput | DecisionOutput | RememberOutput | ReadyOutput | TimerOutput
 
 
 @dataclass(frozen=True)
@@ -147,7 +165,7 @@ class SoarAgent:
         self.log = log or get_logger("reasoner")
         self._on_output = on_output
         self._lock = threading.Lock()
-        self._events: deque[tuple[int, Event]] = deque()
+        self._events: deque[tuple[int, Event, float]] = deque()  # (input id, event, submitted at)
         self._pending_posture: str | None = None
         self._next_id = 0
         self._stamps: OrderedDict[int, float | None] = OrderedDict()
@@ -164,6 +182,9 @@ class SoarAgent:
         self._posture_wme: Any = None
         self._posture = "unknown"
         self._closed = False
+        self._timers: list[tuple[float, int]] = []  # (due on self.clock, key), a heap
+        self.clock: Callable[[], float] = time.monotonic
+        """The timers' clock (tests replace it)."""
         self.last_cycle = time.monotonic()
         """When the last decision cycle's input phase ran (monotonic seconds)."""
 
@@ -249,6 +270,7 @@ class SoarAgent:
             self._events.clear()
             self._pending_posture = None
         self._stamps.clear()
+        self._timers.clear()
         self._to_complete.clear()
         for attr in ("_event_wme", "_memory_wme", "_motion_wme"):
             wme = getattr(self, attr)
@@ -289,8 +311,22 @@ class SoarAgent:
         """Queue an input event (any thread). Returns its input id (the `cause` of outputs)."""
         with self._lock:
             self._next_id += 1
-            self._events.append((self._next_id, event))
+            self._events.append((self._next_id, event, time.time()))
             return self._next_id
+
+    def fire_timers(self) -> int:
+        """Queue a TimerInput for every timer of the agent that has run out (owner thread)."""
+        now = self.clock()
+        fired = 0
+        while self._timers and self._timers[0][0] <= now:
+            _, key = heapq.heappop(self._timers)
+            self.submit(TimerInput(key=key))
+            fired += 1
+        return fired
+
+    def next_timer_in(self) -> float | None:
+        """Seconds until the next timer runs out (None: no timer)."""
+        return max(0.0, self._timers[0][0] - self.clock()) if self._timers else None
 
     def set_posture(self, posture: str) -> None:
         """Latest posture reported by the motion service (any thread); unknown values -> unknown."""
@@ -331,7 +367,7 @@ class SoarAgent:
         if changed:
             agent.Commit()
 
-    def _put_event(self, agent: Any, input_id: int, event: Event) -> None:
+    def _put_event(self, agent: Any, input_id: int, event: Event, submitted: float) -> None:
         self._stamps[input_id] = event.stamp
         while len(self._stamps) > _MAX_STAMPS:
             self._stamps.popitem(last=False)
@@ -341,11 +377,16 @@ class SoarAgent:
             if event.word is not None:
                 agent.CreateStringWME(wme, "word", event.word)
             agent.CreateFloatWME(wme, "confidence", float(event.confidence))
-        else:
+        elif isinstance(event, MarksInput):
             wme = agent.CreateIdWME(il, "marks")
             for shape in sorted(event.shapes):
                 agent.CreateStringWME(wme, "shape", shape)
+        else:
+            wme = agent.CreateIdWME(il, "timer")
+            agent.CreateIntWME(wme, "key", event.key)
         agent.CreateIntWME(wme, "id", input_id)
+        # When it was heard or seen (UNIX seconds): what the agent's episodes remember.
+        agent.CreateFloatWME(wme, "time", float(event.stamp if event.stamp is not None else submitted))
         self._event_wme = wme
         self._applied += 1
         self.events_applied += 1
@@ -374,6 +415,9 @@ class SoarAgent:
             self._produced += 1
             if isinstance(out, ReadyOutput):
                 self._ready = out.memory
+            if isinstance(out, TimerOutput):
+                heapq.heappush(self._timers, (self.clock() + out.after_s, out.key))
+                continue
             self._collected.append(out)
             if self._on_output is not None:
                 try:
@@ -405,6 +449,8 @@ class SoarAgent:
                 command=get("command"), verdict=need("verdict"), reason=need("reason"), action=get("action"),
                 situation=need("situation"), say=get("say"), cause_stamp=self._stamp(get("cause")),
             )
+        if name == "timer":
+            return TimerOutput(key=int(need("key")), after_s=float(need("after")))
         if name in ("remember", "ready"):
             memory = Memory(situation=need("situation"), resume_go=get("resume-go") == "yes")
             return RememberOutput(memory) if name == "remember" else ReadyOutput(memory)
@@ -419,6 +465,7 @@ class SoarAgent:
     def pump(self) -> list[Output]:
         """Run until every queued input is handled and the agent has settled; return the outputs."""
         self._collected = []
+        self.fire_timers()
         busy_steps = 0
         while True:
             applied, produced = self._applied, self._produced

@@ -113,11 +113,13 @@ class AgentDriver:
             # with a debugger listener, wake often enough to answer it promptly
             idle_wait = 0.05 if self._config.debugger_port is not None else 1.0
             while not self._stop.is_set():
-                self._wake.wait(idle_wait)
+                # the agent's own timers (a question's timeout) wake the loop too
+                timer_in = self._agent.next_timer_in()
+                self._wake.wait(idle_wait if timer_in is None else min(idle_wait, timer_in))
                 self._wake.clear()
                 self._agent.serve_remote()
                 self._run_commands()
-                if self._agent.pending():
+                if self._agent.fire_timers() or self._agent.pending():
                     self._busy_since = time.monotonic()
                     try:
                         self._agent.pump()

@@ -104,9 +104,12 @@ def test_confidence_thresholds_come_from_semantic_memory(agent: SoarAgent) -> No
     assert only_decision(agent.step(say("stop", confidence=0.35))).reason == "already_done"  # understood
     assert only_decision(agent.step(say("yes", confidence=0.29))).reason == "not_understood"
     assert motions(agent.step(say("yes", confidence=0.3))) == ["nod"]
-    assert motions(agent.step(say("go", confidence=0.5))) == ["walk_forward"]
+    d = only_decision(agent.step(say("go", confidence=0.5)))  # understood, but unsure: ask
+    assert (d.command, d.verdict, d.reason) == ("go", "ask", "confirm")
+    assert motions(agent.step(say("go", confidence=0.85))) == ["walk_forward"]
     # The numbers are not in Python: they are recalled from semantic memory.
-    assert "^min-confidence 0.5" in agent.execute("print --depth 3 s1")[1]
+    wm = agent.execute("print --depth 3 s1")[1]
+    assert "^min-confidence 0.5" in wm and "^confirm-below 0.85" in wm
 
 
 def test_repeated_commands(agent: SoarAgent) -> None:
