@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import os
 import re
 import threading
 import time
@@ -32,7 +33,7 @@ AGENT_DIR = Path(__file__).with_name("agent")
 KNOWLEDGE_FILE = AGENT_DIR / "knowledge.soar"
 
 POSTURES = ("sitting", "standing", "walking", "moving", "unknown")
-_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "ready": 4, "timer": 5}
+_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "explanation": 3, "ready": 4, "timer": 5}
 """Within one output phase: motion first (safety latency), then persistence, then the rest."""
 
 _AGENT_NUMBERS = itertools.count(1)
@@ -47,6 +48,40 @@ _PRODUCTION = re.compile(r"sp\s*\{\s*([^\s\"(]+)")
 
 class AgentLoadError(RuntimeError):
     """The kernel or the agent's rules could not be loaded; the message names file and rule."""
+
+
+def _children(identifier: Any) -> dict[str, list[Any]]:
+    """An output-link identifier's augmentations by attribute (identifiers converted)."""
+    out: dict[str, list[Any]] = {}
+    for i in range(identifier.GetNumberChildren()):
+        wme = identifier.GetChild(i)
+        out.setdefault(wme.GetAttribute(), []).append(wme.ConvertToIdentifier() if wme.IsIdentifier() else wme)
+    return out
+
+
+def _values(identifier: Any) -> dict[str, str]:
+    """Constant augmentations of an identifier; the agent's nil is left out."""
+    values: dict[str, str] = {}
+    for attr, wmes in _children(identifier).items():
+        for wme in wmes:
+            value = wme.GetValueAsString()
+            if not wme.IsIdentifier() and value != _NIL:
+                values[attr] = value
+    return values
+
+
+def _needed(values: dict[str, str], attr: str) -> str:
+    if attr not in values:
+        raise ValueError(f"^explanation part without ^{attr}")
+    return values[attr]
+
+
+def _float(value: str | None) -> float | None:
+    return float(value) if value is not None else None
+
+
+def _int(value: str | None) -> int | None:
+    return int(value) if value is not None else None
 
 
 # ---------------------------------------------------------------------------------- inputs
@@ -126,6 +161,32 @@ class ReadyOutput:
 
 
 @dataclass(frozen=True)
+class EvidenceOutput:
+    """Something the agent heard (kind command) or saw (kind mark), recalled from an episode."""
+
+    role: str  # decision: what the explained decision answered; cause: the earlier episode's
+    kind: str
+    what: str
+    stamp: float | None
+    episode: int | None
+    meaning: str | None = None  # a mark's meaning (danger | safe)
+
+
+@dataclass(frozen=True)
+class ExplanationOutput:
+    """The agent's answer to "why": which sentence (`template`), the decision it explains as
+    recalled from episodic memory (None: nothing decided yet), and the evidence."""
+
+    template: str
+    situation: str
+    cause: int | None
+    cause_stamp: float | None
+    decision: DecisionOutput | None
+    episode: int | None
+    evidence: tuple[EvidenceOutput, ...] = ()
+
+
+@dataclass(frozen=True)
 class TimerOutput:
     """The agent asks for a ^timer input event with this key after `after_s` seconds. Handled by
     the host itself (never passed to the output sink)."""
@@ -134,7 +195,8 @@ class TimerOutput:
     after_s: float
 
 
-Output = MotionOutput | SayOutput | DecisionOutput | RememberOutput | ReadyOutput | TimerOutput
+Output = (MotionOutput | SayOutput | DecisionOutput | RememberOutput | ReadyOutput | TimerOutput
+          | ExplanationOutput)
 
 
 @dataclass(frozen=True)
@@ -148,6 +210,11 @@ class AgentConfig:
     max_busy_steps: int = 200
     """A pump gives up (and logs) after this many steps that still produce output without input."""
     ready_cycles: int = 400
+    episodes: Path | None = None
+    """The episodic-memory store (an SQLite file kept across restarts); None keeps it in memory."""
+    episodes_max_bytes: int = 64 * 1024 * 1024
+    """Above this size the store file is rotated: it becomes `<name>.1` (the one older generation
+    kept) and a new one is started, so the episodes on disk never exceed twice this."""
 
 
 class SoarAgent:
@@ -176,6 +243,7 @@ class SoarAgent:
         self._ready: Memory | None = None
         self.callback_errors = 0
         self.events_applied = 0
+        self.episode_rotations = 0
         self._event_wme: Any = None
         self._memory_wme: Any = None
         self._motion_wme: Any = None
@@ -206,6 +274,7 @@ class SoarAgent:
             if self._agent is None:
                 detail = self._kernel.GetLastErrorDescription()
                 raise AgentLoadError(f"cannot create the Soar agent: {detail}")
+            self._open_episodes()
             self._load()
             # One callback per decision cycle (a Python callback costs about as much as a decision):
             # output is read at the start of the next input phase (right after the output phase)
@@ -218,6 +287,41 @@ class SoarAgent:
             raise
 
     # ------------------------------------------------------------------------------ loading
+    def _open_episodes(self) -> None:
+        """Point episodic memory at its file before the first episode (00_settings.soar turns it
+        on). Committed per episode (lazy-commit off), so a SIGKILL loses none."""
+        path = self.config.episodes
+        if path is None:
+            return
+        if any(c.isspace() for c in str(path)) or "|" in str(path):
+            raise AgentLoadError(f"the episodic-memory file must not contain spaces or '|': {path}")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        for command in ("epmem --set database file", f"epmem --set path {path}", "epmem --set append on",
+                        "epmem --set lazy-commit off"):
+            ok, out = self.execute(command)
+            if not ok:
+                raise AgentLoadError(f"episodic memory: `{command}` failed: {' '.join(out.split())}")
+
+    def _bound_episodes(self) -> None:
+        """Rotate the episodic-memory file once it is over its bound (owner thread, between runs).
+        The agent keeps its latest decision in working memory, and the next episode stores it in
+        the new file: "why" still answers for it. Older episodes are in `<name>.1` only."""
+        path = self.config.episodes
+        if path is None:
+            return
+        try:
+            size = path.stat().st_size
+        except FileNotFoundError:
+            return
+        if size <= self.config.episodes_max_bytes:
+            return
+        self.execute("epmem --close")
+        os.replace(path, path.with_name(path.name + ".1"))
+        ok, out = self.execute("epmem --init")
+        self.execute("epmem --set force remember")
+        self.episode_rotations += 1
+        self.log.info("episodic memory rotated", path=str(path), size=size, ok=ok, detail=out.strip()[:200])
+
     def _load(self) -> None:
         rules = sorted(p for p in self.config.rules_dir.glob("*.soar") if p.name != KNOWLEDGE_FILE.name)
         if not rules:
@@ -307,10 +411,13 @@ class SoarAgent:
         self.close()
 
     # ------------------------------------------------------------------------------ input
-    def submit(self, event: Event) -> int:
-        """Queue an input event (any thread). Returns its input id (the `cause` of outputs)."""
+    def submit(self, event: Event, reserve: Callable[[int], None] | None = None) -> int:
+        """Queue an input event (any thread). Returns its input id (the `cause` of outputs);
+        `reserve(id)` runs before the event can reach the agent (to wait for its answer)."""
         with self._lock:
             self._next_id += 1
+            if reserve is not None:
+                reserve(self._next_id)
             self._events.append((self._next_id, event, time.time()))
             return self._next_id
 
@@ -449,12 +556,43 @@ class SoarAgent:
                 command=get("command"), verdict=need("verdict"), reason=need("reason"), action=get("action"),
                 situation=need("situation"), say=get("say"), cause_stamp=self._stamp(get("cause")),
             )
+        if name == "explanation":
+            return self._parse_explanation(cmd, get, need)
         if name == "timer":
             return TimerOutput(key=int(need("key")), after_s=float(need("after")))
         if name in ("remember", "ready"):
             memory = Memory(situation=need("situation"), resume_go=get("resume-go") == "yes")
             return RememberOutput(memory) if name == "remember" else ReadyOutput(memory)
         raise ValueError(f"unknown output command ^{name}")
+
+    def _parse_explanation(self, cmd: Any, get: Callable[[str], str | None],
+                           need: Callable[[str], str]) -> ExplanationOutput:
+        children = _children(cmd)
+        decision = None
+        episode = None
+        if "decision" in children:
+            d = _values(children["decision"][0])
+            episode = _int(d.get("episode"))
+            decision = DecisionOutput(
+                command=d.get("command"), verdict=_needed(d, "verdict"), reason=_needed(d, "reason"),
+                action=d.get("action"), situation=_needed(d, "situation"), say=None,
+                cause_stamp=_float(d.get("time")),
+            )
+        evidence = []
+        for wme in children.get("evidence", []):
+            e = _values(wme)
+            evidence.append(EvidenceOutput(
+                role=_needed(e, "role"), kind=_needed(e, "kind"), what=_needed(e, "what"),
+                stamp=_float(e.get("time")), episode=_int(e.get("episode")), meaning=e.get("shape-means"),
+            ))
+        cause = get("cause")
+        return ExplanationOutput(
+            template=need("template"), situation=need("situation"),
+            cause=int(cause) if cause is not None and cause.lstrip("-").isdigit() else None,
+            cause_stamp=self._stamp(cause), decision=decision, episode=episode,
+            # the decision's own evidence first, then the earlier episode's; newest first within each
+            evidence=tuple(sorted(evidence, key=lambda e: (e.role != "decision", -(e.stamp or 0.0), e.what))),
+        )
 
     def _stamp(self, cause: str | None) -> float | None:
         if cause is None or not cause.lstrip("-").isdigit():
@@ -481,6 +619,7 @@ class SoarAgent:
                     continue
                 self.log.warning("agent keeps producing output without input", steps=busy_steps)
             break
+        self._bound_episodes()
         out, self._collected = self._collected, []
         return out
 

@@ -49,10 +49,11 @@ class AgentDriver:
         assert self._agent is not None and self._agent.ready is not None
         return self._agent.ready
 
-    def submit(self, event: Event) -> None:
+    def submit(self, event: Event, reserve: Callable[[int], None] | None = None) -> int:
         assert self._agent is not None, "submit before start"
-        self._agent.submit(event)
+        input_id = self._agent.submit(event, reserve)
         self._wake.set()
+        return input_id
 
     def set_posture(self, posture: str) -> None:
         assert self._agent is not None, "set_posture before start"

@@ -2,6 +2,10 @@
 motion goal first, then persistence, then speech, then the decision. So a Decision that
 reports danger is only published once that danger is on disk.
 
+An explanation (the answer to "why") becomes a speech request and the Decision for "why" (obey,
+ok, no action, `say` the sentence), and is kept as the latest `Explanation` for the
+`reasoner/explain` queryable; a query waiting for it is answered.
+
 A sustained motion goal (walking) is re-published with the same goal_id every
 `keepalive_s` until the agent sends any other motion goal (the contract with motion).
 """
@@ -12,12 +16,14 @@ import threading
 import time
 import uuid
 from collections.abc import Callable
+from concurrent.futures import Future
 from typing import Any
 
 from schemas.messages import (
     Action,
     Command,
     Decision,
+    Explanation,
     HealthStatus,
     MotionGoal,
     Reason,
@@ -27,6 +33,7 @@ from schemas.messages import (
 )
 from services.reasoner.agent_host import (
     DecisionOutput,
+    ExplanationOutput,
     Memory,
     MotionOutput,
     Output,
@@ -34,6 +41,7 @@ from services.reasoner.agent_host import (
     RememberOutput,
     SayOutput,
 )
+from services.reasoner.explain import explanation_model, render
 from services.reasoner.state import StateStore
 from services.runtime import ServiceContext, TypedPublisher
 
@@ -60,6 +68,9 @@ class OutputBridge:
         self._motion_lock = threading.Lock()  # a renewal never overtakes a newer goal
         self._sustained: MotionGoal | None = None
         self.situation: str | None = None
+        self.latest_explanation: Explanation | None = None
+        self._waiting: dict[int, Future[Explanation]] = {}  # input id of a "why" -> its asker
+        self._waiting_lock = threading.Lock()
         self.decisions = 0
         self.renewals = 0
         self.withheld = 0
@@ -78,8 +89,35 @@ class OutputBridge:
             self._speech.put(SpeechRequest(text=out.text, id=self._next_id("say")))
         elif isinstance(out, DecisionOutput):
             self._decision(out)
+        elif isinstance(out, ExplanationOutput):
+            self._explanation(out)
         elif isinstance(out, ReadyOutput):
             self.situation = out.memory.situation
+
+    def expect_explanation(self, cause: int) -> Future[Explanation]:
+        """A future for the explanation the agent gives for the "why" with this input id."""
+        future: Future[Explanation] = Future()
+        with self._waiting_lock:
+            self._waiting[cause] = future
+        return future
+
+    def forget_explanation(self, cause: int) -> None:
+        with self._waiting_lock:
+            self._waiting.pop(cause, None)
+
+    def _explanation(self, out: ExplanationOutput) -> None:
+        now = time.time()
+        text = render(out, now)
+        explanation = explanation_model(out, text, now)
+        self._speech.put(SpeechRequest(text=text, id=self._next_id("say")))
+        self._decision(DecisionOutput(command=Command.WHY.value, verdict=Verdict.OBEY.value, reason=Reason.OK.value,
+                                      action=None, situation=out.situation, say=text, cause_stamp=out.cause_stamp))
+        self.latest_explanation = explanation
+        self._ctx.log.info("explanation", template=out.template, episode=out.episode, text=text)
+        with self._waiting_lock:
+            future = self._waiting.pop(out.cause, None) if out.cause is not None else None
+        if future is not None:
+            future.set_result(explanation)
 
     def _motion(self, out: MotionOutput) -> None:
         with self._motion_lock:

@@ -8,13 +8,18 @@ ready, and only then subscribe to marks, commands and motion state.
 from __future__ import annotations
 
 import os
+import time
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 from pathlib import Path
 
 import zenoh
 
 from schemas.messages import (
+    Command,
     Decision,
+    Explanation,
     HealthStatus,
     MarkObservation,
     MotionGoal,
@@ -37,6 +42,7 @@ class ReasonerOptions:
     knowledge_file: Path | None = None
     debugger_port: int | None = None
     keepalive_s: float = 0.5
+    explain_timeout_s: float = 4.0
 
     @classmethod
     def from_env(
@@ -94,6 +100,18 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     def on_motion(msg: MotionState) -> None:
         driver.set_posture(msg.posture.value)
 
+    def on_explain(_params: str, _payload: bytes) -> Explanation:
+        # Asked over the bus, "why" is the same as spoken: the agent answers it (and says it).
+        waiting: list[tuple[int, Future[Explanation]]] = []
+        driver.submit(CommandInput(word=Command.WHY.value, confidence=1.0, stamp=time.time()),
+                      reserve=lambda cause: waiting.append((cause, bridge.expect_explanation(cause))))
+        cause, future = waiting[0]
+        try:
+            return future.result(options.explain_timeout_s)
+        except FutureTimeout:
+            bridge.forget_explanation(cause)
+            raise RuntimeError(f"the agent gave no explanation within {options.explain_timeout_s:g} s") from None
+
     def on_soar(_params: str, payload: bytes) -> str:
         ok, out = driver.run_command(payload.decode("utf-8", "replace"))
         if not ok:
@@ -104,6 +122,7 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     ctx.subscribe(keys.vision_marks, MarkObservation, on_marks)
     ctx.subscribe(keys.voice_command, VoiceCommand, on_command)
     ctx.queryable(keys.reasoner_soar, on_soar)
+    ctx.queryable(keys.reasoner_explain, on_explain)
     ctx.thread(lambda: bridge.run_keepalive(driver.responsive), "walk-keepalive")
     ctx.update_detail(ready=True)  # every subscription is declared: inputs are accepted now
 
