@@ -31,6 +31,11 @@ DebuggerOption = Annotated[
     typer.Option("--debugger-port", help="Open the Soar kernel listener on this port for the Soar Java "
                  "debugger (env HRI_SOAR_DEBUGGER_PORT; default: no listener)"),
 ]
+EpisodesOption = Annotated[
+    float | None,
+    typer.Option("--episodes-max-mb", help="Size at which the episodic-memory file (<state dir>/episodes.db) is "
+                 "rotated; one older generation is kept (env HRI_REASONER_EPISODES_MAX_MB; default 64)"),
+]
 
 
 @app.callback(invoke_without_command=True)
@@ -41,6 +46,7 @@ def main(
     state_dir: StateDirOption = None,
     knowledge: KnowledgeOption = None,
     debugger_port: DebuggerOption = None,
+    episodes_max_mb: EpisodesOption = None,
 ) -> None:
     """Run the reasoner service until SIGTERM or Ctrl-C."""
     ctx.obj = {"robot": robot, "connect": connect}
@@ -48,7 +54,7 @@ def main(
         return
     try:
         options = ReasonerOptions.from_env(state_dir=state_dir, knowledge_file=knowledge,
-                                           debugger_port=debugger_port)
+                                           debugger_port=debugger_port, episodes_max_mb=episodes_max_mb)
     except ValueError as exc:
         typer.echo(f"reasoner: {exc}", err=True)
         raise typer.Exit(2) from None

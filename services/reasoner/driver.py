@@ -76,11 +76,21 @@ class AgentDriver:
     def backlog(self) -> int:
         return self._agent.pending() if self._agent is not None else 0
 
+    def episodes(self) -> int:
+        """Episodes in the agent's episodic memory (asked between pumps)."""
+        try:
+            ok, out = self.run_command("epmem --stats time")
+        except Exception:
+            return -1
+        digits = "".join(ch for ch in out if ch.isdigit())
+        return max(0, int(digits) - 1) if ok and digits else -1
+
     def stats(self) -> dict[str, int]:
         agent = self._agent
         if agent is None:
             return {}
-        return {"events_applied": agent.events_applied, "soar_callback_errors": agent.callback_errors}
+        return {"events_applied": agent.events_applied, "soar_callback_errors": agent.callback_errors,
+                "episode_rotations": agent.episode_rotations}
 
     def run_command(self, command: str, timeout: float = 5.0) -> tuple[bool, str]:
         """Run a Soar command line on the live agent, between pumps."""

@@ -27,13 +27,30 @@ from schemas.messages import (
     SpeechRequest,
     VoiceCommand,
 )
-from services.reasoner.agent_host import KNOWLEDGE_FILE, AgentConfig, CommandInput, MarksInput
+from services.reasoner.agent_host import KNOWLEDGE_FILE, AgentConfig, CommandInput, MarksInput, Memory
 from services.reasoner.driver import AgentDriver
 from services.reasoner.outputs import OutputBridge
 from services.reasoner.state import StateStore, default_state_dir
 from services.runtime import ServiceContext
 
 NAME = "reasoner"
+EPISODES_FILE = "episodes.db"
+"""The episodic-memory store, next to reasoner.json in the state folder."""
+
+
+def _log_restored(ctx: ServiceContext, store: StateStore, restored: Memory, config: AgentConfig,
+                  episodes: int) -> None:
+    """One line at start: which state folder, what was restored from it, and how much episodic
+    memory. Several checkouts share the default folder, so a latched danger may come from another
+    one: that case is a warning, so it shows at any log level."""
+    saved = (time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(store.saved_at))
+             if store.saved_at is not None else None)
+    what = (f"situation {restored.situation}, resume_go {'yes' if restored.resume_go else 'no'}, saved {saved}"
+            if saved is not None else f"nothing saved: starting {restored.situation}")
+    line = f"state restored from {store.path}: {what}; {episodes} episodes in {config.episodes}"
+    log = ctx.log.warning if restored.situation == "danger" else ctx.log.info
+    log(line, state_file=str(store.path), situation=restored.situation, resume_go=restored.resume_go,
+        saved_at=store.saved_at, episodes=episodes, debugger_port=config.debugger_port)
 
 
 @dataclass(frozen=True)
@@ -43,6 +60,7 @@ class ReasonerOptions:
     debugger_port: int | None = None
     keepalive_s: float = 0.5
     explain_timeout_s: float = 4.0
+    episodes_max_mb: float = 64.0
 
     @classmethod
     def from_env(
@@ -51,6 +69,7 @@ class ReasonerOptions:
         state_dir: Path | None = None,
         knowledge_file: Path | None = None,
         debugger_port: int | None = None,
+        episodes_max_mb: float | None = None,
     ) -> ReasonerOptions:
         """Explicit values win over HRI_STATE_DIR / HRI_REASONER_KNOWLEDGE / HRI_SOAR_DEBUGGER_PORT."""
         if debugger_port is None and os.environ.get("HRI_SOAR_DEBUGGER_PORT"):
@@ -60,7 +79,16 @@ class ReasonerOptions:
             debugger_port = int(raw)
         if knowledge_file is None and os.environ.get("HRI_REASONER_KNOWLEDGE"):
             knowledge_file = Path(os.environ["HRI_REASONER_KNOWLEDGE"])
-        return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port)
+        if episodes_max_mb is None and os.environ.get("HRI_REASONER_EPISODES_MAX_MB"):
+            raw = os.environ["HRI_REASONER_EPISODES_MAX_MB"]
+            try:
+                episodes_max_mb = float(raw)
+            except ValueError:
+                raise ValueError(f"HRI_REASONER_EPISODES_MAX_MB={raw!r} is not a number") from None
+        if episodes_max_mb is not None and not episodes_max_mb > 0:
+            raise ValueError(f"the episodic-memory bound must be positive, not {episodes_max_mb:g} MB")
+        return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port,
+                   **({"episodes_max_mb": episodes_max_mb} if episodes_max_mb is not None else {}))
 
 
 def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
@@ -79,14 +107,14 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         keepalive_s=options.keepalive_s,
     )
     config = AgentConfig(knowledge_file=options.knowledge_file or KNOWLEDGE_FILE,
-                         debugger_port=options.debugger_port)
+                         debugger_port=options.debugger_port, episodes=store.directory / EPISODES_FILE,
+                         episodes_max_bytes=int(options.episodes_max_mb * 1024 * 1024))
     driver = AgentDriver(config, memory, bridge, ctx.log)
     ctx.on_close(driver.stop)
     restored = driver.start()
     ctx.update_detail(state_file=str(store.path), debugger_port=options.debugger_port,
-                      knowledge=str(config.knowledge_file))
-    ctx.log.info("agent ready", situation=restored.situation, resume_go=restored.resume_go,
-                 debugger_port=options.debugger_port)
+                      knowledge=str(config.knowledge_file), episodes_file=str(config.episodes))
+    _log_restored(ctx, store, restored, config, driver.episodes())
 
     def on_command(msg: VoiceCommand) -> None:
         driver.submit(CommandInput(word=msg.command.value if msg.command else None,

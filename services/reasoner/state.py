@@ -46,6 +46,8 @@ class StateStore:
         self.directory = directory
         self.path = directory / STATE_FILE
         self.log = log
+        self.saved_at: float | None = None
+        """When the state that `load()` restored was saved (None: nothing restored)."""
 
     def load(self) -> Memory:
         try:
@@ -62,10 +64,9 @@ class StateStore:
             self.log.error("saved state invalid, assuming danger", path=str(self.path),
                            error=str(exc).splitlines()[0])
             return Memory(situation=Situation.DANGER.value)
-        memory = Memory(situation=state.situation.value, resume_go=state.resume_go)
-        self.log.info("restored state", path=str(self.path), situation=memory.situation,
-                      resume_go=memory.resume_go)
-        return memory
+        # logged once by the service, with the episodic memory, when the agent is ready
+        self.saved_at = state.saved_at
+        return Memory(situation=state.situation.value, resume_go=state.resume_go)
 
     def save(self, memory: Memory) -> None:
         """Write to a temporary file in the same directory, fsync, then os.replace (atomic)."""
