@@ -1,5 +1,6 @@
-"""Property test: random sequences of commands, marks and motion states never break the
-safety invariants 1 and 2 of DESIGN.md, checked after every step."""
+"""Property test: random sequences of commands (with "why", unsure "go"s and "yes" answers at
+various confidences), marks, motion states and the passing of time (a question's timeout) never
+break the safety invariants 1 and 2 of DESIGN.md, checked after every step; "why" never moves."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from dataclasses import dataclass
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from services.reasoner.agent_host import POSTURES, CommandInput, MarksInput, Memory, SoarAgent
+from services.reasoner.agent_host import POSTURES, CommandInput, ExplanationOutput, MarksInput, Memory, SoarAgent
 from tests.reasoner.conftest import decisions, motions
 
 DANGER = {"X", "TRIANGLE"}
@@ -26,7 +27,22 @@ class MotionFollows:
     """The motion service reports the posture its last goal leads to (so walking happens often)."""
 
 
-Step = CommandInput | MarksInput | PostureChange | MotionFollows
+@dataclass(frozen=True)
+class TimePasses:
+    """Seconds go by on the agent's timer clock (an open question may time out)."""
+
+    seconds: float
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+Step = CommandInput | MarksInput | PostureChange | MotionFollows | TimePasses
 
 AFTER_GOAL = {"stand_up": "standing", "sit_down": "sitting", "walk_forward": "walking", "stop": "standing"}
 
@@ -34,8 +50,8 @@ AFTER_GOAL = {"stand_up": "standing", "sit_down": "sitting", "walk_forward": "wa
 # Weighted so that walking, and danger while walking, come up in most examples.
 commands = st.builds(
     CommandInput,
-    word=st.sampled_from(["stand", "down", "yes", "no", "go", "go", "go", "stop", None]),
-    confidence=st.sampled_from([0.3, 0.45, 0.8, 1.0]),
+    word=st.sampled_from(["stand", "down", "yes", "yes", "no", "go", "go", "go", "stop", "why", None]),
+    confidence=st.sampled_from([0.3, 0.45, 0.5, 0.6, 0.69, 0.7, 0.8, 0.85, 1.0]),
 )
 observations = st.builds(
     MarksInput,
@@ -46,9 +62,10 @@ observations = st.builds(
 )
 postures = st.builds(PostureChange, posture=st.sampled_from(POSTURES))
 BY_KIND = {
-    "command": commands, "marks": observations, "posture": postures, "follow": st.just(MotionFollows())
+    "command": commands, "marks": observations, "posture": postures, "follow": st.just(MotionFollows()),
+    "time": st.builds(TimePasses, seconds=st.sampled_from([1.0, 6.0])),
 }
-KINDS = ["command"] * 3 + ["marks"] * 2 + ["posture"] + ["follow"] * 3
+KINDS = ["command"] * 4 + ["marks"] * 2 + ["posture"] + ["follow"] * 3 + ["time"]
 step = st.sampled_from(KINDS).flatmap(BY_KIND.__getitem__)
 steps = st.lists(step, min_size=8, max_size=40)
 
@@ -59,6 +76,8 @@ def test_safety_invariants_hold_after_every_step(
     shared_agent: SoarAgent, sequence: list[Step], restored_danger: bool
 ) -> None:
     shared_agent.reset(Memory("danger" if restored_danger else "safe", False))
+    clock = Clock()
+    shared_agent.clock = clock
     latched = restored_danger  # an X or triangle seen, and no O-only observation since
     walking = False  # the last motion goal published was walk_forward (kept alive)
     posture = "unknown"  # where the motion service would take the robot
@@ -67,6 +86,9 @@ def test_safety_invariants_hold_after_every_step(
             outs = shared_agent.step(posture=step.posture)
         elif isinstance(step, MotionFollows):
             outs = shared_agent.step(posture=posture)
+        elif isinstance(step, TimePasses):
+            clock.now += step.seconds
+            outs = shared_agent.step()
         else:
             outs = shared_agent.step(step)
         sent = motions(outs)
@@ -83,8 +105,12 @@ def test_safety_invariants_hold_after_every_step(
         if sent:
             walking = sent[-1] == "walk_forward"
             posture = AFTER_GOAL.get(sent[-1], posture)
-        # One decision per command, always; marks decide only on a change of situation.
-        if isinstance(step, CommandInput):
-            assert len(decisions(outs)) == 1, (step, outs)
+        # One answer per command, always (a decision, or for "why" an explanation, which never
+        # moves the robot); marks decide only on a change of situation.
+        explained = [o for o in outs if isinstance(o, ExplanationOutput)]
+        if isinstance(step, CommandInput) and step.word == "why" and step.confidence >= 0.3:
+            assert len(explained) == 1 and decisions(outs) == [] and sent == [], (step, outs)
+        elif isinstance(step, CommandInput):
+            assert len(decisions(outs)) == 1 and explained == [], (step, outs)
         for d in decisions(outs):
             assert d.situation == ("danger" if latched else "safe"), (step, d)

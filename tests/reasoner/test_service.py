@@ -20,6 +20,7 @@ from schemas.messages import (
     Action,
     Command,
     Decision,
+    Explanation,
     Health,
     Mark,
     MarkObservation,
@@ -133,6 +134,47 @@ def test_danger_survives_sigkill(bus: ServiceContext, start_service, io, tmp_pat
     d = io["decisions"].wait(lambda d: d.command == "go")
     assert (d.verdict, d.reason, d.situation) == ("refuse", "danger_sign", "danger")
     time.sleep(0.3)
+    assert all(g.action != "walk_forward" for g in io["goals"].snapshot())
+
+
+def _explain(bus: ServiceContext) -> Explanation:
+    replies = list(bus.session.get(bus.keys.reasoner_explain, timeout=5.0))
+    assert len(replies) == 1 and replies[0].ok is not None, replies
+    return Explanation.model_validate_json(replies[0].ok.payload.to_bytes())
+
+
+def test_why_after_sigkill_is_answered_from_the_episodes_on_disk(  # type: ignore[no-untyped-def]
+    bus: ServiceContext, start_service, io, tmp_path: Path
+) -> None:
+    proc = start_service("reasoner")
+    wait_ready(bus, proc)
+    io["motion"].put(MotionState(posture=Posture.STANDING))
+    io["marks"].put(marks(Shape.TRIANGLE))
+    io["decisions"].wait(lambda d: d.situation == "danger")
+    io["voice"].put(VoiceCommand(command=Command.GO, text="go", confidence=0.9))
+    io["decisions"].wait(lambda d: d.command == "go")
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(10)
+    assert (tmp_path / "state" / "episodes.db").is_file()
+
+    proc = start_service("reasoner")
+    wait_ready(bus, proc)
+    started = Path(proc.log_path).read_text()  # type: ignore[attr-defined]
+    line = [li for li in started.splitlines() if "state restored from" in li][-1]  # this start's
+    assert str(tmp_path / "state" / "reasoner.json") in line and "situation danger" in line and "2 episodes" in line
+    # spoken "why": the Decision carries the sentence, the speech service gets it, no goal
+    why = io["voice"].put(VoiceCommand(command=Command.WHY, text="why", confidence=0.9))
+    d = io["decisions"].wait(lambda d: d.command == "why")
+    assert (d.verdict, d.reason, d.action, d.situation) == ("obey", "ok", None, "danger")
+    assert d.cause_stamp == pytest.approx(why.stamp)
+    assert d.say is not None and d.say.startswith("I saw a triangle") and "Show me an O" in d.say
+    assert io["speech"].wait(lambda s: s.text == d.say)
+    # asked over the bus: the structured answer
+    explanation = _explain(bus)
+    assert explanation.text == d.say and explanation.reason == "danger_sign"
+    assert explanation.decision is not None and explanation.decision.command == "go"
+    assert [(e.kind, e.what) for e in explanation.evidence] == [("command", "go"), ("mark", "TRIANGLE")]
+    assert explanation.episode == 2 and explanation.evidence[1].episode == 1
     assert all(g.action != "walk_forward" for g in io["goals"].snapshot())
 
 
