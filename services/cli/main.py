@@ -155,6 +155,38 @@ def send_scene(
     typer.echo(sent.model_dump_json())
 
 
+@app.command()
+def why(
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the structured Explanation as JSON")] = False,
+    timeout: Annotated[float, typer.Option(help="Seconds to wait for the reasoner's answer")] = 5.0,
+) -> None:
+    """Ask the robot why it did what it did last, as if asked aloud (it also says the answer).
+
+    The reasoner answers from its episodic memory on hri/<robot>/reasoner/explain. Exits 1 when
+    no reasoner answers.
+    """
+    from schemas.messages import Explanation
+
+    with probe.client_session(robot, connect) as (session, keys):
+        replies = list(session.get(keys.reasoner_explain, timeout=timeout))
+    answers = [Explanation.model_validate_json(r.ok.payload.to_bytes()) for r in replies if r.ok is not None]
+    errors = [r.err.payload.to_string() for r in replies if r.err is not None]
+    if not answers:
+        typer.echo(errors[0] if errors else f"no reasoner answered on {keys.reasoner_explain} within {timeout:g} s",
+                   err=True)
+        raise typer.Exit(1)
+    explanation = answers[0]
+    if as_json:
+        typer.echo(explanation.model_dump_json(indent=2))
+        return
+    typer.echo(explanation.text)
+    for e in explanation.evidence:
+        ago = f"{e.ago_s:.0f} s ago" if e.ago_s is not None else "earlier"
+        typer.echo(f"  {'heard' if e.kind == 'command' else 'saw'} {e.what}, {ago} (episode {e.episode})")
+
+
 def _choice(enum: type, value: str, what: str):  # type: ignore[no-untyped-def]
     try:
         return enum(value)

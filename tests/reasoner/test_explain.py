@@ -124,3 +124,12 @@ def test_the_store_holds_one_episode_per_decision(agent: SoarAgent) -> None:
         agent.step(say(word))
     agent.step(seen("O"))  # no change of situation: no decision, no episode
     assert agent.execute("epmem --stats time")[1].strip() == "5"  # the next episode would be 5
+
+
+def test_why_keeps_a_refused_go_waiting_for_the_o(agent: SoarAgent) -> None:
+    """The demo's order: refused, asked why, then the O resumes the walk (paper Fig. 12g)."""
+    agent.step(posture="standing")
+    agent.step(seen("X", stamp=NOW - 5))
+    agent.step(say("go", stamp=NOW - 2))
+    assert why(agent).template == "refused-danger"
+    assert motions(agent.step(seen("O"))) == ["walk_forward"]
