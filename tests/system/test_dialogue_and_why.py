@@ -1,0 +1,70 @@
+"""The whole robot (five processes, real router): the confirmation dialogue of an unsure "go"
+(issue #12) and "why" answered from the reasoner's episodic memory (issue #15), asked by voice
+and with `hri why` over the bus."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+from schemas import Action, Posture
+from schemas.messages import Command, Decision, Verdict, VoiceCommand
+from tests.conftest import ROOT
+from tests.system.conftest import Robot
+
+ASK = "Shall I walk forward?"
+
+
+def _hear(robot: Robot, command: Command, confidence: float) -> float:
+    """Publish what the voice service would for a command heard with this confidence."""
+    t0 = time.monotonic()
+    robot.ctx.publisher(robot.ctx.keys.voice_command, VoiceCommand).put(
+        VoiceCommand(command=command, text=command.value, confidence=confidence, engine="systest"))
+    return t0
+
+
+def _decision(robot: Robot, t0: float, command: Command, timeout: float = 8.0) -> Decision:
+    found = robot.rec.wait(lambda: next((d for d in robot.rec.since(t0, "decision") if d.command is command), None),
+                           timeout)
+    assert found is not None, f"no decision for {command.value}; see {robot.log_path}"
+    return found
+
+
+def test_unsure_go_is_confirmed_or_times_out_and_why_explains(robot: Robot) -> None:
+    robot.play([{"say": "stand", "expect": {"verdict": "obey", "posture": "standing"}}])
+
+    # Asked, and nobody answers: after the dialogue's 5 s the question is dropped, no walk.
+    t0 = _hear(robot, Command.GO, 0.6)
+    ask = _decision(robot, t0, Command.GO)
+    assert (ask.verdict, ask.reason, ask.action, ask.say) == (Verdict.ASK, "confirm", None, ASK)
+    assert robot.rec.wait(lambda: [s for s in robot.rec.since(t0, "say") if s.text == ASK], 5)
+    timed_out = robot.rec.wait(lambda: [d for d in robot.rec.since(t0, "decision")
+                                        if d.command is Command.GO and d.verdict is Verdict.IGNORE], 9)
+    assert timed_out and timed_out[0].reason == "confirm"
+    assert not [g for g in robot.rec.since(t0, "goal") if g.action is Action.WALK_FORWARD]
+
+    # Asked again, and a confident "yes": the robot walks, and does not nod.
+    t1 = _hear(robot, Command.GO, 0.7)
+    assert _decision(robot, t1, Command.GO).verdict is Verdict.ASK
+    t2 = _hear(robot, Command.YES, 0.9)
+    yes = _decision(robot, t2, Command.YES)
+    assert (yes.verdict, yes.action) == (Verdict.OBEY, Action.WALK_FORWARD)
+    assert robot.rec.wait(lambda: robot.walking_states_since(t2), 5)
+    assert [g.action for g in robot.rec.since(t2, "goal")
+            if g.action is not Action.WALK_FORWARD] == []  # no nod
+
+    # "why", as a command on the bus: the answer is a Decision, spoken, and moves nothing.
+    robot.play([{"send": "why", "expect": {"heard": "why", "verdict": "obey", "no_action": True,
+                                           "said": "you said yes"}}])
+    # `hri why` asks the same over the queryable and prints the structured answer.
+    env_connect = robot.launcher.endpoint
+    done = subprocess.run([sys.executable, "-m", "services.cli.main", "why", "--json", "--robot", robot.ctx.keys.robot,
+                           "--connect", env_connect], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    answer = json.loads(done.stdout)
+    assert answer["text"].startswith("I asked whether to walk, and you said yes")
+    assert answer["decision"]["command"] == "yes" and answer["decision"]["action"] == "walk_forward"
+    assert answer["episode"] >= 1 and [e["what"] for e in answer["evidence"]] == ["yes"]
+    robot.play([{"say": "stop", "expect": {"verdict": "obey", "posture": "standing"}}])
