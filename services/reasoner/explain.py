@@ -5,6 +5,8 @@ the `Explanation` message that the `reasoner/explain` queryable answers with."""
 
 from __future__ import annotations
 
+import time
+
 from schemas.messages import Action, Command, Decision, Evidence, Explanation, Reason, Situation, Verdict
 from services.reasoner.agent_host import DecisionOutput, EvidenceOutput, ExplanationOutput
 
@@ -60,11 +62,14 @@ def render(out: ExplanationOutput, now: float) -> str:
     mark = _first(out.evidence, role, "mark", meaning)
     heard = _first(out.evidence, "decision", "command")
     cause_heard = _first(out.evidence, "cause", "command")
-    own = mark if mark is not None else heard
+    # A sentence about a mark says when the mark was seen; one about a command, when it was heard.
+    # (A mark no longer in the store, after a rotation, is "a danger sign" seen "before".)
+    about_mark = out.template in ("refused-danger", "stopped-danger", "danger-seen", "safe-seen")
+    own = mark if about_mark else heard
     fields = {
         "word": WORDS.get(word, word) if out.template == "obeyed" else word,
         "mark": MARK_NAMES.get(mark.what, f"a {mark.what}") if mark is not None else "a danger sign",
-        "ago": ago(own.stamp if own is not None else (decision.cause_stamp if decision else None), now),
+        "ago": ago(own.stamp if own is not None else None, now),
         "cause_ago": ago(cause_heard.stamp, now) if cause_heard is not None else "before",
     }
     text = TEMPLATES[out.template].format(**fields)
@@ -75,6 +80,7 @@ def render(out: ExplanationOutput, now: float) -> str:
 
 def _decision_model(d: DecisionOutput) -> Decision:
     return Decision(
+        stamp=d.cause_stamp if d.cause_stamp is not None else time.time(),  # made when its cause came in
         command=Command(d.command) if d.command else None, verdict=Verdict(d.verdict), reason=Reason(d.reason),
         action=Action(d.action) if d.action else None, situation=Situation(d.situation), say=d.say,
         cause_stamp=d.cause_stamp,

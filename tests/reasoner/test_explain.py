@@ -133,3 +133,16 @@ def test_why_keeps_a_refused_go_waiting_for_the_o(agent: SoarAgent) -> None:
     agent.step(say("go", stamp=NOW - 2))
     assert why(agent).template == "refused-danger"
     assert motions(agent.step(seen("O"))) == ["walk_forward"]
+
+
+def test_a_cause_no_longer_in_the_store_is_said_plainly(agent: SoarAgent) -> None:
+    """After a rotation of the store the mark's episode may be gone: no invented time."""
+    agent.step(posture="standing")
+    agent.step(seen("X", stamp=NOW - 5))
+    agent.step(say("go", stamp=NOW - 2))
+    agent.execute("epmem --init")  # in memory: the episodes so far are gone
+    agent.execute("epmem --set force remember")
+    agent.step(say("go", stamp=NOW - 1))  # refused again; stored in the new store
+    out = why(agent)
+    assert out.template == "refused-danger" and [e for e in out.evidence if e.role == "cause"] == []
+    assert text(out) == "I saw a danger sign before, and no O since. Show me an O and I will walk."
