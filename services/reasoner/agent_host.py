@@ -316,11 +316,17 @@ class SoarAgent:
         if size <= self.config.episodes_max_bytes:
             return
         self.execute("epmem --close")
-        os.replace(path, path.with_name(path.name + ".1"))
+        try:
+            os.replace(path, path.with_name(path.name + ".1"))
+        except OSError as exc:  # the agent goes on in the same file; tried again after the next pump
+            self.log.error("episodic memory not rotated", path=str(path), size=size, error=str(exc))
+        else:
+            self.episode_rotations += 1
+            self.log.info("episodic memory rotated", path=str(path), size=size)
         ok, out = self.execute("epmem --init")
-        self.execute("epmem --set force remember")
-        self.episode_rotations += 1
-        self.log.info("episodic memory rotated", path=str(path), size=size, ok=ok, detail=out.strip()[:200])
+        if not ok:
+            self.log.error("episodic memory not reopened", path=str(path), detail=" ".join(out.split())[:300])
+        self.execute("epmem --set force remember")  # the new file starts with the latest decision
 
     def _load(self) -> None:
         rules = sorted(p for p in self.config.rules_dir.glob("*.soar") if p.name != KNOWLEDGE_FILE.name)
