@@ -226,3 +226,12 @@ def test_sigterm_stops_cleanly(bus: ServiceContext, start_service) -> None:  # t
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(10) == 0
     assert "stopped" in Path(proc.log_path).read_text()  # type: ignore[attr-defined]
+
+
+def test_hri_why_without_a_reasoner(router_endpoint: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "services.cli.main", "why", "--timeout", "1"],
+        cwd=ROOT, env=service_env(router_endpoint, "nobody-home"), capture_output=True, text=True, timeout=30,
+    )
+    assert done.returncode == 1
+    assert "no reasoner answered on hri/nobody-home/reasoner/explain" in done.stderr
