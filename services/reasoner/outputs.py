@@ -114,9 +114,12 @@ class OutputBridge:
                                       action=None, situation=out.situation, say=text, cause_stamp=out.cause_stamp))
         self.latest_explanation = explanation
         self._ctx.log.info("explanation", template=out.template, episode=out.episode, text=text)
+        # A "why" that came while an earlier one was being answered replaces it in the agent
+        # (65_explain.soar): one answer for the burst, given to every asker of it.
         with self._waiting_lock:
-            future = self._waiting.pop(out.cause, None) if out.cause is not None else None
-        if future is not None:
+            answered = [c for c in self._waiting if out.cause is not None and c <= out.cause]
+            futures = [self._waiting.pop(c) for c in answered]
+        for future in futures:
             future.set_result(explanation)
 
     def _motion(self, out: MotionOutput) -> None:

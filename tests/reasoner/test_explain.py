@@ -146,3 +146,27 @@ def test_a_cause_no_longer_in_the_store_is_said_plainly(agent: SoarAgent) -> Non
     out = why(agent)
     assert out.template == "refused-danger" and [e for e in out.evidence if e.role == "cause"] == []
     assert text(out) == "I saw a danger sign before, and no O since. Show me an O and I will walk."
+
+
+def test_a_burst_of_whys_gets_one_answer(agent: SoarAgent) -> None:
+    agent.step(posture="standing")
+    agent.step(seen("X", stamp=NOW - 5))
+    agent.step(say("go", stamp=NOW - 2))
+    for _ in range(3):
+        agent.submit(say("why", stamp=NOW))
+    found = [o for o in agent.pump() if isinstance(o, ExplanationOutput)]
+    assert [o.template for o in found] == ["refused-danger"]
+    assert why(agent).template == "refused-danger"  # and nothing was left half done
+
+
+def test_a_why_during_the_recall_of_a_cause_is_not_confused_by_it(agent: SoarAgent) -> None:
+    agent.step(posture="standing")
+    agent.step(seen("X", stamp=NOW - 5))
+    agent.step(say("go", stamp=NOW - 2))
+    for gap in range(6):  # the second why lands at each stage of the first one's retrievals
+        agent.submit(say("why", stamp=NOW))
+        agent.execute(f"run {gap}")
+        agent.submit(say("why", stamp=NOW))
+        found = [o for o in agent.pump() if isinstance(o, ExplanationOutput)]
+        assert found and all(o.template == "refused-danger" for o in found), (gap, found)
+        assert [e.what for e in found[-1].evidence] == ["go", "X"], gap
