@@ -174,8 +174,8 @@ def why(
     answers = [Explanation.model_validate_json(r.ok.payload.to_bytes()) for r in replies if r.ok is not None]
     errors = [r.err.payload.to_string() for r in replies if r.err is not None]
     if not answers:
-        typer.echo(errors[0] if errors else f"no reasoner answered on {keys.reasoner_explain} within {timeout:g} s",
-                   err=True)
+        missing = f"no reasoner answered on {keys.reasoner_explain} within {timeout:g} s"
+        typer.echo(errors[0] if errors else missing, err=True)
         raise typer.Exit(1)
     explanation = answers[0]
     if as_json:

@@ -49,7 +49,8 @@ def describe(event: Event) -> tuple[str, str]:
         case "decision":
             cmd = m.command.value if m.command else ("(speech)" if m.reason is Reason.NOT_UNDERSTOOD else "(mark)")
             act = m.action.value if m.action else "no motion"
-            line = f"{m.verdict.value.upper():<6} {cmd:<6} reason={m.reason.value}  -> {act}  situation={m.situation.value}"
+            line = (f"{m.verdict.value.upper():<6} {cmd:<6} reason={m.reason.value}  -> {act}  "
+                    f"situation={m.situation.value}")
             if m.command is Command.WHY and m.say:  # the answer, recalled from episodic memory
                 line += f'  answers "{m.say}"'
             return "reasoner", line

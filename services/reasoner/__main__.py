@@ -33,8 +33,8 @@ DebuggerOption = Annotated[
 ]
 EpisodesOption = Annotated[
     float | None,
-    typer.Option("--episodes-max-mb", help="Size at which the episodic-memory file (<state dir>/episodes.db) is "
-                 "rotated; one older generation is kept (env HRI_REASONER_EPISODES_MAX_MB; default 64)"),
+    typer.Option("--episodes-max-mb", help="Size at which the episodic-memory file (<state dir>/episodes.db) "
+                 "is rotated; one older generation is kept (env HRI_REASONER_EPISODES_MAX_MB; default 64)"),
 ]
 
 

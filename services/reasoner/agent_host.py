@@ -33,7 +33,8 @@ AGENT_DIR = Path(__file__).with_name("agent")
 KNOWLEDGE_FILE = AGENT_DIR / "knowledge.soar"
 
 POSTURES = ("sitting", "standing", "walking", "moving", "unknown")
-_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "explanation": 3, "ready": 4, "timer": 5}
+_OUTPUT_ORDER = {"motion": 0, "remember": 1, "say": 2, "decision": 3, "explanation": 3, "ready": 4,
+                 "timer": 5}
 """Within one output phase: motion first (safety latency), then persistence, then the rest."""
 
 _AGENT_NUMBERS = itertools.count(1)
@@ -55,7 +56,8 @@ def _children(identifier: Any) -> dict[str, list[Any]]:
     out: dict[str, list[Any]] = {}
     for i in range(identifier.GetNumberChildren()):
         wme = identifier.GetChild(i)
-        out.setdefault(wme.GetAttribute(), []).append(wme.ConvertToIdentifier() if wme.IsIdentifier() else wme)
+        value = wme.ConvertToIdentifier() if wme.IsIdentifier() else wme
+        out.setdefault(wme.GetAttribute(), []).append(value)
     return out
 
 
@@ -293,10 +295,10 @@ class SoarAgent:
         path = self.config.episodes
         if path is None:
             return
-        if any(c.isspace() for c in str(path)) or "|" in str(path):
-            raise AgentLoadError(f"the episodic-memory file must not contain spaces or '|': {path}")
+        if '"' in str(path) or "\n" in str(path):
+            raise AgentLoadError(f"an episodic-memory file name cannot hold a quote or newline: {path}")
         path.parent.mkdir(parents=True, exist_ok=True)
-        for command in ("epmem --set database file", f"epmem --set path {path}", "epmem --set append on",
+        for command in ("epmem --set database file", f'epmem --set path "{path}"', "epmem --set append on",
                         "epmem --set lazy-commit off"):
             ok, out = self.execute(command)
             if not ok:

@@ -81,7 +81,8 @@ def render(out: ExplanationOutput, now: float) -> str:
 def _decision_model(d: DecisionOutput) -> Decision:
     return Decision(
         stamp=d.cause_stamp if d.cause_stamp is not None else time.time(),  # made when its cause came in
-        command=Command(d.command) if d.command else None, verdict=Verdict(d.verdict), reason=Reason(d.reason),
+        command=Command(d.command) if d.command else None, verdict=Verdict(d.verdict),
+        reason=Reason(d.reason),
         action=Action(d.action) if d.action else None, situation=Situation(d.situation), say=d.say,
         cause_stamp=d.cause_stamp,
     )
@@ -95,8 +96,8 @@ def explanation_model(out: ExplanationOutput, text: str, now: float) -> Explanat
         reason=decision.reason if decision is not None else None,
         text=text,
         evidence=[
-            Evidence(kind=e.kind, what=e.what, stamp=e.stamp or 0.0,
-                     ago_s=round(max(0.0, now - e.stamp), 3) if e.stamp is not None else None, episode=e.episode)
+            Evidence(kind=e.kind, what=e.what, stamp=e.stamp or 0.0, episode=e.episode,
+                     ago_s=round(max(0.0, now - e.stamp), 3) if e.stamp is not None else None)
             for e in out.evidence
         ],
         episode=out.episode,

@@ -3,8 +3,8 @@ motion goal first, then persistence, then speech, then the decision. So a Decisi
 reports danger is only published once that danger is on disk.
 
 An explanation (the answer to "why") becomes a speech request and the Decision for "why" (obey,
-ok, no action, `say` the sentence), and is kept as the latest `Explanation` for the
-`reasoner/explain` queryable; a query waiting for it is answered.
+ok, no action, `say` the sentence); a `reasoner/explain` query waiting for it gets the
+`Explanation`.
 
 A sustained motion goal (walking) is re-published with the same goal_id every
 `keepalive_s` until the agent sends any other motion goal (the contract with motion).
@@ -68,7 +68,6 @@ class OutputBridge:
         self._motion_lock = threading.Lock()  # a renewal never overtakes a newer goal
         self._sustained: MotionGoal | None = None
         self.situation: str | None = None
-        self.latest_explanation: Explanation | None = None
         self._waiting: dict[int, Future[Explanation]] = {}  # input id of a "why" -> its asker
         self._waiting_lock = threading.Lock()
         self.decisions = 0
@@ -110,9 +109,9 @@ class OutputBridge:
         text = render(out, now)
         explanation = explanation_model(out, text, now)
         self._speech.put(SpeechRequest(text=text, id=self._next_id("say")))
-        self._decision(DecisionOutput(command=Command.WHY.value, verdict=Verdict.OBEY.value, reason=Reason.OK.value,
-                                      action=None, situation=out.situation, say=text, cause_stamp=out.cause_stamp))
-        self.latest_explanation = explanation
+        self._decision(DecisionOutput(command=Command.WHY.value, verdict=Verdict.OBEY.value,
+                                      reason=Reason.OK.value, action=None, situation=out.situation, say=text,
+                                      cause_stamp=out.cause_stamp))
         self._ctx.log.info("explanation", template=out.template, episode=out.episode, text=text)
         # A "why" that came while an earlier one was being answered replaces it in the agent
         # (65_explain.soar): one answer for the burst, given to every asker of it.

@@ -45,7 +45,8 @@ def _log_restored(ctx: ServiceContext, store: StateStore, restored: Memory, conf
     one: that case is a warning, so it shows at any log level."""
     saved = (time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(store.saved_at))
              if store.saved_at is not None else None)
-    what = (f"situation {restored.situation}, resume_go {'yes' if restored.resume_go else 'no'}, saved {saved}"
+    resume = "yes" if restored.resume_go else "no"
+    what = (f"situation {restored.situation}, resume_go {resume}, saved {saved}"
             if saved is not None else f"nothing saved: starting {restored.situation}")
     line = f"state restored from {store.path}: {what}; {episodes} episodes in {config.episodes}"
     log = ctx.log.warning if restored.situation == "danger" else ctx.log.info
@@ -138,7 +139,8 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
             return future.result(options.explain_timeout_s)
         except FutureTimeout:
             bridge.forget_explanation(cause)
-            raise RuntimeError(f"the agent gave no explanation within {options.explain_timeout_s:g} s") from None
+            raise RuntimeError(
+                f"the agent gave no explanation within {options.explain_timeout_s:g} s") from None
 
     def on_soar(_params: str, payload: bytes) -> str:
         ok, out = driver.run_command(payload.decode("utf-8", "replace"))

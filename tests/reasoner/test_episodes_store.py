@@ -20,7 +20,7 @@ def explain(agent: SoarAgent) -> ExplanationOutput:
 
 
 def test_a_restarted_agent_explains_a_danger_latched_before(tmp_path: Path) -> None:
-    db = tmp_path / "state" / "episodes.db"
+    db = tmp_path / "state folder" / "episodes.db"  # a space, as in many home folders
     with SoarAgent(AgentConfig(episodes=db)) as before:
         before.step(posture="standing")
         before.step(seen("TRIANGLE", stamp=NOW - 40))
