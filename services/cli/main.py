@@ -155,6 +155,86 @@ def send_scene(
     typer.echo(sent.model_dump_json())
 
 
+@app.command()
+def record(
+    file: Annotated[Path, typer.Argument(help="The MCAP file to write")],
+    duration: Annotated[float | None, typer.Option(min=0.1, help="Stop after this many seconds "
+                                                   "[default: at Ctrl-C]")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace FILE if it exists")] = False,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """Record every message of the robot (hri/<robot>/**) into an MCAP file, until Ctrl-C or --duration."""
+    from services.cli.record import record as record_to
+    from services.runtime import run_service
+
+    if file.exists() and not overwrite:
+        typer.echo(f"error: {file} exists (use --overwrite to replace it)", err=True)
+        raise typer.Exit(2)
+    if not file.parent.is_dir():
+        typer.echo(f"error: no folder {file.parent} for {file.name}", err=True)
+        raise typer.Exit(2)
+    done = []
+    code = run_service("record", lambda ctx: done.append(record_to(ctx, file, duration)), robot=robot,
+                       connect=connect)
+    if done:
+        console.print(done[0].table())
+    raise typer.Exit(code)
+
+
+@app.command()
+def replay(
+    file: Annotated[Path, typer.Argument(help="An MCAP recording made by `hri record` or `hri demo --record`")],
+    rate: Annotated[float, typer.Option(min=0.0, help="Speed: 2 plays twice as fast, 0 as fast as possible")] = 1.0,
+    all_keys: Annotated[bool, typer.Option("--all", help="Replay every recorded key, not only the inputs "
+                                                         "(marks, commands)")] = False,
+    check: Annotated[bool, typer.Option("--check", help="Compare the decisions made now with the recorded "
+                                                        "ones; exit 1 when they differ")] = False,
+    settle: Annotated[float, typer.Option(help="With --check: seconds without a new decision that end "
+                                               "the replay")] = 3.0,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """Publish a recording's inputs (marks seen, commands heard) again, with their original timing."""
+    from services.cli import replay as rp
+    from services.cli.mcapfile import RecordingError, read_recording
+    from services.runtime import run_service
+
+    try:
+        recorded = list(read_recording(file))
+        chosen = rp.select(recorded, all_keys=all_keys)
+    except RecordingError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    if not chosen:
+        typer.echo(f"error: {file} holds no {'messages' if all_keys else 'marks or commands'} to replay", err=True)
+        raise typer.Exit(2)
+    expected = rp.recorded_decisions(recorded)
+    made: list[list] = []  # the decisions made during the replay, once it has run to its end
+
+    def body(ctx):  # type: ignore[no-untyped-def]
+        watch = rp.DecisionWatch(ctx) if check else None
+        result = rp.Replayer(ctx, chosen, rate=rate).run()
+        for key in result.unmatched:
+            console.print(f"[yellow]nobody was listening on {key} when the replay started", highlight=False)
+        console.print(f"replayed {result.published} message(s) in {result.seconds:.1f} s", highlight=False)
+        if watch is not None and not result.interrupted:
+            made.append(watch.settle(len(expected), settle, timeout=settle + 30.0))
+
+    code = run_service("replay", body, robot=robot, connect=connect)
+    if check and code == 0:
+        if not made:
+            console.print("[yellow]interrupted: no check")
+            raise typer.Exit(130)
+        problems = rp.compare(expected, made[0])
+        console.print(f"{len(expected)} decision(s) recorded, {len(made[0])} made now", highlight=False)
+        for line in problems:
+            console.print(line, highlight=False, markup=False)
+        console.print("[red]the decisions differ" if problems else "[green]the same decisions")
+        code = 1 if problems else 0
+    raise typer.Exit(code)
+
+
 def _choice(enum: type, value: str, what: str):  # type: ignore[no-untyped-def]
     try:
         return enum(value)
