@@ -90,6 +90,8 @@ def demo(
     port: Annotated[int, typer.Option(help="Router port on 127.0.0.1 (0: a free one)")] = 0,
     voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = DEFAULT_VOICE,
     list_scenarios: Annotated[bool, typer.Option("--list", help="List the built-in scenarios and exit")] = False,
+    record_to: Annotated[Path | None, typer.Option("--record", help="Also record everything on the bus into "
+                                                   "this MCAP file (see `hri record`)")] = None,
 ) -> None:
     """Run a scenario (default: the paper's experiment) on the simulated robot, with a live timeline.
 
@@ -107,7 +109,11 @@ def demo(
     except scenarios.ScenarioError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
-    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console))
+    folder = record_to.resolve().parent if record_to is not None else None
+    if folder is not None and not folder.is_dir() and folder != out.resolve():  # `out` is made afresh
+        typer.echo(f"error: no folder {record_to.parent} for {record_to.name}", err=True)
+        raise typer.Exit(2)
+    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console, record=record_to))
 
 
 @send_app.command("command")

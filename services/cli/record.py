@@ -48,8 +48,8 @@ class RecordSummary:
         return self.path.stat().st_size if self.path.exists() else 0
 
     def table(self) -> Table:
-        table = Table(title=f"{self.path}: {self.messages} messages in {self.duration_s:.1f} s, "
-                            f"{self.size_bytes / 1024:.1f} KiB")
+        table = Table(title=str(self.path), caption=f"{self.messages} messages in {self.duration_s:.1f} s, "
+                                                    f"{self.size_bytes / 1024:.1f} KiB")
         for col in ("key", "messages", "rate /s", "left out"):
             table.add_column(col, justify="left" if col == "key" else "right")
         for key in sorted(set(self.counts) | set(self.rejected)):
