@@ -12,11 +12,12 @@ import typer
 from rich.console import Console
 
 from schemas.keys import SERVICES
-from schemas.messages import Command, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
+from schemas.messages import Command, Decision, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
+from services.runtime import ServiceContext
 from services.runtime.cli import ConnectOption, RobotOption
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__)
@@ -216,9 +217,9 @@ def replay(
         typer.echo(f"error: {file} holds no {'messages' if all_keys else 'marks or commands'} to replay", err=True)
         raise typer.Exit(2)
     expected = rp.recorded_decisions(recorded)
-    made: list[list] = []  # the decisions made during the replay, once it has run to its end
+    made: list[list[Decision]] = []  # the decisions made during the replay, once it has run to its end
 
-    def body(ctx):  # type: ignore[no-untyped-def]
+    def body(ctx: ServiceContext) -> None:
         watch = rp.DecisionWatch(ctx) if check else None
         result = rp.Replayer(ctx, chosen, rate=rate).run()
         for key in result.unmatched:
@@ -239,6 +240,72 @@ def replay(
         console.print("[red]the decisions differ" if problems else "[green]the same decisions")
         code = 1 if problems else 0
     raise typer.Exit(code)
+
+
+@app.command()
+def view(
+    file: Annotated[Path | None, typer.Argument(help="An MCAP recording [default: live, from the bus]")] = None,
+    web: Annotated[bool, typer.Option("--web", help="Serve Rerun's web viewer instead of opening the native one")]
+    = False,
+    web_port: Annotated[int, typer.Option(help="HTTP port of the web viewer")] = 9090,
+    grpc_port: Annotated[int, typer.Option(help="Port of the Rerun data server the web viewer reads")] = 9876,
+    host: Annotated[str, typer.Option(help="This machine's name as a browser elsewhere reaches it")] = "localhost",
+    save: Annotated[Path | None, typer.Option(help="Write a Rerun file (.rrd) instead of showing a viewer")] = None,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """The camera with the marks found, the robot as a stick figure, its joint angles, situation and posture
+    over time, and what it heard, decided and said: in a Rerun viewer. Needs the `view` extra."""
+    try:
+        from services.cli import view as v
+    except ImportError as exc:
+        typer.echo(f"error: the viewer needs the rerun-sdk package: pip install 'hri-op2[view]' ({exc})", err=True)
+        raise typer.Exit(2) from None
+    from services.cli.mcapfile import RecordingError
+    from services.runtime import run_service
+    from services.viewer.scene import ViewLogger
+
+    sink = v.Sink(web=web, web_port=web_port, grpc_port=grpc_port, host=host, save=save)
+    try:
+        rec, address = v.open_stream(sink, file.name if file else "live")
+    except v.NoDisplay as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    if address:
+        console.print(f"web viewer: {address}", highlight=False, soft_wrap=True)
+    logger = ViewLogger(rec)
+    code = 0
+    if file is not None:
+        try:
+            console.print(f"{v.log_recording(file, logger)} message(s) drawn from {file}", highlight=False)
+        except RecordingError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(2) from None
+        if web:
+            console.print("serving until Ctrl-C", highlight=False)
+            code = _wait_for_signal()
+    else:
+
+        def live(ctx: ServiceContext) -> None:
+            v.LiveFeed(ctx, logger)
+            ctx.wait()
+
+        code = run_service("view", live, robot=robot, connect=connect)
+    rec.flush()
+    rec.disconnect()
+    raise typer.Exit(code)
+
+
+def _wait_for_signal() -> int:
+    """Block until Ctrl-C or SIGTERM."""
+    import signal
+
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    while not stop.wait(0.5):
+        pass
+    return 0
 
 
 def _choice(enum: type, value: str, what: str):  # type: ignore[no-untyped-def]

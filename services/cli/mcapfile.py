@@ -41,6 +41,14 @@ def model_for_encoding(encoding: str) -> type[Header] | None:
     return MODELS.get(schema)
 
 
+def topic_of(key: str) -> str:
+    """`hri/op2/vision/marks` -> `vision/marks` (the key without the robot's prefix)."""
+    parts = key.split("/", 2)
+    if len(parts) < 3 or parts[0] != "hri":
+        raise RecordingError(f"key {key!r} is not under hri/<robot>/")
+    return parts[2]
+
+
 class McapWriter:
     """Writes messages of known models to an MCAP file; registers a schema and channel when first seen."""
 

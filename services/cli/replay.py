@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 from schemas.messages import Decision, Header
-from services.cli.mcapfile import Recorded, RecordingError
+from services.cli.mcapfile import Recorded, topic_of
 from services.runtime import ServiceContext, TypedPublisher
 
 INPUT_TOPICS: tuple[str, ...] = ("vision/marks", "voice/command")
@@ -24,14 +24,6 @@ INPUT_TOPICS: tuple[str, ...] = ("vision/marks", "voice/command")
 MATCH_WAIT_S = 3.0
 """How long to wait for a subscriber of each replayed key before starting (Zenoh drops puts that
 no subscriber has been matched to yet)."""
-
-
-def topic_of(key: str) -> str:
-    """`hri/op2/vision/marks` -> `vision/marks`."""
-    parts = key.split("/", 2)
-    if len(parts) < 3 or parts[0] != "hri":
-        raise RecordingError(f"key {key!r} is not under hri/<robot>/")
-    return parts[2]
 
 
 def select(messages: Iterable[Recorded], *, all_keys: bool = False) -> list[Recorded]:
