@@ -11,13 +11,16 @@ publisher's `seq`.
 from __future__ import annotations
 
 import json
+import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
+from mcap.records import Channel, Message, Schema
+from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
 from schemas.messages import MODELS, Header
@@ -109,15 +112,47 @@ class Recorded:
         return self.model.model_validate_json(self.data)
 
 
+_UNREADABLE = (McapError, ValueError, EOFError, struct.error)
+
+
 def read_recording(path: Path) -> Iterator[Recorded]:
-    """Every message of a recording in log-time order; RecordingError if it is not a readable MCAP file."""
+    """Every message of a recording in log-time order; RecordingError if it is not a readable MCAP file.
+
+    A file whose recorder was killed has no summary: it is read from the start, up to its last
+    complete chunk.
+    """
     try:
         with path.open("rb") as f:
-            reader = make_reader(f)
-            for schema, channel, message in reader.iter_messages(log_time_order=True):
-                name = schema.name if schema is not None else ""
-                yield Recorded(channel.topic, name, message.log_time / 1e9, message.data, MODELS.get(name))
+            try:
+                messages = list(make_reader(f).iter_messages(log_time_order=True))
+            except _UNREADABLE as exc:
+                f.seek(0)
+                messages = _read_truncated(f, exc)
     except FileNotFoundError:
         raise RecordingError(f"{path}: no such file") from None
-    except (McapError, ValueError, EOFError) as exc:
+    except _UNREADABLE as exc:
         raise RecordingError(f"{path}: not a readable MCAP recording ({exc})") from None
+    for schema, channel, message in messages:
+        name = schema.name if schema is not None else ""
+        yield Recorded(channel.topic, name, message.log_time / 1e9, message.data, MODELS.get(name))
+
+
+def _read_truncated(f: IO[bytes], first_error: Exception) -> list[tuple[Any, Any, Any]]:
+    """The messages of every complete chunk of a file that ends early (no summary, no footer)."""
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    out: list[tuple[Any, Any, Any]] = []
+    try:
+        for record in StreamReader(f, skip_magic=False).records:
+            if isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Message) and record.channel_id in channels:
+                channel = channels[record.channel_id]
+                out.append((schemas.get(channel.schema_id), channel, record))
+    except _UNREADABLE:
+        if not out:
+            raise first_error from None
+    out.sort(key=lambda item: item[2].log_time)
+    return out

@@ -137,12 +137,14 @@ class DecisionWatch:
             self._cond.notify_all()
 
     def settle(self, count: int, quiet_s: float, timeout: float) -> list[Decision]:
-        """Wait until at least `count` decisions came and none for `quiet_s`, or `timeout` passed."""
+        """Wait until `count` decisions came and then none for `quiet_s`; with fewer, give up after
+        three times that without a new one (or once `timeout` has passed)."""
         deadline = time.monotonic() + timeout
         with self._cond:
             while time.monotonic() < deadline:
                 n = len(self.decisions)
-                self._cond.wait(quiet_s)
-                if len(self.decisions) == n and n >= count:
+                patience = quiet_s if n >= count else 3 * quiet_s
+                self._cond.wait(min(patience, max(0.0, deadline - time.monotonic())))
+                if len(self.decisions) == n:
                     break
             return list(self.decisions)
