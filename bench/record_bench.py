@@ -51,39 +51,44 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
-def _frame() -> np.ndarray:
+def _frames(n: int) -> list[np.ndarray]:
+    """Distinct camera frames (a recording of identical frames would compress far better than life)."""
     gen = SceneGenerator(seed=3, variation=MILD)
-    return gen.render(gen.scene(Shape.X))[0]
+    return [gen.render(gen.scene(Shape.X if i % 2 else None))[0] for i in range(n)]
 
 
 def bench_writer(n: int) -> dict[str, Any]:
-    frame = _frame()
     mark = Mark(shape=Shape.X, confidence=0.9, box=(200, 120, 240, 240))
-    samples: dict[str, Header] = {
-        "vision/preview": make_preview(frame, 1, [mark], time.time(), PreviewSettings()),
-        "motion/joints": joint_positions({k: round(v) for k, v in SIT.items()}),
-        "vision/marks": MarkObservation(marks=[mark], frame=1),
+    rng = np.random.default_rng(0)
+    samples: dict[str, list[Header]] = {
+        "vision/preview": [make_preview(f, i, [mark], time.time(), PreviewSettings())
+                           for i, f in enumerate(_frames(40))],
+        "motion/joints": [joint_positions({k: round(v) + int(rng.integers(-30, 30)) for k, v in SIT.items()})
+                          for _ in range(200)],
+        "vision/marks": [MarkObservation(marks=[mark] if i % 3 else [], frame=i) for i in range(200)],
     }
     out: dict[str, Any] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for topic, msg in samples.items():
-            data = msg.model_dump_json().encode()
-            model = type(msg)
+        for topic, msgs in samples.items():
+            payloads = [m.model_dump_json().encode() for m in msgs]
+            model = type(msgs[0])
             path = Path(tmp) / f"{topic.replace('/', '_')}.mcap"
             w = McapWriter(path)
             t0 = time.perf_counter()
             for i in range(n):
+                data = payloads[i % len(payloads)]
                 m = model.model_validate_json(data)  # as the recorder does
                 m.stamp += i
                 w.write(f"hri/bench/{topic}", m, data)
             w.close()
             dt = time.perf_counter() - t0
-            out[topic] = {"message_bytes": len(data), "messages_per_s": round(n / dt),
+            out[topic] = {"message_bytes": round(statistics.mean(len(p) for p in payloads)),
+                          "messages_per_s": round(n / dt),
                           "file_bytes_per_message": round(path.stat().st_size / n, 1)}
     return out
 
 
-def _flood(endpoint: str, robot: str, seconds: float, ready: Any) -> None:
+def _flood(endpoint: str, robot: str, seconds: float, ready: Any, sent: Any) -> None:
     """In another process: publish MarkObservations as fast as possible for `seconds`."""
     ctx = ServiceContext("flood", zenoh.open(client_config([endpoint])), Keys(robot))
     try:
@@ -97,6 +102,7 @@ def _flood(endpoint: str, robot: str, seconds: float, ready: Any) -> None:
         while time.monotonic() < end:
             n += 1
             pub.put(MarkObservation(marks=[mark], frame=n))
+        sent.value = n
     finally:
         ctx.close()
 
@@ -105,19 +111,23 @@ def bench_recorder(seconds: float) -> dict[str, Any]:
     robot = f"b{uuid.uuid4().hex[:8]}"
     with service_rig(robot, participant="bench") as rig, tempfile.TemporaryDirectory() as tmp:
         rec = McapRecorder(rig.ctx, Path(tmp) / "flood.mcap")
-        ready = mp.get_context("spawn").Event()
-        proc = mp.get_context("spawn").Process(target=_flood, args=(rig.endpoint, robot, seconds, ready))
+        spawn = mp.get_context("spawn")
+        ready, sent = spawn.Event(), spawn.Value("q", 0)
+        proc = spawn.Process(target=_flood, args=(rig.endpoint, robot, seconds, ready, sent))
         proc.start()
         ready.wait(30)
         t0 = time.monotonic()
         proc.join(seconds + 30)
-        summary = rec.close()  # writes what is still queued
-        dt = time.monotonic() - t0
-        published = rig.ctx.query_health  # noqa: F841 - the flood's own count is its last seq
+        last = -1
+        while rec.summary.messages != last:  # what is still in flight or queued arrives and is written
+            last = rec.summary.messages
+            time.sleep(1.0)
+        dt = time.monotonic() - t0 - 1.0
+        summary = rec.close()
         recorded = summary.messages
-        seqs = summary.counts
-        return {"recorded": recorded, "seconds": round(dt, 2), "recorded_per_s": round(recorded / dt),
-                "file_bytes": summary.size_bytes, "keys": dict(seqs)}
+        return {"published": sent.value, "recorded": recorded, "seconds": round(dt, 2),
+                "recorded_per_s": round(recorded / dt), "file_bytes": summary.size_bytes,
+                "file_bytes_per_message": round(summary.size_bytes / max(recorded, 1), 1)}
 
 
 def bench_robot(seconds: float) -> dict[str, Any]:
@@ -145,7 +155,7 @@ def bench_robot(seconds: float) -> dict[str, Any]:
 
 
 def bench_preview_cpu(seconds: float) -> dict[str, Any]:
-    frame = _frame()
+    frame = _frames(1)[0]
     times = []
     for _ in range(200):
         t0 = time.perf_counter()

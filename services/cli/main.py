@@ -168,6 +168,8 @@ def record(
     duration: Annotated[float | None, typer.Option(min=0.1, help="Stop after this many seconds "
                                                    "[default: at Ctrl-C]")] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace FILE if it exists")] = False,
+    images: Annotated[bool, typer.Option("--images/--no-images", help="Record the camera preview (about 5 MB "
+                                         "a minute) [default: yes]")] = True,
     robot: RobotOption = None,
     connect: ConnectOption = None,
 ) -> None:
@@ -182,8 +184,8 @@ def record(
         typer.echo(f"error: no folder {file.parent} for {file.name}", err=True)
         raise typer.Exit(2)
     done = []
-    code = run_service("record", lambda ctx: done.append(record_to(ctx, file, duration)), robot=robot,
-                       connect=connect)
+    code = run_service("record", lambda ctx: done.append(record_to(ctx, file, duration, images=images)),
+                       robot=robot, connect=connect)
     if done:
         console.print(done[0].table())
     raise typer.Exit(code)
@@ -214,7 +216,8 @@ def replay(
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
     if not chosen:
-        typer.echo(f"error: {file} holds no {'messages' if all_keys else 'marks or commands'} to replay", err=True)
+        what = "messages" if all_keys else "marks or commands"
+        typer.echo(f"error: {file} holds no {what} to replay", err=True)
         raise typer.Exit(2)
     expected = rp.recorded_decisions(recorded)
     made: list[list[Decision]] = []  # the decisions made during the replay, once it has run to its end
@@ -245,12 +248,13 @@ def replay(
 @app.command()
 def view(
     file: Annotated[Path | None, typer.Argument(help="An MCAP recording [default: live, from the bus]")] = None,
-    web: Annotated[bool, typer.Option("--web", help="Serve Rerun's web viewer instead of opening the native one")]
-    = False,
+    web: Annotated[bool, typer.Option("--web", help="Serve Rerun's web viewer instead of opening the native "
+                                                    "one")] = False,
     web_port: Annotated[int, typer.Option(help="HTTP port of the web viewer")] = 9090,
     grpc_port: Annotated[int, typer.Option(help="Port of the Rerun data server the web viewer reads")] = 9876,
     host: Annotated[str, typer.Option(help="This machine's name as a browser elsewhere reaches it")] = "localhost",
-    save: Annotated[Path | None, typer.Option(help="Write a Rerun file (.rrd) instead of showing a viewer")] = None,
+    save: Annotated[Path | None, typer.Option(help="Write a Rerun file (.rrd) instead of showing a "
+                                                   "viewer")] = None,
     robot: RobotOption = None,
     connect: ConnectOption = None,
 ) -> None:
@@ -259,16 +263,18 @@ def view(
     try:
         from services.cli import view as v
     except ImportError as exc:
-        typer.echo(f"error: the viewer needs the rerun-sdk package: pip install 'hri-op2[view]' ({exc})", err=True)
+        typer.echo(f"error: the viewer needs the rerun-sdk package: pip install 'hri-op2[view]' ({exc})",
+                   err=True)
         raise typer.Exit(2) from None
-    from services.cli.mcapfile import RecordingError
+    from services.cli.mcapfile import RecordingError, read_recording
     from services.runtime import run_service
     from services.viewer.scene import ViewLogger
 
-    sink = v.Sink(web=web, web_port=web_port, grpc_port=grpc_port, host=host, save=save)
     try:
-        rec, address = v.open_stream(sink, file.name if file else "live")
-    except v.NoDisplay as exc:
+        recorded = list(read_recording(file)) if file is not None else []
+        rec, address = v.open_stream(v.Sink(web=web, web_port=web_port, grpc_port=grpc_port, host=host, save=save),
+                                     file.name if file else "live")
+    except (RecordingError, v.NoDisplay) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
     if address:
@@ -276,11 +282,7 @@ def view(
     logger = ViewLogger(rec)
     code = 0
     if file is not None:
-        try:
-            console.print(f"{v.log_recording(file, logger)} message(s) drawn from {file}", highlight=False)
-        except RecordingError as exc:
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(2) from None
+        console.print(f"{v.log_recording(recorded, logger)} message(s) drawn from {file}", highlight=False)
         if web:
             console.print("serving until Ctrl-C", highlight=False)
             code = _wait_for_signal()

@@ -12,6 +12,7 @@ import queue
 import threading
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,6 +20,7 @@ import zenoh
 from pydantic import ValidationError
 from rich.table import Table
 
+from schemas.keys import SERVICES, Keys
 from services.cli.mcapfile import McapWriter, model_for_encoding
 from services.runtime import ServiceContext
 
@@ -58,10 +60,16 @@ class RecordSummary:
         return table
 
 
-class McapRecorder:
-    """Records every sample under `keyexpr` (default: the robot's `hri/<robot>/**`) on `ctx`'s session."""
+def without_images(keys: Keys) -> list[str]:
+    """Every key of the robot except the preview images (which vision then does not even encode)."""
+    p = keys.prefix
+    return [keys.vision_marks, keys.vision_scene, *(f"{p}/{s}/**" for s in SERVICES if s != "vision")]
 
-    def __init__(self, ctx: ServiceContext, path: Path, keyexpr: str | None = None) -> None:
+
+class McapRecorder:
+    """Records every sample under `keyexprs` (default: the robot's `hri/<robot>/**`) on `ctx`'s session."""
+
+    def __init__(self, ctx: ServiceContext, path: Path, keyexprs: Sequence[str] | None = None) -> None:
         self.ctx = ctx
         self.summary = RecordSummary(path)
         self._writer = McapWriter(path)
@@ -69,7 +77,7 @@ class McapRecorder:
         self._closed = False
         self._thread = threading.Thread(target=self._drain, name="mcap-writer", daemon=True)
         self._thread.start()
-        self._sub = ctx.session.declare_subscriber(keyexpr or ctx.keys.all, self._on_sample)
+        self._subs = [ctx.session.declare_subscriber(k, self._on_sample) for k in keyexprs or [ctx.keys.all]]
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         # On a Zenoh thread: only queue (a slow callback pushes back on the network).
@@ -112,10 +120,11 @@ class McapRecorder:
         """Stop listening, write what is queued and the file's summary; returns the record summary."""
         if not self._closed:
             self._closed = True
-            try:
-                self._sub.undeclare()
-            except Exception:  # the session is already closed
-                pass
+            for sub in self._subs:
+                try:
+                    sub.undeclare()
+                except Exception:  # the session is already closed
+                    pass
             self._queue.put(_STOP)
             self._thread.join()
             self._writer.close()
@@ -123,9 +132,9 @@ class McapRecorder:
         return self.summary
 
 
-def record(ctx: ServiceContext, path: Path, duration: float | None = None) -> RecordSummary:
+def record(ctx: ServiceContext, path: Path, duration: float | None = None, *, images: bool = True) -> RecordSummary:
     """Record until `ctx` is asked to stop (Ctrl-C, SIGTERM) or `duration` seconds have passed."""
-    recorder = McapRecorder(ctx, path)
+    recorder = McapRecorder(ctx, path, None if images else without_images(ctx.keys))
     ctx.log.info("recording", path=str(path), keys=ctx.keys.all, duration_s=duration)
     try:
         ctx.wait(duration)

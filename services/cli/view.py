@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import queue
 import threading
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
@@ -19,7 +20,7 @@ import rerun as rr
 import zenoh
 from pydantic import ValidationError
 
-from services.cli.mcapfile import model_for_encoding, read_recording, topic_of
+from services.cli.mcapfile import Recorded, model_for_encoding, topic_of
 from services.runtime import ServiceContext
 from services.viewer.scene import ViewLogger, blueprint
 
@@ -59,10 +60,10 @@ def open_stream(sink: Sink, recording_name: str) -> tuple[rr.RecordingStream, st
     return rec, None
 
 
-def log_recording(path: Path, logger: ViewLogger) -> int:
-    """Draw every message of an MCAP recording; returns how many were drawn."""
+def log_recording(messages: Iterable[Recorded], logger: ViewLogger) -> int:
+    """Draw the messages of a recording (`read_recording`); returns how many were drawn."""
     n = 0
-    for m in read_recording(path):
+    for m in messages:
         if m.model is None:
             continue
         logger.log(topic_of(m.key), m.decode())

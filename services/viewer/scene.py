@@ -47,7 +47,8 @@ def blueprint() -> rrb.Blueprint:
         rrb.Vertical(
             rrb.Horizontal(
                 rrb.Spatial2DView(origin="camera", name="camera"),
-                rrb.Spatial3DView(origin="robot", name="robot"),
+                rrb.Spatial3DView(origin="robot", name="robot", eye_controls=rrb.EyeControls3D(
+                    position=(0.42, -0.32, 0.30), look_target=(0.0, 0.0, 0.16), eye_up=(0.0, 0.0, 1.0))),
                 rrb.TextLogView(origin="log", name="heard, decided, said"),
             ),
             rrb.Horizontal(
@@ -56,6 +57,8 @@ def blueprint() -> rrb.Blueprint:
             ),
             row_shares=[3, 2],
         ),
+        # Follow the newest data (live: as it comes); the time bar stays for scrubbing a recording.
+        rrb.TimePanel(timeline=TIMELINE, play_state="following", state="collapsed"),
         collapse_panels=True,
     )
 
@@ -70,6 +73,9 @@ class ViewLogger:
         self._goals: set[str] = set()
         self._series_named = False
         self.logged = 0
+        # Situation and posture hold until the next change: steps, not slopes.
+        for name in ("situation", "posture"):
+            rec.log(f"state/{name}", rr.SeriesLines(names=name, interpolation_mode="stepafter"), static=True)
 
     def log(self, topic: str, msg: Header) -> None:
         """Log one message; `topic` is its key after `hri/<robot>/` (`vision/preview`)."""

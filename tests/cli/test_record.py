@@ -108,3 +108,19 @@ def test_a_recording_cut_short_reads_up_to_its_last_complete_chunk(tmp_path: Pat
         raise AssertionError("a header alone is not a recording")
     except RecordingError as exc:
         assert str(cut) in str(exc)
+
+
+def test_recording_without_images_leaves_the_preview_unwatched(bus: ServiceContext, tmp_path: Path) -> None:
+    from schemas.messages import VisionPreview
+    from services.cli.record import without_images
+
+    preview = bus.publisher(bus.keys.vision_preview, VisionPreview)
+    joints_key = bus.keys.motion_joints
+    rec = McapRecorder(bus, tmp_path / "n.mcap", without_images(bus.keys))
+    marks = bus.publisher(bus.keys.vision_marks, MarkObservation)
+    wait_for(lambda: marks.matched, timeout=5)
+    time.sleep(0.3)
+    assert not preview.matched  # so vision encodes no preview for this recorder
+    bus.session.put(joints_key, b"{}")  # a key the list still covers (motion/**): seen, rejected
+    wait_for(lambda: rec.summary.rejected[joints_key] == 1, timeout=5)
+    rec.close()

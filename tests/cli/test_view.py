@@ -22,7 +22,7 @@ from schemas.messages import (
     SpeechRequest,
     VoiceCommand,
 )
-from services.cli.mcapfile import McapWriter
+from services.cli.mcapfile import McapWriter, read_recording
 from services.cli.view import APP_ID, log_recording
 from services.motion.joints import CENTER, JOINTS, SIT, STAND
 from services.motion.present import joint_positions
@@ -87,7 +87,7 @@ def test_a_recording_drawn_into_an_rrd_file_has_every_entity(tmp_path: Path) -> 
     rec = rr.RecordingStream(APP_ID)
     rec.save(rrd)
     logger = ViewLogger(rec)
-    assert log_recording(mcap, logger) == 13
+    assert log_recording(read_recording(mcap), logger) == 13
     rec.flush()
     rec.disconnect()
 
@@ -109,3 +109,28 @@ def test_a_recording_drawn_into_an_rrd_file_has_every_entity(tmp_path: Path) -> 
     texts = [str(v) for c in chunks if c.entity_path == "/log"
              for v in c.to_record_batch().column("TextLog:text").to_pylist()]
     assert any("REFUSE go: danger_sign" in t for t in texts), texts
+
+
+def test_the_live_feed_draws_what_comes_over_the_bus(bus, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    from services.cli.view import LiveFeed
+    from services.runtime import encoding_for
+    from tests.conftest import wait_for
+
+    rrd = tmp_path / "live.rrd"
+    rec = rr.RecordingStream(APP_ID)
+    rec.save(rrd)
+    logger = ViewLogger(rec)
+    feed = LiveFeed(bus, logger)
+    joints = bus.publisher(bus.keys.motion_joints, JointPositions)
+    decisions = bus.publisher(bus.keys.reasoner_decision, Decision)
+    wait_for(lambda: joints.matched and decisions.matched, timeout=5)
+    joints.put(joint_positions({k: round(v) for k, v in STAND.items()}))
+    decisions.put(Decision(command="stop", verdict="obey", reason="ok", action="stop", situation="safe"))
+    bus.session.put(bus.keys.motion_joints, b'{"ids": "garbage"}')  # no model named: skipped
+    bus.session.put(bus.keys.motion_joints, b'{"ids": "garbage"}', encoding=encoding_for(JointPositions))
+    wait_for(lambda: logger.logged == 2 and bus.counters.rejected == 1, timeout=5)  # invalid: counted
+    feed.close()
+    rec.flush()
+    rec.disconnect()
+    paths = {c.entity_path for c in RrdReader(rrd).stream().to_chunks()}
+    assert {"/robot/skeleton", "/joints/r_knee", "/state/situation", "/log"} <= paths

@@ -71,8 +71,8 @@ def test_the_recording_reads_back_with_valid_schemas_and_messages(session: Sessi
         summary = reader.get_summary()
         assert summary is not None and summary.statistics is not None
         topics = {c.topic for c in summary.channels.values()}
-        for topic in ("vision/marks", "vision/scene", "voice/command", "reasoner/decision", "motion/goal",
-                      "motion/state", "speech/say", "speech/state"):
+        for topic in ("vision/marks", "vision/scene", "vision/preview", "voice/command", "reasoner/decision",
+                      "motion/goal", "motion/state", "motion/joints", "speech/say", "speech/state"):
             assert f"{prefix}/{topic}" in topics, sorted(topics)
         validators = {}
         for schema in summary.schemas.values():
