@@ -1,4 +1,4 @@
-"""`hri`: run the whole robot (`up`, `demo`) and look at it (`status`, `spy`, `send`)."""
+"""`hri`: run the whole robot (`up`, `demo`), look at it (`status`, `spy`, `send`, `view`), record and replay it."""
 
 from __future__ import annotations
 
