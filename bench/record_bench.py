@@ -33,7 +33,7 @@ import zenoh
 from schemas.keys import Keys
 from schemas.messages import Header, Mark, MarkObservation, Shape, VisionPreview
 from services.cli.mcapfile import McapWriter
-from services.cli.record import McapRecorder
+from services.cli.record import McapRecorder, without_images
 from services.cli.rig import service_rig
 from services.cli.scenario import load
 from services.cli.simrobot import simulated_robot
@@ -139,18 +139,23 @@ def bench_robot(seconds: float) -> dict[str, Any]:
             if missing:
                 raise SystemExit(f"robot did not come up: {missing}")
             rec = McapRecorder(sim.ctx, path)
+            lean = McapRecorder(sim.ctx, out / "no-images.mcap", without_images(sim.ctx.keys))
             t0 = time.monotonic()
             sim.runner.run(load("paper"))
             scenario_s = time.monotonic() - t0
             left = seconds - (time.monotonic() - t0)
             if left > 0:
                 time.sleep(left)
-            summary = rec.close()
+            summary, lean_summary = rec.close(), lean.close()
         minutes = summary.duration_s / 60
-        per_key = {k: {"messages_per_min": round(c / minutes)} for k, c in sorted(summary.counts.items())}
+        per_key = {k.split("/", 2)[2]: {"messages_per_min": round(c / minutes),
+                                        "json_bytes_per_min": round(summary.payload_bytes[k] / minutes)}
+                   for k, c in sorted(summary.counts.items())}
         return {"seconds": round(summary.duration_s, 1), "scenario_s": round(scenario_s, 1),
                 "messages": summary.messages, "file_bytes": summary.size_bytes,
-                "bytes_per_min": round(summary.size_bytes / minutes),
+                "file_bytes_per_min": round(summary.size_bytes / minutes),
+                "file_bytes_per_min_without_images": round(lean_summary.size_bytes / minutes),
+                "json_bytes_per_min": round(sum(summary.payload_bytes.values()) / minutes),
                 "messages_per_min": round(summary.messages / minutes), "per_key": per_key}
 
 
@@ -208,13 +213,19 @@ def main(
     flood_seconds: Annotated[float, typer.Option(help="seconds of flooding for the recorder")] = 5.0,
     robot_seconds: Annotated[float, typer.Option(help="seconds of the running robot to record")] = 60.0,
     cpu_seconds_each: Annotated[float, typer.Option("--cpu-seconds", help="seconds per preview CPU window")] = 20.0,
-    skip_robot: Annotated[bool, typer.Option("--skip-robot")] = False,
+    parts: Annotated[str, typer.Option(help="comma-separated: writer, recorder, robot, preview")]
+    = "writer,recorder,robot,preview",
 ) -> None:
-    out: dict[str, Any] = {"load_avg_at_start": os.getloadavg()[0], "writer": bench_writer(writer_n),
-                           "recorder": bench_recorder(flood_seconds)}
-    if not skip_robot:
+    chosen = {p.strip() for p in parts.split(",")}
+    out: dict[str, Any] = {"load_avg_at_start": os.getloadavg()[0]}
+    if "writer" in chosen:
+        out["writer"] = bench_writer(writer_n)
+    if "recorder" in chosen:
+        out["recorder"] = bench_recorder(flood_seconds)
+    if "robot" in chosen:
         out["robot"] = bench_robot(robot_seconds)
-    out["preview"] = bench_preview_cpu(cpu_seconds_each)
+    if "preview" in chosen:
+        out["preview"] = bench_preview_cpu(cpu_seconds_each)
     out["load_avg_at_end"] = os.getloadavg()[0]
     print(json.dumps(out, indent=2))
 

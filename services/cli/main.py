@@ -168,7 +168,7 @@ def record(
     duration: Annotated[float | None, typer.Option(min=0.1, help="Stop after this many seconds "
                                                    "[default: at Ctrl-C]")] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace FILE if it exists")] = False,
-    images: Annotated[bool, typer.Option("--images/--no-images", help="Record the camera preview (about 5 MB "
+    images: Annotated[bool, typer.Option("--images/--no-images", help="Record the camera preview (about 1.7 MB "
                                          "a minute) [default: yes]")] = True,
     robot: RobotOption = None,
     connect: ConnectOption = None,

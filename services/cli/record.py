@@ -31,6 +31,8 @@ _STOP = object()
 class RecordSummary:
     path: Path
     counts: Counter[str] = field(default_factory=Counter)
+    payload_bytes: Counter[str] = field(default_factory=Counter)
+    """JSON bytes recorded per key, before compression."""
     rejected: Counter[str] = field(default_factory=Counter)
     first: float | None = None
     last: float | None = None
@@ -52,11 +54,12 @@ class RecordSummary:
     def table(self) -> Table:
         table = Table(title=str(self.path), caption=f"{self.messages} messages in {self.duration_s:.1f} s, "
                                                     f"{self.size_bytes / 1024:.1f} KiB")
-        for col in ("key", "messages", "rate /s", "left out"):
+        for col in ("key", "messages", "rate /s", "JSON KiB", "left out"):
             table.add_column(col, justify="left" if col == "key" else "right")
         for key in sorted(set(self.counts) | set(self.rejected)):
             rate = self.counts[key] / self.duration_s if self.duration_s > 0 else 0.0
-            table.add_row(key, str(self.counts[key]), f"{rate:.1f}", str(self.rejected[key] or ""))
+            table.add_row(key, str(self.counts[key]), f"{rate:.1f}", f"{self.payload_bytes[key] / 1024:.1f}",
+                          str(self.rejected[key] or ""))
         return table
 
 
@@ -107,6 +110,7 @@ class McapRecorder:
             return
         self._writer.write(key, msg, data)
         s.counts[key] += 1
+        s.payload_bytes[key] += len(data)
         s.first = msg.stamp if s.first is None else min(s.first, msg.stamp)
         s.last = msg.stamp if s.last is None else max(s.last, msg.stamp)
 
