@@ -212,6 +212,7 @@ def replay(
     try:
         recorded = list(read_recording(file))
         chosen = rp.select(recorded, all_keys=all_keys)
+        expected = rp.recorded_decisions(recorded)
     except RecordingError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -219,7 +220,6 @@ def replay(
         what = "messages" if all_keys else "marks or commands"
         typer.echo(f"error: {file} holds no {what} to replay", err=True)
         raise typer.Exit(2)
-    expected = rp.recorded_decisions(recorded)
     made: list[list[Decision]] = []  # the decisions made during the replay, once it has run to its end
 
     def body(ctx: ServiceContext) -> None:
@@ -227,7 +227,8 @@ def replay(
         result = rp.Replayer(ctx, chosen, rate=rate).run()
         for key in result.unmatched:
             console.print(f"[yellow]nobody was listening on {key} when the replay started", highlight=False)
-        console.print(f"replayed {result.published} message(s) in {result.seconds:.1f} s", highlight=False)
+        skipped = f" ({result.skipped} invalid, left out)" if result.skipped else ""
+        console.print(f"replayed {result.published} message(s) in {result.seconds:.1f} s{skipped}", highlight=False)
         if watch is not None and not result.interrupted:
             made.append(watch.settle(len(expected), settle, timeout=settle + 30.0))
 

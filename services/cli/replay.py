@@ -15,8 +15,10 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
+from pydantic import ValidationError
+
 from schemas.messages import Decision, Header
-from services.cli.mcapfile import Recorded, topic_of
+from services.cli.mcapfile import Recorded, RecordingError, topic_of
 from services.runtime import ServiceContext, TypedPublisher
 
 INPUT_TOPICS: tuple[str, ...] = ("vision/marks", "voice/command")
@@ -41,10 +43,14 @@ def signature(d: Decision) -> Signature:
 
 
 def recorded_decisions(messages: Iterable[Recorded]) -> list[Decision]:
+    """The recorded decisions; RecordingError if one is not a valid `Decision` of today's contract."""
     out = []
     for m in messages:
         if m.model is Decision and topic_of(m.key) == "reasoner/decision":
-            out.append(Decision.model_validate_json(m.data))
+            try:
+                out.append(Decision.model_validate_json(m.data))
+            except ValidationError as exc:
+                raise RecordingError(f"a recorded decision is not valid today: {exc.errors()[0]['msg']}") from None
     return out
 
 
@@ -72,6 +78,8 @@ class ReplayResult:
     unmatched: list[str] = field(default_factory=list)
     """Keys that had no subscriber when the replay started."""
     interrupted: bool = False
+    skipped: int = 0
+    """Recorded messages that are not valid messages of today's models (logged, not published)."""
 
 
 class Replayer:
@@ -113,7 +121,13 @@ class Replayer:
             elif self.ctx.stopping.is_set():
                 result.interrupted = True
                 break
-            msg = m.decode()
+            try:
+                msg = m.decode()
+            except ValidationError as exc:  # recorded by an older or newer version of the contract
+                result.skipped += 1
+                self.ctx.counters.bump("rejected")
+                self.ctx.log.warning("not replayed", key=m.key, error=str(exc.errors()[0]["msg"]))
+                continue
             msg.stamp = time.time()
             self._pubs[f"{self.ctx.keys.prefix}/{topic_of(m.key)}"].put(msg)
             result.published += 1
