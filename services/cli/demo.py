@@ -11,6 +11,8 @@ from __future__ import annotations
 import shutil
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from rich.console import Console
@@ -18,13 +20,14 @@ from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
+from services.cli.record import McapRecorder
 from services.cli.recorder import Event, describe
 from services.cli.router import free_port
 from services.cli.runner import StepResult
 from services.cli.scenario import Scenario
 from services.cli.simrobot import simulated_robot
 from services.cli.utterance import DEFAULT_VOICE
-from services.runtime import configure_logging
+from services.runtime import ServiceContext, configure_logging
 
 _COLOURS = {"voice": "cyan", "vision": "magenta", "reasoner": "bold yellow", "motion": "green", "speech": "blue"}
 
@@ -73,8 +76,21 @@ def problems(results: list[StepResult]) -> list[str]:
     return [f"step {r.index} ({r.step.label()}): {'; '.join(r.problems)}" for r in results if not r.ok]
 
 
+@contextmanager
+def _recording(ctx: ServiceContext, path: Path | None, console: Console) -> Iterator[None]:
+    """`hri demo --record FILE.mcap`: everything on the bus into FILE while the demo runs."""
+    if path is None:
+        yield
+        return
+    recorder = McapRecorder(ctx, path.resolve())
+    try:
+        yield
+    finally:
+        console.print(recorder.close().table())
+
+
 def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAULT_VOICE,
-             console: Console | None = None) -> int:
+             console: Console | None = None, record: Path | None = None) -> int:
     console = console or Console()
     configure_logging("warning")  # the timeline is the output; service logs go to services.log
     out = out.resolve()
@@ -90,7 +106,8 @@ def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAU
                   f"tcp/127.0.0.1:{port})", highlight=False)
     results: list[StepResult] = []
     try:
-        with simulated_robot(out, port=port, voice=voice, on_event=timeline.event) as robot:
+        with simulated_robot(out, port=port, voice=voice, on_event=timeline.event) as robot, \
+                _recording(robot.ctx, record, console):
             timeline.line(time.monotonic(), "demo", "waiting for the five services ...", "bold")
             missing = robot.runner.wait_ready()
             if missing:

@@ -1,4 +1,4 @@
-"""`hri`: run the whole robot (`up`, `demo`) and look at it (`status`, `spy`, `send`)."""
+"""`hri`: run the whole robot (`up`, `demo`), look at it (`status`, `spy`, `send`, `view`), record and replay it."""
 
 from __future__ import annotations
 
@@ -12,11 +12,12 @@ import typer
 from rich.console import Console
 
 from schemas.keys import SERVICES
-from schemas.messages import Command, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
+from schemas.messages import Command, Decision, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
+from services.runtime import ServiceContext
 from services.runtime.cli import ConnectOption, RobotOption
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__)
@@ -90,6 +91,8 @@ def demo(
     port: Annotated[int, typer.Option(help="Router port on 127.0.0.1 (0: a free one)")] = 0,
     voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = DEFAULT_VOICE,
     list_scenarios: Annotated[bool, typer.Option("--list", help="List the built-in scenarios and exit")] = False,
+    record_to: Annotated[Path | None, typer.Option("--record", help="Also record everything on the bus into "
+                                                   "this MCAP file (see `hri record`)")] = None,
 ) -> None:
     """Run a scenario (default: the paper's experiment) on the simulated robot, with a live timeline.
 
@@ -107,7 +110,11 @@ def demo(
     except scenarios.ScenarioError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
-    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console))
+    folder = record_to.resolve().parent if record_to is not None else None
+    if folder is not None and not folder.is_dir() and folder != out.resolve():  # `out` is made afresh
+        typer.echo(f"error: no folder {record_to.parent} for {record_to.name}", err=True)
+        raise typer.Exit(2)
+    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console, record=record_to))
 
 
 @send_app.command("command")
@@ -185,6 +192,155 @@ def why(
     for e in explanation.evidence:
         ago = f"{e.ago_s:.0f} s ago" if e.ago_s is not None else "earlier"
         typer.echo(f"  {'heard' if e.kind == 'command' else 'saw'} {e.what}, {ago} (episode {e.episode})")
+
+
+@app.command()
+def record(
+    file: Annotated[Path, typer.Argument(help="The MCAP file to write")],
+    duration: Annotated[float | None, typer.Option(min=0.1, help="Stop after this many seconds "
+                                                   "[default: at Ctrl-C]")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace FILE if it exists")] = False,
+    images: Annotated[bool, typer.Option("--images/--no-images", help="Record the camera preview (about 1.7 MB "
+                                         "a minute) [default: yes]")] = True,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """Record every message of the robot (hri/<robot>/**) into an MCAP file, until Ctrl-C or --duration."""
+    from services.cli.record import record as record_to
+    from services.runtime import run_service
+
+    if file.exists() and not overwrite:
+        typer.echo(f"error: {file} exists (use --overwrite to replace it)", err=True)
+        raise typer.Exit(2)
+    if not file.parent.is_dir():
+        typer.echo(f"error: no folder {file.parent} for {file.name}", err=True)
+        raise typer.Exit(2)
+    done = []
+    code = run_service("record", lambda ctx: done.append(record_to(ctx, file, duration, images=images)),
+                       robot=robot, connect=connect)
+    if done:
+        console.print(done[0].table())
+    raise typer.Exit(code)
+
+
+@app.command()
+def replay(
+    file: Annotated[Path, typer.Argument(help="An MCAP recording made by `hri record` or `hri demo --record`")],
+    rate: Annotated[float, typer.Option(min=0.0, help="Speed: 2 plays twice as fast, 0 as fast as possible")] = 1.0,
+    all_keys: Annotated[bool, typer.Option("--all", help="Replay every recorded key, not only the inputs "
+                                                         "(marks, commands)")] = False,
+    check: Annotated[bool, typer.Option("--check", help="Compare the decisions made now with the recorded "
+                                                        "ones; exit 1 when they differ")] = False,
+    settle: Annotated[float, typer.Option(help="With --check: seconds without a new decision that end "
+                                               "the replay")] = 3.0,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """Publish a recording's inputs (marks seen, commands heard) again, with their original timing."""
+    from services.cli import replay as rp
+    from services.cli.mcapfile import RecordingError, read_recording
+    from services.runtime import run_service
+
+    try:
+        recorded = list(read_recording(file))
+        chosen = rp.select(recorded, all_keys=all_keys)
+        expected = rp.recorded_decisions(recorded)
+    except RecordingError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    if not chosen:
+        what = "messages" if all_keys else "marks or commands"
+        typer.echo(f"error: {file} holds no {what} to replay", err=True)
+        raise typer.Exit(2)
+    made: list[list[Decision]] = []  # the decisions made during the replay, once it has run to its end
+
+    def body(ctx: ServiceContext) -> None:
+        watch = rp.DecisionWatch(ctx) if check else None
+        result = rp.Replayer(ctx, chosen, rate=rate).run()
+        for key in result.unmatched:
+            console.print(f"[yellow]nobody was listening on {key} when the replay started", highlight=False)
+        skipped = f" ({result.skipped} invalid, left out)" if result.skipped else ""
+        console.print(f"replayed {result.published} message(s) in {result.seconds:.1f} s{skipped}", highlight=False)
+        if watch is not None and not result.interrupted:
+            made.append(watch.settle(len(expected), settle, timeout=settle + 30.0))
+
+    code = run_service("replay", body, robot=robot, connect=connect)
+    if check and code == 0:
+        if not made:
+            console.print("[yellow]interrupted: no check")
+            raise typer.Exit(130)
+        problems = rp.compare(expected, made[0])
+        console.print(f"{len(expected)} decision(s) recorded, {len(made[0])} made now", highlight=False)
+        for line in problems:
+            console.print(line, highlight=False, markup=False)
+        console.print("[red]the decisions differ" if problems else "[green]the same decisions")
+        code = 1 if problems else 0
+    raise typer.Exit(code)
+
+
+@app.command()
+def view(
+    file: Annotated[Path | None, typer.Argument(help="An MCAP recording [default: live, from the bus]")] = None,
+    web: Annotated[bool, typer.Option("--web", help="Serve Rerun's web viewer instead of opening the native "
+                                                    "one")] = False,
+    web_port: Annotated[int, typer.Option(help="HTTP port of the web viewer")] = 9090,
+    grpc_port: Annotated[int, typer.Option(help="Port of the Rerun data server the web viewer reads")] = 9876,
+    host: Annotated[str, typer.Option(help="This machine's name as a browser elsewhere reaches it")] = "localhost",
+    save: Annotated[Path | None, typer.Option(help="Write a Rerun file (.rrd) instead of showing a "
+                                                   "viewer")] = None,
+    robot: RobotOption = None,
+    connect: ConnectOption = None,
+) -> None:
+    """The camera with the marks found, the robot as a stick figure, its joint angles, situation and posture
+    over time, and what it heard, decided and said: in a Rerun viewer. Needs the `view` extra."""
+    try:
+        from services.cli import view as v
+    except ImportError as exc:
+        typer.echo(f"error: the viewer needs the rerun-sdk package: pip install 'hri-op2[view]' ({exc})",
+                   err=True)
+        raise typer.Exit(2) from None
+    from services.cli.mcapfile import RecordingError, read_recording
+    from services.runtime import run_service
+    from services.viewer.scene import ViewLogger
+
+    try:
+        recorded = list(read_recording(file)) if file is not None else []
+        rec, address = v.open_stream(v.Sink(web=web, web_port=web_port, grpc_port=grpc_port, host=host, save=save),
+                                     file.name if file else "live")
+    except (RecordingError, v.NoDisplay) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    if address:
+        console.print(f"web viewer: {address}", highlight=False, soft_wrap=True)
+    logger = ViewLogger(rec)
+    code = 0
+    if file is not None:
+        console.print(f"{v.log_recording(recorded, logger)} message(s) drawn from {file}", highlight=False)
+        if web:
+            console.print("serving until Ctrl-C", highlight=False)
+            code = _wait_for_signal()
+    else:
+
+        def live(ctx: ServiceContext) -> None:
+            v.LiveFeed(ctx, logger)
+            ctx.wait()
+
+        code = run_service("view", live, robot=robot, connect=connect)
+    rec.flush()
+    rec.disconnect()
+    raise typer.Exit(code)
+
+
+def _wait_for_signal() -> int:
+    """Block until Ctrl-C or SIGTERM."""
+    import signal
+
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    while not stop.wait(0.5):
+        pass
+    return 0
 
 
 def _choice(enum: type, value: str, what: str):  # type: ignore[no-untyped-def]

@@ -16,6 +16,7 @@ from schemas.messages import HealthStatus, MotionGoal, MotionState
 from services.motion.config import MotionSettings
 from services.motion.executor import GoalRequest, Snapshot
 from services.motion.loop import ControlLoop
+from services.motion.present import publish_joints
 from services.motion.simproc import SimProcess
 from services.runtime import ServiceContext
 
@@ -85,6 +86,7 @@ def serve(ctx: ServiceContext, settings: MotionSettings | None = None) -> None:
             loop.reasoner_lost()
 
     ctx.subscribe(ctx.keys.motion_goal, MotionGoal, on_goal)
+    ctx.thread(lambda: publish_joints(ctx, lambda: loop.present if loop.bus_ok else {}), "joints")
     ctx.on_liveliness(ctx.keys.alive("reasoner"), on_reasoner)
     control = ctx.thread(loop.run, "control")
     try:

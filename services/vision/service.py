@@ -16,6 +16,7 @@ from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.vision.debounce import DebounceConfig, Debouncer
 from services.vision.detector import MarkDetector
+from services.vision.preview import PreviewPublisher
 from services.vision.sources import (
     ALTERNATIVES,
     EndOfStream,
@@ -74,7 +75,7 @@ def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
             ctx.log.info("scene", shape=cmd.shape.value if cmd.shape else None)
 
         ctx.subscribe(ctx.keys.vision_scene, SceneCommand, on_scene)
-    _run(ctx, settings, holder, detector, debounce, pub, stats)
+    _run(ctx, settings, holder, detector, debounce, pub, stats, PreviewPublisher(ctx))
 
 
 class _SourceHolder:
@@ -113,6 +114,7 @@ def _run(
     debounce: Debouncer,
     pub: TypedPublisher[MarkObservation],
     stats: _Stats,
+    preview: PreviewPublisher | None = None,
 ) -> None:
     opened = False
     source: FrameSource | None = None
@@ -181,9 +183,11 @@ def _run(
             continue
         stats.add(time.perf_counter() - t0)
         confirmed = debounce.update(found)
-        pub.put(
+        obs = pub.put(
             MarkObservation(stamp=frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
         )
+        if preview is not None:
+            preview.offer(frame.image, obs.frame, obs.marks, obs.stamp)
         if stats.frames % 15 == 0:
             ctx.update_detail(
                 frames=stats.frames,
