@@ -1,0 +1,68 @@
+"""The default engine: a command spotter (pretrained speech embedding + a small trained head).
+
+One utterance (a trimmed WAV file or a VAD-cut stretch of a stream) is centred in a 2 s window,
+embedded (`spotter.features`) and classified over the vocabulary plus "other" (`spotter.head`). The
+most probable class is published if it is a command and its raw probability reaches the command's
+`accept` threshold; the published confidence is calibrated so that 0.5 is `accept` and 0.85 is
+`sure` (for "go": walk without asking). An utterance longer than `MAX_SPEECH_S` is not one command
+word and is rejected without classifying it.
+
+The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
+else the committed `spotter/head.npz`.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from schemas.messages import Command
+from services.voice.engine import EngineError, Recognition
+from services.voice.spotter.features import MAX_SPEECH_S, Embedder, FeatureError, speech_seconds
+from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
+
+
+class SpotterEngine:
+    name = "spotter"
+
+    def __init__(self, head: Head, embedder: Embedder | None = None) -> None:
+        unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
+        if unknown:
+            raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
+        self.head = head
+        self.embedder = embedder or Embedder()
+
+    @classmethod
+    def from_path(cls, path: Path | str | None = None) -> SpotterEngine:
+        try:
+            return cls(Head.load(path or DEFAULT_HEAD))
+        except (HeadError, FeatureError) as exc:
+            raise EngineError(str(exc)) from None
+
+    def scores(self, pcm: bytes) -> dict[str, float]:
+        """Raw class probabilities of one utterance."""
+        probs = self.head.probabilities(self.embedder.utterance(pcm))[0]
+        return {c: float(p) for c, p in zip(self.head.classes, probs, strict=True)}
+
+    def recognise(self, pcm: bytes) -> Recognition:
+        t0 = time.perf_counter()
+        audio_s = speech_seconds(pcm)
+        if audio_s > MAX_SPEECH_S:
+            return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
+                               {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
+        probs = self.head.probabilities(self.embedder.utterance(pcm))[0]
+        best = int(probs.argmax())
+        n = len(self.head.vocabulary)
+        top_cmd = int(probs[:n].argmax())
+        conf = self.head.confidence(top_cmd, float(probs[top_cmd]))
+        detail = {"p": {c: round(float(p), 3) for c, p in zip(self.head.classes, probs, strict=True) if p >= 0.01}}
+        word = self.head.classes[best]
+        if best == n:
+            command, reason = None, "other"
+            conf = min(conf, 0.49)
+        elif conf < 0.5:
+            command, reason = None, f"{word} below threshold {self.head.accept[best]:.3f}"
+        else:
+            command, reason = Command(word), "accepted"
+        detail["reason"] = reason
+        return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)
