@@ -26,8 +26,10 @@ is heard so. Thresholds are read from services/reasoner/agent/knowledge.soar (0.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import multiprocessing
+import pickle
 import random
 import re
 import sys
@@ -43,7 +45,7 @@ sys.path.insert(0, str(ROOT))
 
 from schemas.messages import Command  # noqa: E402
 from services.voice import synth  # noqa: E402
-from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
 from services.voice.training import corpus, dataset  # noqa: E402
@@ -117,11 +119,17 @@ def _render(job: tuple[dataset.Recipe, str]) -> Item | None:
 
 def heldout_items(seed: int, workers: int) -> list[Item]:
     jobs = heldout_recipes(seed)
-    with multiprocessing.get_context("spawn").Pool(workers) as pool:
-        items = [i for i in pool.map(_render, jobs, chunksize=16) if i is not None]
+    key = hashlib.sha1(repr([1, jobs]).encode()).hexdigest()[:16]  # bump when render_utterance changes
+    cache = synth.cache_dir() / f"bench-heldout-{key}.pickle"
+    if cache.exists():
+        items = pickle.loads(cache.read_bytes())
+    else:
+        with multiprocessing.get_context("spawn").Pool(workers) as pool:
+            items = [i for i in pool.map(_render, jobs, chunksize=16) if i is not None]
+        cache.write_bytes(pickle.dumps(items))
     print(f"held-out clips: {len(items)} of {len(jobs)} rendered", flush=True)
-    for clip in synth.noise_set("heldout")):
-        items.append(Item("noise", "", OTHER, clip.text, "noise", synth.read_wav(clip.path)))
+    for clip in synth.noise_set("heldout"):
+        items.append(Item("noise", "", OTHER, clip.text, "noise", read_wav(clip.path)))
     return items
 
 

@@ -1,10 +1,11 @@
 """Fit the spotter head: `python -m services.voice train` (a few minutes on two cores; never in CI).
 
-1. Render the `train` and `tune` splits (`dataset`), cached features reused.
+1. Render the `train`, `engines` and `tune` splits (`dataset`), cached features reused.
 2. Fit a one-hidden-layer MLP (scikit-learn) on `train`, fixed seed.
 3. On `tune` only, choose each command's two knots on its raw probability:
-   - `accept` (published 0.5): the lowest value at which at most `max_false_accept` of the tune clips
-     that are not this command would be published as it, and never below `min_accept`;
+   - `accept` (published 0.5): the lowest value at which at most the command's false-accept budget
+     (`budgets`: strict for "go", which moves the robot; lenient for "stop", the safe command) of the
+     tune clips that are not this command would be published as it, and never below `min_accept`;
    - `sure` (published 0.85): above the highest probability any tune clip that is not this command
      reached, times `sure_margin` (for "go": the robot walks without asking only above it).
 4. Save the head (`spotter/head.npz` by default) and print the tune figures.
@@ -27,7 +28,8 @@ class TrainConfig:
     seed: int = 12
     hidden: int = 96
     alpha: float = 1e-2
-    max_false_accept: float = 0.003
+    budgets: tuple[tuple[str, float], ...] = (("go", 0.003), ("stop", 0.03))
+    default_budget: float = 0.01
     min_accept: float = 0.5
     sure_margin: float = 1.02
     workers: int = 2
@@ -59,7 +61,7 @@ def calibrate(head: Head, x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> dic
     for c in range(n):
         others = probs[(y != c) & (best == c), c]  # non-c clips that would be published as c at threshold 0
         total_others = int((y != c).sum())
-        k = int(np.floor(cfg.max_false_accept * total_others))
+        k = int(np.floor(dict(cfg.budgets).get(head.vocabulary[c], cfg.default_budget) * total_others))
         ranked = np.sort(others)[::-1]
         accept = max(cfg.min_accept, float(ranked[k]) + 1e-4 if ranked.size > k else cfg.min_accept)
         worst = float(probs[y != c, c].max())
@@ -91,7 +93,8 @@ def tune_figures(head: Head, x: np.ndarray, y: np.ndarray) -> dict[str, float]:
 def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
     t0 = time.time()
     tune = dataset.features(dataset.recipes("tune", cfg.sizes, cfg.seed), cfg.workers)
-    train_xy = dataset.features(dataset.recipes("train", cfg.sizes, cfg.seed), cfg.workers)
+    parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers) for split in ("train", "engines")]
+    train_xy = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
     t1 = time.time()
     head = fit(*train_xy, cfg)
     chosen = calibrate(head, *tune, cfg)
