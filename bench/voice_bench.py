@@ -151,6 +151,7 @@ class Score:
     audio_s: float = 0.0
     per_command: dict[str, list[int]] = field(default_factory=lambda: defaultdict(lambda: [0, 0]))
     errors: Counter[str] = field(default_factory=Counter)
+    walked_on: Counter[str] = field(default_factory=Counter)
 
     def row(self) -> dict[str, object]:
         return {
@@ -164,6 +165,7 @@ class Score:
             "rtf": round(self.decode_s / max(1e-9, self.audio_s), 4),
             "n": {"commands": self.commands, "oov": self.oov, "noise": self.noise},
             "top_errors": dict(self.errors.most_common(8)),
+            "false_walks_on": dict(self.walked_on.most_common(10)),
         }
 
 
@@ -192,6 +194,7 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
             asks = is_go and policy.min_confidence <= conf < policy.confirm_below
             if it.label != WORDS.index("go") and walks:
                 s.false_walk_direct += 1
+                s.walked_on[f"{it.text} ({it.voice}, {it.condition})"] += 1
             if it.label != WORDS.index("go") and asks:
                 s.false_ask += 1
             if it.label < OTHER:

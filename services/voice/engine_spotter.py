@@ -7,6 +7,9 @@ most probable class is published if it is a command and its raw probability reac
 `sure` (for "go": walk without asking). An utterance longer than `MAX_SPEECH_S` is not one command
 word and is rejected without classifying it.
 
+A head made by enrolment keeps the calibrated head's last layer: its "go" is capped just below 0.85
+(the robot asks) unless the calibrated head is sure as well.
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -19,7 +22,7 @@ from pathlib import Path
 from schemas.messages import Command
 from services.voice.engine import EngineError, Recognition
 from services.voice.spotter.features import MAX_SPEECH_S, Embedder, FeatureError, speech_seconds
-from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
+from services.voice.spotter.head import DEFAULT_HEAD, SURE_CONFIDENCE, Head, HeadError
 
 
 class SpotterEngine:
@@ -50,7 +53,8 @@ class SpotterEngine:
         if audio_s > MAX_SPEECH_S:
             return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
                                {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
-        probs = self.head.probabilities(self.embedder.utterance(pcm))[0]
+        feats = self.embedder.utterance(pcm)
+        probs = self.head.probabilities(feats)[0]
         best = int(probs.argmax())
         n = len(self.head.vocabulary)
         top_cmd = int(probs[:n].argmax())
@@ -64,5 +68,9 @@ class SpotterEngine:
             command, reason = None, f"{word} below threshold {self.head.accept[best]:.3f}"
         else:
             command, reason = Command(word), "accepted"
+            if command == Command.GO and conf >= SURE_CONFIDENCE and self.head.base_last is not None:
+                base_conf = self.head.confidence(best, float(self.head.probabilities(feats, base=True)[0][best]))
+                if base_conf < SURE_CONFIDENCE:  # enrolment alone never makes the robot walk unasked
+                    conf, reason = SURE_CONFIDENCE - 0.01, "accepted (enrolled; the calibrated head is not sure: ask)"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)

@@ -9,8 +9,9 @@ by gradient descent on:
 - synthesised anchors: the command words' nearest non-command neighbours spoken by espeak-ng, labelled
   "other", so that the head does not learn "anything this voice says is a command",
 
-with an L2 pull towards the original weights. The thresholds (`accept`, `sure`) are kept, so "go"
-stays as strict as it was calibrated. The result is written to `<state dir>/voice-head.npz`
+with an L2 pull towards the original weights. The thresholds (`accept`, `sure`) are kept, and the
+calibrated last layer is stored beside the adapted one: an enrolled "go" walks without asking only if
+the calibrated head is sure too (otherwise the robot asks). The result is written to `<state dir>/voice-head.npz`
 (`HRI_STATE_DIR`, else `$XDG_STATE_HOME/hri/<robot>`, else `~/.local/state/hri/<robot>`), which the
 service then uses.
 """
@@ -31,7 +32,7 @@ from services.voice.spotter.features import Embedder
 from services.voice.spotter.head import Head
 
 HEAD_FILE = "voice-head.npz"
-ANCHOR_VOICES = ("en-us", "en-gb+f3")
+ANCHOR_VOICES = ("en-us",)
 ANCHOR_WORDS: tuple[str, ...] = (
     "sand", "stamp", "town", "done", "yet", "chess", "now", "so", "goat", "though", "coat", "grow", "top",
     "shop", "white", "wide", "hello", "table", "okay", "water",
@@ -132,9 +133,7 @@ def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = E
             labels.append(len(classes) - 1)
     x = np.stack(feats).reshape(len(feats), -1).astype(np.float32)
     y = np.asarray(labels)
-    h = (x - head.mean) / head.scale
-    for w, b in zip(head.weights[:-1], head.biases[:-1], strict=True):
-        h = np.maximum(h @ w + b, 0.0)
+    h = head.hidden(x)
     w0, b0 = head.weights[-1].astype(np.float64), head.biases[-1].astype(np.float64)
     w, b = w0.copy(), b0.copy()
     onehot = np.eye(len(classes))[y]
@@ -157,8 +156,10 @@ def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = E
             v *= 0.999
             v += 0.001 * grad**2
             param -= cfg.learning_rate * (m / (1 - 0.9**step)) / (np.sqrt(v / (1 - 0.999**step)) + 1e-8)
-    return replace(head, weights=[*head.weights[:-1], w.astype(np.float32)], biases=[*head.biases[:-1], b.astype(np.float32)],
-                   meta={**head.meta, "enrolled_samples": len(samples)})
+    base = head.base_last or (head.weights[-1], head.biases[-1])
+    return replace(head, weights=[*head.weights[:-1], w.astype(np.float32)],
+                   biases=[*head.biases[:-1], b.astype(np.float32)],
+                   meta={**head.meta, "enrolled_samples": len(samples)}, base_last=base)
 
 
 def record_prompted(words: Sequence[str], per_word: int, seconds: float = 1.5) -> list[tuple[str, bytes]]:

@@ -37,21 +37,28 @@ class Head:
     sure: np.ndarray
     """Per command: raw probability published as confidence 0.85."""
     meta: dict[str, Any] = field(default_factory=dict)
+    base_last: tuple[np.ndarray, np.ndarray] | None = None
+    """An enrolled head keeps the calibrated head's last layer: enrolment may make the robot *ask*
+    about a "go" more readily, but it walks without asking only if the calibrated head is sure too."""
 
     @property
     def classes(self) -> tuple[str, ...]:
         return (*self.vocabulary, "other")
 
-    def probabilities(self, feats: np.ndarray) -> np.ndarray:
-        """(n, frames, 96) or (frames, 96) embeddings -> (n, classes) softmax probabilities."""
-        x = feats.reshape(-1, self.mean.size).astype(np.float32)
-        h = (x - self.mean) / self.scale
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            h = h @ w + b
-            if i < len(self.weights) - 1:
-                h = np.maximum(h, 0.0)
-        h -= h.max(axis=1, keepdims=True)
-        e = np.exp(h)
+    def hidden(self, feats: np.ndarray) -> np.ndarray:
+        """(n, frames, 96) or (frames, 96) embeddings -> the last layer's input."""
+        h = (feats.reshape(-1, self.mean.size).astype(np.float32) - self.mean) / self.scale
+        for w, b in zip(self.weights[:-1], self.biases[:-1], strict=True):
+            h = np.maximum(h @ w + b, 0.0)
+        return h
+
+    def probabilities(self, feats: np.ndarray, *, base: bool = False) -> np.ndarray:
+        """(n, frames, 96) or (frames, 96) embeddings -> (n, classes) softmax probabilities
+        (`base`: of the calibrated head an enrolled head was made from)."""
+        w, b = self.base_last if base and self.base_last is not None else (self.weights[-1], self.biases[-1])
+        z = self.hidden(feats) @ w + b
+        z -= z.max(axis=1, keepdims=True)
+        e = np.exp(z)
         return e / e.sum(axis=1, keepdims=True)
 
     def confidence(self, index: int, p: float) -> float:
@@ -69,6 +76,8 @@ class Head:
         for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             arrays[f"w{i}"] = w.astype(np.float16)
             arrays[f"b{i}"] = b.astype(np.float32)
+        if self.base_last is not None:
+            arrays["base_w"], arrays["base_b"] = self.base_last[0].astype(np.float16), self.base_last[1]
         np.savez_compressed(path, **arrays)  # type: ignore[arg-type]
 
     @classmethod
@@ -77,12 +86,13 @@ class Head:
         try:
             data = np.load(path, allow_pickle=False)
             n = sum(1 for k in data.files if k.startswith("w"))
+            base = (data["base_w"].astype(np.float32), data["base_b"]) if "base_w" in data.files else None
             head = cls(
                 vocabulary=tuple(str(v) for v in data["vocabulary"]), mean=data["mean"], scale=data["scale"],
                 weights=[data[f"w{i}"].astype(np.float32) for i in range(n)],
                 biases=[data[f"b{i}"] for i in range(n)],
                 accept=data["accept"].astype(np.float64), sure=data["sure"].astype(np.float64),
-                meta={"source": str(path)},
+                meta={"source": str(path)}, base_last=base,
             )
         except (OSError, KeyError, ValueError) as exc:
             raise HeadError(f"{path}: not a spotter head ({exc})") from None
