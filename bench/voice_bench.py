@@ -43,12 +43,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from schemas.messages import Command  # noqa: E402
-from services.voice import synth  # noqa: E402
-from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
-from services.voice.engine import Engine, make_engine  # noqa: E402
-from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
-from services.voice.training import corpus, dataset  # noqa: E402
+from schemas.messages import Command
+from services.voice import synth
+from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
+from services.voice.engine import Engine, make_engine
+from services.voice.segmenter import Segmenter, SegmenterConfig
+from services.voice.training import corpus, dataset
+from services.voice.training.tts import TtsError
 
 KNOWLEDGE = ROOT / "services/reasoner/agent/knowledge.soar"
 WORDS = corpus.VOCABULARY
@@ -112,7 +113,7 @@ def _render(job: tuple[dataset.Recipe, str]) -> Item | None:
     r, cond = job
     try:
         pcm = dataset.render_utterance(r)
-    except Exception:  # a TTS failure drops the clip (counted)
+    except TtsError:  # a TTS failure drops the clip (counted)
         return None
     return Item(family(r.voice), r.voice, r.label, r.text, cond, pcm)
 

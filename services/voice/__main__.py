@@ -144,7 +144,13 @@ def enroll(
     head: HeadOption = None,
 ) -> None:
     """Adapt the spotter to one person (seconds); the service uses the result when it is present."""
-    from services.voice.enrol import EnrolError, adapt, enrolled_head_path, record_prompted, samples_from_folder
+    from services.voice.enrol import (
+        EnrolError,
+        adapt,
+        enrolled_head_path,
+        record_prompted,
+        samples_from_folder,
+    )
     from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
 
     try:

@@ -175,7 +175,7 @@ def record_prompted(words: Sequence[str], per_word: int, seconds: float = 1.5) -
             try:
                 audio = sd.rec(int(seconds * 16000), samplerate=16000, channels=1, dtype="int16")
                 sd.wait()
-            except Exception as exc:  # PortAudio raises its own error types
+            except sd.PortAudioError as exc:
                 raise EnrolError(f"microphone failed: {exc}") from None
             out.append((word, trim_to_speech(audio.tobytes())))
     return out

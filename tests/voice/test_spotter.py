@@ -126,7 +126,7 @@ def _cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedP
     import os
 
     return subprocess.run([sys.executable, "-m", "services.voice", *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=60, env={**os.environ, **(env or {})})
+                          check=False, timeout=60, env={**os.environ, **(env or {})})
 
 
 def test_unknown_engine_exits_2_with_one_line() -> None:

@@ -92,7 +92,7 @@ def centre(pcm: bytes, seed: int = 0) -> np.ndarray:
     """The utterance in the middle of WINDOW_S of audio (quiet noise around it; a longer one is cut to
     its middle), as int16-valued float32 samples."""
     x = np.frombuffer(pcm, dtype="<i2").astype(np.float32)
-    n = int(round(WINDOW_S * SAMPLE_RATE))
+    n = round(WINDOW_S * SAMPLE_RATE)
     if x.size >= n:
         start = (x.size - n) // 2
         return x[start : start + n].copy()

@@ -63,7 +63,7 @@ def apply(speech: np.ndarray, aug: Augment, rng: np.random.Generator,
     x = speech
     if aug.tempo != 1.0:
         up = 100
-        x = resample_poly(x, up, int(round(up * aug.tempo)))
+        x = resample_poly(x, up, round(up * aug.tempo))
     if aug.reverb_rt60 > 0:
         x = fftconvolve(x, room_impulse(aug.reverb_rt60, rng))[: x.size + int(0.1 * SAMPLE_RATE)]
     x = np.concatenate([np.zeros(int(aug.pad_s[0] * SAMPLE_RATE)), x, np.zeros(int(aug.pad_s[1] * SAMPLE_RATE))])

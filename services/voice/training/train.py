@@ -16,7 +16,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +36,7 @@ class TrainConfig:
     sure_margin: tuple[tuple[str, float], ...] = (("go", 3.0),)
     default_sure_margin: float = 0.1
     workers: int = 2
-    sizes: dataset.Sizes = dataset.Sizes()
+    sizes: dataset.Sizes = field(default_factory=dataset.Sizes)
 
 
 def _logit(p: float) -> float:

@@ -47,8 +47,8 @@ def _run(argv: list[str], stdin: bytes | None = None) -> bytes:
 
 
 def espeak(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
-    wpm = int(round(165 / speed))
-    return _wav_samples(_run(["espeak-ng", "-v", voice, "-s", str(wpm), "-p", str(int(round(50 * pitch))),
+    wpm = round(165 / speed)
+    return _wav_samples(_run(["espeak-ng", "-v", voice, "-s", str(wpm), "-p", str(round(50 * pitch)),
                               "--stdout", text]))
 
 
