@@ -120,17 +120,17 @@ def say(
 
 @app.command()
 def train(
-    out: Annotated[Path, typer.Option("--out", help="where to write the head")] = Path(
-        "services/voice/spotter/head.npz"),
+    out: Annotated[Path | None, typer.Option("--out", help="where to write the head [default: the committed one]")] = None,
     seed: Annotated[int, typer.Option(help="seed of every random choice")] = 12,
     workers: Annotated[int, typer.Option(help="rendering processes")] = 2,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
+    from services.voice.spotter.head import DEFAULT_HEAD
     from services.voice.training.train import TrainConfig
     from services.voice.training.train import train as run_training
 
-    report = run_training(TrainConfig(seed=seed, workers=workers), out)
+    report = run_training(TrainConfig(seed=seed, workers=workers), out or DEFAULT_HEAD)
     typer.echo(json.dumps(report, indent=2))
 
 

@@ -42,11 +42,6 @@ class SpotterEngine:
         except (HeadError, FeatureError) as exc:
             raise EngineError(str(exc)) from None
 
-    def scores(self, pcm: bytes) -> dict[str, float]:
-        """Raw class probabilities of one utterance."""
-        probs = self.head.probabilities(self.embedder.utterance(pcm))[0]
-        return {c: float(p) for c, p in zip(self.head.classes, probs, strict=True)}
-
     def recognise(self, pcm: bytes) -> Recognition:
         t0 = time.perf_counter()
         audio_s = speech_seconds(pcm)

@@ -35,7 +35,7 @@ HEAD_FILE = "voice-head.npz"
 ANCHOR_VOICES = ("en-us",)
 ANCHOR_WORDS: tuple[str, ...] = (
     "sand", "stamp", "town", "done", "yet", "chess", "now", "so", "goat", "though", "coat", "grow", "top",
-    "shop", "white", "wide", "hello", "table", "okay", "water",
+    "shop", "white", "wide", "hello", "table", "okay", "music",
 )
 """Near neighbours of the commands (none a homophone), spoken as "other" anchors."""
 

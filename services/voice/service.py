@@ -5,8 +5,9 @@ passed; otherwise it is null and `text` says what was heard. A source that canno
 PortAudio, no microphone, missing folder) turns health `degraded`, naming the source and the
 alternatives, and is retried with back-off (`retry_s`, doubling up to `max_retry_s`; one warning per
 new error, not one per retry); the service keeps running. Invalid configuration (unknown engine,
-unreadable lexicon or head file) is found by `check_settings` before the service starts: exit 2. A file or folder source
-that has been read to the end leaves the service idle (health detail `source: finished`).
+unreadable lexicon or head file) is found by `check_settings` before the service starts: exit 2.
+A file or folder source that has been read to the end leaves the service idle (health detail
+`source: finished`).
 """
 
 from __future__ import annotations
