@@ -1,4 +1,5 @@
-"""`python -m services.voice`: run the voice service, or transcribe / synthesise WAV files offline."""
+"""`python -m services.voice`: run the voice service; transcribe or synthesise WAV files offline; train
+the spotter's head; enrol a user."""
 
 from __future__ import annotations
 
@@ -13,8 +14,8 @@ import typer
 from services.runtime import run_service
 from services.runtime.cli import ConnectOption, RobotOption
 from services.voice.audio import AudioError, read_wav, write_wav
-from services.voice.engine import ENGINES, EngineError, make_engine
-from services.voice.service import NAME, VoiceSettings, serve
+from services.voice.engine import DEFAULT_ENGINE, ENGINES, EngineError, make_engine
+from services.voice.service import NAME, VoiceSettings, check_settings, serve
 from services.voice.sources import trim_to_speech
 
 app = typer.Typer(add_completion=False, help=__doc__)
@@ -26,6 +27,11 @@ SourceOption = Annotated[
 ]
 EngineOption = Annotated[
     str, typer.Option("--engine", envvar="HRI_VOICE_ENGINE", help=f"one of {', '.join(ENGINES)}"),
+]
+HeadOption = Annotated[
+    str | None,
+    typer.Option("--head", envvar="HRI_VOICE_HEAD",
+                 help="spotter head file [default: the enrolled head in the state folder, else the committed one]"),
 ]
 VoskModelOption = Annotated[
     str | None,
@@ -40,25 +46,32 @@ LexiconOption = Annotated[
 
 @app.callback(invoke_without_command=True)
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
-         source: SourceOption = None, engine: EngineOption = "pocketsphinx",
-         vosk_model: VoskModelOption = None, lexicon: LexiconOption = None) -> None:
+         source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
+         vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
-    settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon)
+    settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
+                             head=head)
+    try:
+        check_settings(settings)
+    except EngineError as exc:
+        typer.echo(f"voice: configuration error: {exc}", err=True)
+        raise typer.Exit(2) from None
     raise typer.Exit(run_service(NAME, lambda c: serve(c, settings), robot=robot, connect=connect))
 
 
 @app.command()
 def transcribe(
     wavs: Annotated[list[Path], typer.Argument(help="16 kHz 16-bit mono WAV files")],
-    engine: EngineOption = "pocketsphinx",
+    engine: EngineOption = DEFAULT_ENGINE,
     vosk_model: VoskModelOption = None,
     lexicon: LexiconOption = None,
+    head: HeadOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
-        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon)
+        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -79,15 +92,22 @@ def transcribe(
 @app.command()
 def say(
     text: Annotated[str, typer.Argument(help="words to speak")],
-    out: Annotated[Path, typer.Option("--to", help="a WAV file, or a spool folder (atomic .tmp rename)")],
+    out: Annotated[Path | None, typer.Option("--out", help="a WAV file, or a spool folder (atomic .tmp rename)")] = None,
     voice: Annotated[str, typer.Option(help="espeak-ng voice, e.g. en-us, en-gb+f3")] = "en-us",
-    speed: Annotated[int, typer.Option(help="words per minute")] = 150,
+    rate: Annotated[int, typer.Option("--rate", help="words per minute")] = 150,
+    to: Annotated[Path | None, typer.Option("--to", hidden=True, help="old spelling of --out")] = None,
+    speed: Annotated[int | None, typer.Option("--speed", hidden=True, help="old spelling of --rate")] = None,
 ) -> None:
     """Synthesise TEXT with espeak-ng into a 16 kHz WAV (for a `watch:<dir>` source or `transcribe`)."""
     from services.voice.synth import SynthError, render_speech
 
+    out = out or to
+    rate = speed if speed is not None else rate
+    if out is None:
+        typer.echo("error: give --out FILE.wav or --out SPOOL_FOLDER", err=True)
+        raise typer.Exit(2)
     try:
-        pcm = render_speech(text, voice, speed, None, seed=0)
+        pcm = render_speech(text, voice, rate, None, seed=0)
     except SynthError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -96,6 +116,59 @@ def say(
     write_wav(tmp, pcm)
     tmp.replace(target)
     typer.echo(str(target))
+
+
+@app.command()
+def train(
+    out: Annotated[Path | None, typer.Option("--out", help="where to write the head [default: the committed one]")] = None,
+    seed: Annotated[int, typer.Option(help="seed of every random choice")] = 12,
+    workers: Annotated[int, typer.Option(help="rendering processes")] = 2,
+) -> None:
+    """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
+    Takes minutes (run it with nice); never part of the tests."""
+    from services.voice.spotter.head import DEFAULT_HEAD
+    from services.voice.training.train import TrainConfig
+    from services.voice.training.train import train as run_training
+
+    report = run_training(TrainConfig(seed=seed, workers=workers), out or DEFAULT_HEAD)
+    typer.echo(json.dumps(report, indent=2))
+
+
+@app.command()
+def enroll(
+    folder: Annotated[Path | None, typer.Argument(help="WAVs named by command: go-1.wav, stop_2.wav, why/3.wav")] = None,
+    mic: Annotated[bool, typer.Option("--mic", help="record prompted samples from the microphone instead")] = False,
+    samples: Annotated[int, typer.Option(help="with --mic: recordings per command")] = 5,
+    robot: RobotOption = None,
+    out: Annotated[Path | None, typer.Option("--out", help="[default: <state dir>/voice-head.npz]")] = None,
+    head: HeadOption = None,
+) -> None:
+    """Adapt the spotter to one person (seconds); the service uses the result when it is present."""
+    from services.voice.enrol import (
+        EnrolError,
+        adapt,
+        enrolled_head_path,
+        record_prompted,
+        samples_from_folder,
+    )
+    from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
+
+    try:
+        base = Head.load(head or DEFAULT_HEAD)
+        if mic:
+            recs = record_prompted(base.vocabulary, samples)
+        elif folder is not None:
+            recs = samples_from_folder(folder, base.classes)
+        else:
+            raise EnrolError("give a folder of WAVs named by command, or --mic")
+    except (EnrolError, HeadError, AudioError) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    target = out or enrolled_head_path(robot or os.environ.get("HRI_ROBOT") or "op2")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    adapt(base, recs).save(target)
+    counts = {c: sum(1 for label, _ in recs if label == c) for c in base.classes}
+    typer.echo(json.dumps({"head": str(target), "samples": counts}))
 
 
 if __name__ == "__main__":

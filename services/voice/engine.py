@@ -41,12 +41,26 @@ class EngineError(RuntimeError):
     """An engine that cannot start (missing model, bad configuration)."""
 
 
-ENGINES = ("pocketsphinx", "vosk")
+ENGINES = ("spotter", "pocketsphinx", "vosk")
+DEFAULT_ENGINE = "spotter"
 
 
-def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str | None = None) -> Engine:
+def check_engine_name(name: str) -> None:
+    """`EngineError` for a name that no engine has (a configuration error, not a missing model)."""
+    if name not in ENGINES:
+        raise EngineError(f"unknown engine {name!r}: use one of {', '.join(ENGINES)}")
+
+
+def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str | None = None,
+                head_path: str | None = None) -> Engine:
     """Build an engine by name; `EngineError` says what is missing."""
     from services.voice.lexicon import Lexicon, LexiconError
+
+    check_engine_name(name)
+    if name == "spotter":
+        from services.voice.engine_spotter import SpotterEngine
+
+        return SpotterEngine.from_path(head_path)
 
     try:
         lexicon = Lexicon.load(lexicon_path) if lexicon_path else None

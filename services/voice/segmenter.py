@@ -11,9 +11,11 @@ from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
 
 @dataclass(frozen=True)
 class SegmenterConfig:
-    window_s: float = 0.3
-    """Length of the VAD decision window."""
-    ratio: float = 0.9
+    window_s: float = 0.15
+    """Length of the VAD decision window. The end of an utterance is known about this long after the
+    speech ends: 0.15 s (with ratio 0.8) gives ~120 ms end of speech -> segment on the held-out bench
+    clips, none split in two; 0.3 s gave ~270 ms."""
+    ratio: float = 0.8
     """Fraction of the window that must be speech (or silence) to switch state."""
     vad_mode: int = 1
     """Aggressiveness 0 (loose) .. 3 (strict)."""

@@ -3,8 +3,11 @@
 Publishes on `hri/<robot>/voice/command`. `command` is set only when the engine's acceptance test
 passed; otherwise it is null and `text` says what was heard. A source that cannot be opened (no
 PortAudio, no microphone, missing folder) turns health `degraded`, naming the source and the
-alternatives, and is retried every `retry_s`; the service keeps running. A file or folder source
-that has been read to the end leaves the service idle (health detail `source: finished`).
+alternatives, and is retried with back-off (`retry_s`, doubling up to `max_retry_s`; one warning per
+new error, not one per retry); the service keeps running. Invalid configuration (unknown engine,
+unreadable lexicon or head file) is found by `check_settings` before the service starts: exit 2.
+A file or folder source that has been read to the end leaves the service idle (health detail
+`source: finished`).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from pathlib import Path
 from schemas.messages import HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice.audio import AudioError
-from services.voice.engine import Engine, EngineError, make_engine
+from services.voice.engine import DEFAULT_ENGINE, Engine, EngineError, check_engine_name, make_engine
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 
 NAME = "voice"
@@ -26,19 +29,43 @@ NAME = "voice"
 @dataclass(frozen=True)
 class VoiceSettings:
     source: str = "mic"
-    engine: str = "pocketsphinx"
+    engine: str = DEFAULT_ENGINE
     vosk_model: str | None = None
     lexicon: str | None = None
+    head: str | None = None
+    """Spotter head file; None: the enrolled head in the state folder if there is one, else the committed one."""
     retry_s: float = 2.0
+    max_retry_s: float = 30.0
 
     @classmethod
     def from_env(cls) -> VoiceSettings:
         return cls(
             source=os.environ.get("HRI_VOICE_SOURCE") or "mic",
-            engine=os.environ.get("HRI_VOICE_ENGINE") or "pocketsphinx",
+            engine=os.environ.get("HRI_VOICE_ENGINE") or DEFAULT_ENGINE,
             vosk_model=os.environ.get("HRI_VOSK_MODEL") or None,
             lexicon=os.environ.get("HRI_VOICE_LEXICON") or None,
+            head=os.environ.get("HRI_VOICE_HEAD") or None,
         )
+
+
+def check_settings(settings: VoiceSettings) -> None:
+    """Raise `EngineError` for configuration that can never work (so the service exits 2 at start);
+    a missing device or model that may appear later is not checked here (it is retried)."""
+    check_engine_name(settings.engine)
+    if settings.lexicon:
+        from services.voice.lexicon import Lexicon, LexiconError
+
+        try:
+            Lexicon.load(settings.lexicon)
+        except LexiconError as exc:
+            raise EngineError(str(exc)) from None
+    if settings.engine == "spotter" and settings.head:
+        from services.voice.spotter.head import Head, HeadError
+
+        try:
+            Head.load(settings.head)
+        except HeadError as exc:
+            raise EngineError(f"HRI_VOICE_HEAD: {exc}") from None
 
 
 @dataclass
@@ -101,18 +128,25 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
                      latency_ms=round((time.time() - utt.stamp) * 1000, 1), **rec.detail)
         ctx.update_detail(**stats.as_detail())
 
+    delay, last_error = settings.retry_s, ""
     while not ctx.stopping.is_set():
         try:
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
+                    ctx.log.info("voice source available", source=settings.source)
+                delay, last_error = settings.retry_s, ""
                 handle(utt)
         except (SourceError, AudioError) as exc:
-            ctx.set_status(HealthStatus.DEGRADED, source_error=str(exc), alternatives=ALTERNATIVES)
-            ctx.log.warning("voice source unavailable, retrying", source=settings.source, error=str(exc),
-                            retry_in_s=settings.retry_s)
-            ctx.wait(settings.retry_s)
+            ctx.set_status(HealthStatus.DEGRADED, source_error=str(exc), alternatives=ALTERNATIVES,
+                           retry_in_s=delay)
+            if str(exc) != last_error:  # one warning per new error; the retries are in health
+                ctx.log.warning("voice source unavailable, retrying with back-off", source=settings.source,
+                                error=str(exc), alternatives=ALTERNATIVES)
+                last_error = str(exc)
+            ctx.wait(delay)
+            delay = min(delay * 2, settings.max_retry_s)
             continue
         if not ctx.stopping.is_set():
             ctx.log.info("source finished", source=settings.source)
@@ -124,7 +158,8 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
     """Build the engine; a missing model is reported as degraded health and retried."""
     while not ctx.stopping.is_set():
         try:
-            engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon)
+            engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon,
+                                 head_path=settings.head or _enrolled_head(ctx.keys.robot))
             ctx.log.info("engine ready", engine=engine.name)
             return engine
         except EngineError as exc:
@@ -132,3 +167,10 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
             ctx.log.error("engine unavailable", engine=settings.engine, error=str(exc))
             ctx.wait(max(settings.retry_s, 5.0))
     return None
+
+
+def _enrolled_head(robot: str) -> str | None:
+    from services.voice.enrol import enrolled_head_path
+
+    path = enrolled_head_path(robot)
+    return str(path) if path.is_file() else None

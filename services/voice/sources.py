@@ -101,10 +101,14 @@ def stream_utterances(
         yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
 
 
+TRIM_CONFIG = SegmenterConfig(window_s=0.3, ratio=0.9)
+"""Trimming a file is not latency-bound: a longer VAD window (the spotter was trained on clips trimmed so)."""
+
+
 def trim_to_speech(pcm: bytes, config: SegmenterConfig | None = None) -> bytes:
     """The span of a short recording from the VAD's first speech to its last (with pre- and post-roll);
     the whole recording if the VAD finds none. Long silences around a word hurt decoding."""
-    seg = Segmenter(config or SegmenterConfig())
+    seg = Segmenter(config or TRIM_CONFIG)
     step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
     found = [s for i in range(0, len(pcm), step) for s in seg.feed(pcm[i : i + step])] + seg.flush()
     if not found:

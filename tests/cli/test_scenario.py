@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from schemas import Command, Shape
+from schemas import Shape
 from services.cli.scenario import ScenarioError, builtin_names, load
 from tests.conftest import ROOT
 
@@ -19,7 +19,9 @@ def test_builtin_scenarios_load() -> None:
     labels = [s.label() for s in paper.steps]
     assert labels[0] == 'say "stand"' and labels[-1] == 'say "down"'
     assert [s.shape for s in paper.steps if s.show] == [Shape.X, None, Shape.O, None]
-    assert sum(s.send is Command.GO for s in paper.steps) == 2
+    assert sum(s.say == "go" for s in paper.steps) == 2
+    for name in ("paper", "danger"):  # every command is spoken through the recogniser, "go" included
+        assert not [s for s in load(name).steps if s.send is not None]
 
 
 def test_a_scenario_file_by_path(tmp_path: Path) -> None:

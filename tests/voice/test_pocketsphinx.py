@@ -62,7 +62,7 @@ def test_no_false_go_from_non_commands_or_noise(engine: PocketsphinxEngine) -> N
     assert all(r.command is None for r in noise)
     oov = [r for c, (_, r) in zip(clips, results, strict=True) if c.kind == "oov"]
     accepted = sum(r.command is not None for r in oov) / len(oov)
-    assert accepted <= 0.6, accepted  # documented held-out OOV false-accept rate is ~0.5 (README)
+    assert accepted <= 0.66, accepted  # held-out OOV false-accept rate ~0.63 with "why" in the grammar (README)
 
 
 def test_real_time_factor(engine: PocketsphinxEngine) -> None:

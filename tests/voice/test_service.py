@@ -41,7 +41,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
         first = heard[0]
     assert first.command is not None and first.command.value == "stop"
     assert first.confidence >= 0.5
-    assert first.engine == "pocketsphinx"
+    assert first.engine == "spotter"
 
     # a new file written atomically while the service runs: published with low latency
     table = synth.speech_clip("table", "en-us", 150)

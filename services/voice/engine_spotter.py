@@ -1,0 +1,71 @@
+"""The default engine: a command spotter (pretrained speech embedding + a small trained head).
+
+One utterance (a trimmed WAV file or a VAD-cut stretch of a stream) is centred in a 2 s window,
+embedded (`spotter.features`) and classified over the vocabulary plus "other" (`spotter.head`). The
+most probable class is published if it is a command and its raw probability reaches the command's
+`accept` threshold; the published confidence is calibrated so that 0.5 is `accept` and 0.85 is
+`sure` (for "go": walk without asking). An utterance longer than `MAX_SPEECH_S` is not one command
+word and is rejected without classifying it.
+
+A head made by enrolment keeps the calibrated head's last layer: its "go" is capped just below 0.85
+(the robot asks) unless the calibrated head is sure as well.
+
+The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
+else the committed `spotter/head.npz`.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from schemas.messages import Command
+from services.voice.engine import EngineError, Recognition
+from services.voice.spotter.features import MAX_SPEECH_S, Embedder, FeatureError, speech_seconds
+from services.voice.spotter.head import DEFAULT_HEAD, SURE_CONFIDENCE, Head, HeadError
+
+
+class SpotterEngine:
+    name = "spotter"
+
+    def __init__(self, head: Head, embedder: Embedder | None = None) -> None:
+        unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
+        if unknown:
+            raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
+        self.head = head
+        self.embedder = embedder or Embedder()
+
+    @classmethod
+    def from_path(cls, path: Path | str | None = None) -> SpotterEngine:
+        try:
+            return cls(Head.load(path or DEFAULT_HEAD))
+        except (HeadError, FeatureError) as exc:
+            raise EngineError(str(exc)) from None
+
+    def recognise(self, pcm: bytes) -> Recognition:
+        t0 = time.perf_counter()
+        audio_s = speech_seconds(pcm)
+        if audio_s > MAX_SPEECH_S:
+            return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
+                               {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
+        feats = self.embedder.utterance(pcm)
+        probs = self.head.probabilities(feats)[0]
+        best = int(probs.argmax())
+        n = len(self.head.vocabulary)
+        top_cmd = int(probs[:n].argmax())
+        conf = self.head.confidence(top_cmd, float(probs[top_cmd]))
+        detail = {"p": {c: round(float(p), 3) for c, p in zip(self.head.classes, probs, strict=True) if p >= 0.01}}
+        word = self.head.classes[best]
+        if best == n:
+            command, reason = None, "other"
+            conf = min(conf, 0.49)
+        elif conf < 0.5:
+            command, reason = None, f"{word} below threshold {self.head.accept[best]:.3f}"
+        else:
+            command, reason = Command(word), "accepted"
+            if command == Command.GO and conf >= SURE_CONFIDENCE and self.head.base_last is not None:
+                base_conf = self.head.confidence(best, float(self.head.probabilities(feats, base=True)[0][best]))
+                if base_conf < SURE_CONFIDENCE:  # enrolment alone never makes the robot walk unasked
+                    conf, reason = SURE_CONFIDENCE - 0.01, "accepted (enrolled; the calibrated head is not sure: ask)"
+        detail["reason"] = reason
+        return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)

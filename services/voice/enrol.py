@@ -1,0 +1,181 @@
+"""Enrolment: adapt the spotter's head to one person from a few recordings of each command.
+
+`python -m services.voice enroll FOLDER` takes WAVs named by command (`go-1.wav`, `go_2.wav`, or
+`go/1.wav`; `other-*.wav` for the user's own non-commands) or, with `--mic`, records prompted samples.
+Each recording is trimmed and embedded as the service does. The head's last layer is then refitted
+by gradient descent on:
+
+- the user's samples (and copies of them with noise and gain changes),
+- synthesised anchors: the command words' nearest non-command neighbours spoken by espeak-ng, labelled
+  "other", so that the head does not learn "anything this voice says is a command",
+
+with an L2 pull towards the original weights. The thresholds (`accept`, `sure`) are kept, and the
+calibrated last layer is stored beside the adapted one: an enrolled "go" walks without asking only if
+the calibrated head is sure too (otherwise the robot asks). The result is written to `<state dir>/voice-head.npz`
+(`HRI_STATE_DIR`, else `$XDG_STATE_HOME/hri/<robot>`, else `~/.local/state/hri/<robot>`), which the
+service then uses.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from services.voice.audio import AudioError, read_wav, to_pcm
+from services.voice.sources import trim_to_speech
+from services.voice.spotter.features import Embedder
+from services.voice.spotter.head import Head
+
+HEAD_FILE = "voice-head.npz"
+ANCHOR_VOICES = ("en-us",)
+ANCHOR_WORDS: tuple[str, ...] = (
+    "sand", "stamp", "town", "done", "yet", "chess", "now", "so", "goat", "though", "coat", "grow", "top",
+    "shop", "white", "wide", "hello", "table", "okay", "music",
+)
+"""Near neighbours of the commands (none a homophone), spoken as "other" anchors."""
+
+
+class EnrolError(ValueError):
+    """Recordings that cannot be used for enrolment."""
+
+
+def state_dir(robot: str, env: Mapping[str, str] = os.environ) -> Path:
+    """The same state folder convention as the reasoner's."""
+    if env.get("HRI_STATE_DIR"):
+        return Path(env["HRI_STATE_DIR"]).expanduser()
+    xdg = env.get("XDG_STATE_HOME")
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".local/state") / "hri" / robot
+
+
+def enrolled_head_path(robot: str, env: Mapping[str, str] = os.environ) -> Path:
+    return state_dir(robot, env) / HEAD_FILE
+
+
+def label_of(path: Path, classes: Sequence[str]) -> str | None:
+    """The class a recording is named for: its folder (`go/1.wav`) or its name's first word (`go-1.wav`)."""
+    for candidate in (path.parent.name, re.split(r"[-_ .0-9]", path.stem, maxsplit=1)[0]):
+        if candidate.lower() in classes:
+            return candidate.lower()
+    return None
+
+
+def samples_from_folder(folder: Path, classes: Sequence[str]) -> list[tuple[str, bytes]]:
+    if not folder.is_dir():
+        raise EnrolError(f"{folder}: no such folder")
+    out: list[tuple[str, bytes]] = []
+    for path in sorted(folder.rglob("*.wav")):
+        label = label_of(path, classes)
+        if label is None:
+            raise EnrolError(f"{path}: name it after a command ({', '.join(classes)}), e.g. go-1.wav")
+        try:
+            out.append((label, trim_to_speech(read_wav(path))))
+        except AudioError as exc:
+            raise EnrolError(str(exc)) from None
+    if not out:
+        raise EnrolError(f"{folder}: no WAV files")
+    return out
+
+
+@dataclass(frozen=True)
+class EnrolConfig:
+    steps: int = 300
+    learning_rate: float = 0.05
+    prior: float = 0.02
+    """L2 pull of the refitted weights towards the original ones."""
+    copies: int = 4
+    """Noisy copies of each user sample."""
+    anchors: bool = True
+    seed: int = 0
+
+
+def _noisy(pcm: bytes, rng: np.random.Generator) -> bytes:
+    x = np.frombuffer(pcm, dtype="<i2").astype(np.float64) / 32768.0
+    x = x * 10 ** rng.uniform(-0.6, 0.3)
+    x = x + rng.normal(0.0, np.sqrt(np.mean(x**2)) / 10 ** (rng.uniform(10, 30) / 20), x.size)
+    return to_pcm(x)
+
+
+def _anchor_audio() -> list[bytes]:
+    from services.voice.synth import SynthError, espeak_available, render_speech
+
+    if not espeak_available():
+        return []
+    out = []
+    for i, word in enumerate(ANCHOR_WORDS):
+        for voice in ANCHOR_VOICES:
+            try:
+                out.append(trim_to_speech(render_speech(word, voice, 160, None, seed=i)))
+            except SynthError:
+                continue
+    return out
+
+
+def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = EnrolConfig(),
+          embedder: Embedder | None = None) -> Head:
+    """A copy of `head` whose last layer is refitted to `samples` (label, trimmed PCM)."""
+    embedder = embedder or Embedder()
+    rng = np.random.default_rng(cfg.seed)
+    classes = head.classes
+    feats: list[np.ndarray] = []
+    labels: list[int] = []
+    for label, pcm in samples:
+        for k in range(cfg.copies + 1):
+            feats.append(embedder.utterance(pcm if k == 0 else _noisy(pcm, rng), seed=k))
+            labels.append(classes.index(label))
+    if cfg.anchors:
+        for pcm in _anchor_audio():
+            feats.append(embedder.utterance(pcm))
+            labels.append(len(classes) - 1)
+    x = np.stack(feats).reshape(len(feats), -1).astype(np.float32)
+    y = np.asarray(labels)
+    h = head.hidden(x)
+    w0, b0 = head.weights[-1].astype(np.float64), head.biases[-1].astype(np.float64)
+    w, b = w0.copy(), b0.copy()
+    onehot = np.eye(len(classes))[y]
+    # Balance the classes present, so five "go"s weigh as much as forty anchors.
+    counts = np.bincount(y, minlength=len(classes)).astype(np.float64)
+    weight = (1.0 / np.maximum(counts, 1.0))[y]
+    weight /= weight.sum()
+    m_w, v_w, m_b, v_b = (np.zeros_like(w), np.zeros_like(w), np.zeros_like(b), np.zeros_like(b))
+    for step in range(1, cfg.steps + 1):
+        logits = h @ w + b
+        logits -= logits.max(axis=1, keepdims=True)
+        p = np.exp(logits)
+        p /= p.sum(axis=1, keepdims=True)
+        g = (p - onehot) * weight[:, None]
+        gw = h.T @ g + cfg.prior * (w - w0)
+        gb = g.sum(axis=0) + cfg.prior * (b - b0)
+        for param, grad, m, v in ((w, gw, m_w, v_w), (b, gb, m_b, v_b)):  # Adam
+            m *= 0.9
+            m += 0.1 * grad
+            v *= 0.999
+            v += 0.001 * grad**2
+            param -= cfg.learning_rate * (m / (1 - 0.9**step)) / (np.sqrt(v / (1 - 0.999**step)) + 1e-8)
+    base = head.base_last or (head.weights[-1], head.biases[-1])
+    return replace(head, weights=[*head.weights[:-1], w.astype(np.float32)],
+                   biases=[*head.biases[:-1], b.astype(np.float32)],
+                   meta={**head.meta, "enrolled_samples": len(samples)}, base_last=base)
+
+
+def record_prompted(words: Sequence[str], per_word: int, seconds: float = 1.5) -> list[tuple[str, bytes]]:
+    """Prompt for each word `per_word` times on the terminal and record `seconds` from the microphone."""
+    try:
+        import sounddevice as sd
+    except (ImportError, OSError) as exc:
+        raise EnrolError(f"no microphone ({exc}); record WAVs and pass their folder instead") from None
+    out: list[tuple[str, bytes]] = []
+    for word in words:
+        for i in range(per_word):
+            print(f'say "{word}" ({i + 1}/{per_word}) now', flush=True)
+            try:
+                audio = sd.rec(int(seconds * 16000), samplerate=16000, channels=1, dtype="int16")
+                sd.wait()
+            except sd.PortAudioError as exc:
+                raise EnrolError(f"microphone failed: {exc}") from None
+            out.append((word, trim_to_speech(audio.tobytes())))
+    return out

@@ -1,0 +1,80 @@
+"""Audio augmentation for training clips: tempo, gain, room reverberation, a robot microphone's band
+limits, and noise at a chosen SNR. Every random choice comes from the caller's generator."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import butter, fftconvolve, resample_poly, sosfilt
+
+from services.voice.audio import SAMPLE_RATE
+from services.voice.synth import noise
+
+NOISE_KINDS = ("white", "pink", "brown", "hum", "babble")
+
+
+@dataclass(frozen=True)
+class Augment:
+    tempo: float = 1.0
+    """Playback-rate factor (resampling: changes pitch with speed)."""
+    reverb_rt60: float = 0.0
+    band: tuple[float, float] | None = None
+    """High-pass and low-pass corner frequencies (Hz)."""
+    noise: str | None = None
+    snr_db: float = 30.0
+    peak: float = 0.5
+    pad_s: tuple[float, float] = (0.4, 0.4)
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, strength: float = 1.0) -> Augment:
+        """A random augmentation; `strength` 0 gives the clean clip (only padding and gain vary)."""
+        tempo = float(rng.uniform(0.88, 1.12)) if rng.random() < 0.5 * strength else 1.0
+        rt60 = float(rng.uniform(0.15, 0.7)) if rng.random() < 0.35 * strength else 0.0
+        band = (float(rng.uniform(80, 400)), float(rng.uniform(3000, 7000))) if rng.random() < 0.3 * strength else None
+        kind = str(rng.choice(NOISE_KINDS)) if rng.random() < 0.7 * strength else None
+        return cls(tempo=tempo, reverb_rt60=rt60, band=band, noise=kind, snr_db=float(rng.uniform(3, 30)),
+                   peak=float(10 ** rng.uniform(-1.3, -0.1)), pad_s=(float(rng.uniform(0.2, 0.7)),
+                                                                    float(rng.uniform(0.2, 0.7))))
+
+
+def room_impulse(rt60: float, rng: np.random.Generator) -> np.ndarray:
+    """A synthetic room impulse response: a direct path then exponentially decaying noise."""
+    n = int(rt60 * SAMPLE_RATE)
+    t = np.arange(n) / SAMPLE_RATE
+    tail = rng.normal(size=n) * np.exp(-6.9 * t / rt60) * 0.3
+    tail[: int(0.003 * SAMPLE_RATE)] = 0.0
+    tail[0] = 1.0
+    return tail
+
+
+def babble(n: int, rng: np.random.Generator, others: list[np.ndarray]) -> np.ndarray:
+    """Overlapping speech of other clips: the hardest background noise."""
+    out = np.zeros(n)
+    for x in others:
+        at = int(rng.integers(0, max(1, n - x.size)))
+        seg = x[: n - at]
+        out[at : at + seg.size] += seg
+    return out if np.any(out) else noise("pink", n, rng)
+
+
+def apply(speech: np.ndarray, aug: Augment, rng: np.random.Generator,
+          others: list[np.ndarray] | None = None) -> np.ndarray:
+    x = speech
+    if aug.tempo != 1.0:
+        up = 100
+        x = resample_poly(x, up, round(up * aug.tempo))
+    if aug.reverb_rt60 > 0:
+        x = fftconvolve(x, room_impulse(aug.reverb_rt60, rng))[: x.size + int(0.1 * SAMPLE_RATE)]
+    x = np.concatenate([np.zeros(int(aug.pad_s[0] * SAMPLE_RATE)), x, np.zeros(int(aug.pad_s[1] * SAMPLE_RATE))])
+    if aug.band is not None:
+        lo, hi = aug.band
+        x = sosfilt(butter(2, [lo, min(hi, 7900.0)], btype="bandpass", fs=SAMPLE_RATE, output="sos"), x)
+    x = aug.peak * x / (np.max(np.abs(x)) + 1e-9)
+    if aug.noise is not None:
+        active = x[np.abs(x) > 0.05 * aug.peak]
+        p = float(np.mean(active**2)) if active.size else float(np.mean(x**2))
+        bg = babble(x.size, rng, others or []) if aug.noise == "babble" else noise(aug.noise, x.size, rng)
+        bg = bg / (np.sqrt(np.mean(bg**2)) + 1e-12)
+        x = x + bg * np.sqrt(p / 10 ** (aug.snr_db / 10))
+    return x + rng.normal(0.0, 2.0 / 32768.0, x.size)

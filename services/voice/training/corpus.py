@@ -1,0 +1,122 @@
+"""What the spotter is trained and measured on: the vocabulary, the negatives and the voice splits.
+
+Splits differ in how the speech is *made*, not only in seed:
+
+- `train` (fit the head): espeak-ng accents and variants of `ESPEAK_TRAIN_*`, flite kal16 (diphone)
+  and flite awb (clustergen, one speaker); negatives from `NEIGHBOURS_TRAIN`, `PHRASES_TRAIN` and a
+  sample of the pocketsphinx dictionary.
+- `tune` (choose thresholds and the confidence calibration): the same engines, other espeak variants.
+- `heldout` (the bench only): flite rms and slt (two speakers the head never heard), Festival's kal
+  voice (another synthesiser), espeak-ng accents and variants not used above, and the non-command
+  words of `services.voice.synth.OOV_HELDOUT`, which no other split contains.
+
+Homophones of a command (same pronunciation in the CMU dictionary, e.g. "know" for "no", "y" and
+"wye" for "why") are never negatives: they are the command.
+"""
+
+from __future__ import annotations
+
+import random
+from functools import lru_cache
+from pathlib import Path
+
+from schemas.messages import Command
+from services.voice.synth import OOV_HELDOUT, OOV_TUNE
+
+VOCABULARY: tuple[str, ...] = tuple(c.value for c in Command)
+"""The words the spotter is trained on, in class order; "other" is the last class."""
+
+ESPEAK_TRAIN_ACCENTS = ("en-us", "en-gb", "en-gb-x-rp", "en-gb-x-gbclan", "en-gb-x-gbcwmd")
+ESPEAK_HELDOUT_ACCENTS = ("en-029", "en-gb-scotland", "en-us-nyc")
+ESPEAK_TRAIN_VARIANTS = (
+    "", "m1", "m3", "m5", "m6", "m8", "f1", "f2", "f3", "klatt", "klatt2", "klatt4", "Andy", "Annie",
+    "adam", "anika", "belinda", "benjamin", "david", "edward", "grandma", "grandpa", "john", "linda",
+    "max", "michel", "norbert", "paul", "pablo", "Alicia", "Gene", "Lee", "Mike", "iven", "caleb",
+)
+ESPEAK_TUNE_VARIANTS = ("m2", "f5", "klatt3", "Alex", "Andrea", "antonio", "boris", "ed", "gustave", "Hugo")
+ESPEAK_HELDOUT_VARIANTS = ("m4", "m7", "f4", "klatt5", "aunty", "Denis", "Jacky", "marcelo", "Michael", "Storm")
+FLITE_TRAIN = ("flite:kal16", "flite:awb")
+HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
+
+NEIGHBOURS_TRAIN: dict[str, tuple[str, ...]] = {
+    "stand": ("sand", "stamp", "standing", "understand", "stem", "stab", "span", "tanned", "stained", "strand",
+              "planned", "land", "stance", "stun", "than"),
+    "down": ("town", "dawn", "done", "den", "dine", "round", "brown", "crown", "drown", "dune", "noun", "clown",
+             "count", "pound", "about", "downtown"),
+    "yes": ("yet", "yeah", "mess", "chess", "yell", "yam", "jest", "nest", "press", "dress", "test", "west",
+            "youth", "year", "ye", "yesterday", "essay"),
+    "no": ("now", "so", "toe", "nor", "gnaw", "knee", "nine", "own", "show", "near", "not", "nut",
+           "nod", "oh", "noon", "known", "mow"),
+    "go": ("goat", "ghost", "though", "grow", "gore", "got", "gut", "gum", "good", "coat", "dough", "bow",
+           "going", "golf", "game", "gap", "guy", "gopher", "cold", "yo", "row", "home", "gone",
+           "gaze", "o", "owe", "toast", "dog", "go-kart"),
+    "stop": ("top", "shop", "stock", "stuck", "stomp", "spot", "slop", "drop", "crop", "strap", "swap",
+             "stall", "stoop", "sloppy", "tops", "hop"),
+    "why": ("white", "wide", "wine", "while", "wise", "way", "wait", "high", "buy", "bye", "try", "fly", "my",
+            "sky", "wife", "wire", "whale", "eye", "we", "wow", "what", "hi"),
+}
+PHRASES_TRAIN = (
+    "thanks a lot", "come here", "turn left", "turn right", "hello there", "how are you", "what is that",
+    "nice to meet you", "look at me", "one two three", "red card", "the king of hearts", "let me see",
+    "open the door", "good night", "all right", "that one", "I don't think so", "maybe later", "very good",
+)
+
+
+@lru_cache(maxsize=1)
+def _cmudict() -> dict[str, list[str]]:
+    import pocketsphinx
+
+    path = Path(pocketsphinx.get_model_path()) / "en-us" / "cmudict-en-us.dict"
+    prons: dict[str, list[str]] = {}
+    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+        word, _, pron = line.partition(" ")
+        prons.setdefault(word.split("(")[0], []).append(pron.strip())
+    return prons
+
+
+def homophones() -> dict[str, set[str]]:
+    """Every dictionary word pronounced like a command (plus spellings of the command itself)."""
+    prons = _cmudict()
+    extra = {"why": {"y", "wye", "whye"}, "no": {"know", "noh", "knoe"}, "go": {"goh"}}
+    out: dict[str, set[str]] = {}
+    for word in VOCABULARY:
+        own = set(prons.get(word, []))
+        out[word] = {w for w, ps in prons.items() if own.intersection(ps)} | extra.get(word, set()) | {word}
+    return out
+
+
+def forbidden_negatives() -> set[str]:
+    bad = set().union(*homophones().values())
+    for word in VOCABULARY:  # plurals and other forms of the commands themselves are ambiguous
+        bad |= {word + "s", word + "es", word + "ped", word + "ping", word + "'s"}
+    return bad
+
+
+def common_words(n: int, seed: int) -> list[str]:
+    """`n` plain dictionary words (2-8 letters), none a homophone of a command or a held-out word."""
+    prons = _cmudict()
+    bad = forbidden_negatives() | set(OOV_HELDOUT) | set(OOV_TUNE)
+    pool = sorted(w for w in prons if w.isalpha() and w.isascii() and 2 <= len(w) <= 8 and w not in bad)
+    return random.Random(seed).sample(pool, n)
+
+
+def negatives_train(n_common: int, seed: int) -> list[str]:
+    bad = forbidden_negatives() | set(OOV_HELDOUT)
+    words = [w for ws in NEIGHBOURS_TRAIN.values() for w in ws] + list(PHRASES_TRAIN)
+    clean = [w for w in words if w not in bad]
+    assert len(clean) == len(words), f"homophone or held-out word in the training negatives: {set(words) - set(clean)}"
+    return clean + common_words(n_common, seed)
+
+
+def espeak_voices(accents: tuple[str, ...], variants: tuple[str, ...]) -> list[str]:
+    return [f"espeak:{a}+{v}" if v else f"espeak:{a}" for a in accents for v in variants]
+
+
+def voices(split: str) -> list[str]:
+    if split == "train":
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(FLITE_TRAIN)
+    if split == "tune":
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TUNE_VARIANTS) + list(FLITE_TRAIN)
+    if split == "heldout":
+        return espeak_voices(ESPEAK_HELDOUT_ACCENTS, ESPEAK_HELDOUT_VARIANTS) + list(HELDOUT_OTHER_ENGINES)
+    raise ValueError(f"unknown split {split!r}")

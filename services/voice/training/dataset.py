@@ -1,0 +1,187 @@
+"""Recipes for every training / tuning clip, and their rendering into spotter features.
+
+A recipe says what is said (or which noise), by which voice, at which speed and pitch, with which
+augmentation seed; rendering runs the same path as the service (`trim_to_speech`, then the spotter's
+`Embedder.utterance`). Features are cached under the synth cache folder, keyed by the recipes, so a
+second `train` run only fits the head. Nothing here is committed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import multiprocessing
+import random
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from services.voice.audio import SAMPLE_RATE, to_pcm
+from services.voice.sources import trim_to_speech
+from services.voice.spotter.features import MAX_SPEECH_S, Embedder, speech_seconds
+from services.voice.synth import OOV_TUNE, cache_dir, noise
+from services.voice.training import augment, corpus, tts
+
+DATASET_VERSION = 1
+OTHER = len(corpus.VOCABULARY)
+NOISES = ("white", "pink", "brown", "hum", "clicks")
+
+
+@dataclass(frozen=True)
+class Recipe:
+    text: str
+    """Words to speak; for a noise clip, the noise kind."""
+    label: int
+    voice: str = ""
+    """`engine:name`; empty for pure noise."""
+    speed: float = 1.0
+    pitch: float = 1.0
+    seed: int = 0
+    strength: float = 1.0
+    """Augmentation strength (0: clean)."""
+
+
+@dataclass(frozen=True)
+class Sizes:
+    positives: int = 450
+    """Per command word, train split."""
+    neighbour_repeats: int = 6
+    common_words: int = 600
+    common_repeats: int = 4
+    phrase_repeats: int = 8
+    noise: int = 400
+    tune_positives: int = 80
+    tune_common_words: int = 300
+    engines_positives: int = 200
+    """Per command, `engines` split: the training voices of the engines other than espeak-ng."""
+    engines_repeats: int = 2
+
+
+def _voice_draw(rng: random.Random, voices: list[str]) -> tuple[str, float, float]:
+    return rng.choice(voices), rng.uniform(0.75, 1.35), rng.uniform(0.7, 1.5)
+
+
+def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
+    """Every clip of the `train`, `engines` or `tune` split (the held-out split belongs to the bench).
+
+    `engines` adds clips of the training voices of engines other than espeak-ng (flite kal16 and awb):
+    in `train` they are 2 of 177 voices, and espeak-ng alone does not teach what speech made from
+    recordings sounds like."""
+    rng = random.Random(f"{seed}:{split}")
+    voices = corpus.voices("train" if split == "engines" else split)
+    if split == "engines":
+        voices = [v for v in voices if not v.startswith("espeak:")]
+    pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
+    out: list[Recipe] = []
+
+    def add(text: str, label: int, n: int, strength_clean: float = 0.2) -> None:
+        for _ in range(n):
+            v, s, p = _voice_draw(rng, voices)
+            strength = 0.0 if rng.random() < strength_clean else 1.0
+            out.append(Recipe(text, label, v, round(s, 3), round(p, 3), rng.randrange(2**31), strength))
+
+    if split == "train":
+        for i, word in enumerate(corpus.VOCABULARY):
+            add(word, i, sizes.positives)
+        negatives = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
+        for word in negatives:
+            add(word, OTHER, sizes.neighbour_repeats)
+        for word in pool[: sizes.common_words]:
+            add(word, OTHER, sizes.common_repeats)
+        for phrase in corpus.PHRASES_TRAIN:
+            add(phrase, OTHER, sizes.phrase_repeats)
+        n_noise = sizes.noise
+    elif split == "engines":
+        for i, word in enumerate(corpus.VOCABULARY):
+            add(word, i, sizes.engines_positives)
+        for word in [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws] + list(corpus.PHRASES_TRAIN):
+            add(word, OTHER, sizes.engines_repeats)
+        for word in pool[: sizes.common_words]:
+            add(word, OTHER, sizes.engines_repeats)
+        n_noise = 0
+    elif split == "tune":
+        for i, word in enumerate(corpus.VOCABULARY):
+            add(word, i, sizes.tune_positives)
+        forbidden = corpus.forbidden_negatives()
+        for word in OOV_TUNE:
+            if word not in forbidden:
+                add(word, OTHER, 6)
+        for word in pool[sizes.common_words :]:
+            add(word, OTHER, 1)
+        n_noise = sizes.noise // 4
+    else:
+        raise ValueError(f"recipes are for train or tune, not {split!r}")
+    for _ in range(n_noise):
+        out.append(Recipe(rng.choice(NOISES), OTHER, seed=rng.randrange(2**31)))
+    return out
+
+
+_EMBEDDER: Embedder | None = None
+
+
+def _embedder() -> Embedder:
+    global _EMBEDDER
+    if _EMBEDDER is None:
+        _EMBEDDER = Embedder()
+    return _EMBEDDER
+
+
+def render(r: Recipe) -> bytes | None:
+    """The recipe's audio as the service would receive it (trimmed to speech), or None if it is too
+    long to be one command word (the spotter rejects those before the classifier)."""
+    pcm = render_utterance(r)
+    return None if speech_seconds(pcm) > MAX_SPEECH_S else pcm
+
+
+def render_utterance(r: Recipe) -> bytes:
+    """The recipe's audio, trimmed to its speech as the service trims a WAV file."""
+    rng = np.random.default_rng(r.seed)
+    if not r.voice:
+        level = 10 ** rng.uniform(-3.0, -0.7)
+        x = noise(r.text, int(rng.uniform(0.6, 2.5) * SAMPLE_RATE), rng) * level
+    else:
+        speech = tts.synthesise(r.text, r.voice, r.speed, r.pitch)
+        aug = augment.Augment.draw(rng, r.strength)
+        others: list[np.ndarray] = []
+        if aug.noise == "babble":
+            others = [tts.synthesise(w, r.voice, 1.0, 1.0) * rng.uniform(0.3, 1.0)
+                      for w in rng.choice(["table", "water", "music", "window", "morning"], 3)]
+        x = augment.apply(speech, aug, rng, others)
+    return trim_to_speech(to_pcm(x))
+
+
+def _features(r: Recipe) -> np.ndarray | None:
+    try:
+        pcm = render(r)
+    except tts.TtsError:
+        return None
+    return None if pcm is None else _embedder().utterance(pcm, seed=r.seed).astype(np.float16)
+
+
+def _key(items: list[Recipe]) -> str:
+    blob = json.dumps([DATASET_VERSION] + [asdict(r) for r in items], sort_keys=True).encode()
+    return hashlib.sha1(blob).hexdigest()[:16]
+
+
+def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(X: n x FRAMES x 96 float16, y: n) for the recipes that render; cached."""
+    path = cache_dir() / f"spotter-features-{_key(items)}.npz"
+    if path.exists():
+        data = np.load(path)
+        return data["x"], data["y"]
+    xs: list[np.ndarray] = []
+    ys: list[int] = []
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(workers) as pool:
+        for i, (r, f) in enumerate(zip(items, pool.imap(_features, items, chunksize=16), strict=True)):
+            if f is not None:
+                xs.append(f)
+                ys.append(r.label)
+            if progress and (i + 1) % 500 == 0:
+                print(f"  {i + 1}/{len(items)} clips", flush=True)
+    x, y = np.stack(xs), np.asarray(ys, dtype=np.int16)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, x=x, y=y)
+    tmp.replace(path)
+    return x, y
+

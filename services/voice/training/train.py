@@ -1,0 +1,117 @@
+"""Fit the spotter head: `python -m services.voice train` (a few minutes on two cores; never in CI).
+
+1. Render the `train`, `engines` and `tune` splits (`dataset`), cached features reused.
+2. Fit a one-hidden-layer MLP (scikit-learn) on `train`, fixed seed.
+3. On `tune` only, choose each command's two knots on its raw probability:
+   - `accept` (published 0.5): the lowest value at which at most the command's false-accept budget
+     (`budgets`: strict for "go", which moves the robot; lenient for "stop", the safe command) of the
+     tune clips that are not this command would be published as it, and never below `min_accept`;
+   - `sure` (published 0.85): above the highest probability any tune clip that is not this command
+     reached, by `sure_margin` in log-odds (for "go", 3.0: twenty times the odds of the worst tune
+     clip; the robot walks without asking only above it, and the tune split is small, so its worst
+     case is an underestimate of what unseen voices and words reach).
+4. Save the head (`spotter/head.npz` by default) and print the tune figures.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from services.voice.spotter.head import DEFAULT_HEAD, Head
+from services.voice.training import corpus, dataset
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    seed: int = 12
+    hidden: int = 96
+    alpha: float = 1e-2
+    budgets: tuple[tuple[str, float], ...] = (("go", 0.003), ("stop", 0.03))
+    default_budget: float = 0.01
+    min_accept: float = 0.5
+    sure_margin: tuple[tuple[str, float], ...] = (("go", 3.0),)
+    default_sure_margin: float = 0.1
+    workers: int = 2
+    sizes: dataset.Sizes = field(default_factory=dataset.Sizes)
+
+
+def _logit(p: float) -> float:
+    p = min(max(p, 1e-9), 1 - 1e-9)
+    return float(np.log(p / (1 - p)))
+
+
+def _sigmoid(z: float) -> float:
+    return float(1 / (1 + np.exp(-z)))
+
+
+def fit(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> Head:
+    from sklearn.neural_network import MLPClassifier
+
+    flat = x.reshape(len(x), -1).astype(np.float32)
+    mean = flat.mean(axis=0)
+    scale = flat.std(axis=0) + 1e-3
+    clf = MLPClassifier(hidden_layer_sizes=(cfg.hidden,), alpha=cfg.alpha, max_iter=200, early_stopping=True,
+                        validation_fraction=0.1, n_iter_no_change=12, random_state=cfg.seed)
+    clf.fit((flat - mean) / scale, y)
+    n = len(corpus.VOCABULARY)
+    if list(clf.classes_) != list(range(n + 1)):
+        raise RuntimeError(f"training data lacks some classes: {clf.classes_}")
+    return Head(corpus.VOCABULARY, mean, scale, [w.astype(np.float32) for w in clf.coefs_],
+                [b.astype(np.float32) for b in clf.intercepts_], np.full(n, 0.5), np.full(n, 0.9))
+
+
+def calibrate(head: Head, x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> dict[str, object]:
+    """Set `head.accept` and `head.sure` from the tune split; returns what was chosen and why."""
+    probs = head.probabilities(x)
+    n = len(head.vocabulary)
+    best = probs.argmax(axis=1)
+    report: dict[str, object] = {}
+    for c in range(n):
+        others = probs[(y != c) & (best == c), c]  # non-c clips that would be published as c at threshold 0
+        total_others = int((y != c).sum())
+        k = int(np.floor(dict(cfg.budgets).get(head.vocabulary[c], cfg.default_budget) * total_others))
+        ranked = np.sort(others)[::-1]
+        accept = max(cfg.min_accept, float(ranked[k]) + 1e-4 if ranked.size > k else cfg.min_accept)
+        worst = float(probs[y != c, c].max())
+        margin = dict(cfg.sure_margin).get(head.vocabulary[c], cfg.default_sure_margin)
+        sure = min(max(accept + 0.01, _sigmoid(_logit(worst) + margin)), 0.99999)
+        head.accept[c], head.sure[c] = accept, sure
+        report[head.vocabulary[c]] = {"accept": round(accept, 4), "sure": round(sure, 4),
+                                      "worst_other": round(worst, 4)}
+    return report
+
+
+def tune_figures(head: Head, x: np.ndarray, y: np.ndarray) -> dict[str, float]:
+    probs = head.probabilities(x)
+    n = len(head.vocabulary)
+    best = probs.argmax(axis=1)
+    conf = np.array([head.confidence(int(b), float(probs[i, b])) if b < n else 0.0 for i, b in enumerate(best)])
+    published = (best < n) & (conf >= 0.5)
+    cmd = y < n
+    go = corpus.VOCABULARY.index("go")
+    return {
+        "command_accuracy": float(np.mean(published[cmd] & (best[cmd] == y[cmd]))),
+        "other_accepted": float(np.mean(published[~cmd])),
+        "false_go_ask": int(np.sum(published & (best == go) & (y != go))),
+        "false_go_walk": int(np.sum(published & (best == go) & (y != go) & (conf >= 0.85))),
+        "go_walk": float(np.mean((best == go)[y == go] & (conf[y == go] >= 0.85))),
+        "go_ask_or_walk": float(np.mean(published[y == go] & (best[y == go] == go))),
+    }
+
+
+def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
+    t0 = time.time()
+    tune = dataset.features(dataset.recipes("tune", cfg.sizes, cfg.seed), cfg.workers)
+    parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers) for split in ("train", "engines")]
+    train_xy = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
+    t1 = time.time()
+    head = fit(*train_xy, cfg)
+    chosen = calibrate(head, *tune, cfg)
+    head.save(out)
+    return {"train_clips": len(train_xy[1]), "tune_clips": len(tune[1]), "render_s": round(t1 - t0, 1),
+            "fit_s": round(time.time() - t1, 1), "thresholds": chosen, "tune": tune_figures(head, *tune),
+            "head": str(out), "head_bytes": out.stat().st_size}
