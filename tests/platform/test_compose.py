@@ -21,7 +21,8 @@ def test_router_is_zenohd_1_10_with_rest() -> None:
     cmd = " ".join(zenoh["command"])
     assert "--rest-http-port 8000" in cmd and "tcp/0.0.0.0:7447" in cmd
     # published on loopback unless asked otherwise
-    assert zenoh["ports"] == ["${HRI_PUBLISH_ADDR:-127.0.0.1}:7447:7447", "${HRI_PUBLISH_ADDR:-127.0.0.1}:8000:8000"]
+    assert zenoh["ports"] == ["${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_ROUTER_PORT:-7447}:7447",
+                              "${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_REST_PORT:-8000}:8000"]
 
 
 def test_every_service_runs_an_importable_module_against_the_router() -> None:
