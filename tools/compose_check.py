@@ -21,8 +21,8 @@ import time
 import uuid
 import wave
 from collections.abc import Callable
-from typing import IO
 from pathlib import Path
+from typing import IO
 
 import zenoh
 
@@ -63,7 +63,7 @@ class Stack:
             output: IO[bytes] | None = None, timeout: float = 900) -> subprocess.CompletedProcess[bytes]:
         """`docker compose ARGS`; its output captured, sent to `output`, or (neither) shown."""
         cmd = ["docker", "compose", "-p", PROJECT, "-f", str(ROOT / "docker-compose.yml"), *args]
-        out = subprocess.run(cmd, input=input, env=self.env, cwd=ROOT, timeout=timeout,
+        out = subprocess.run(cmd, input=input, env=self.env, cwd=ROOT, timeout=timeout, check=False,
                              stdout=subprocess.PIPE if capture else output,
                              stderr=subprocess.PIPE if capture else (subprocess.STDOUT if output else None))
         if check and out.returncode != 0:
@@ -132,11 +132,11 @@ def timed(what: str, times: dict[str, float], fn: Callable[[], object]) -> objec
         times[what] = time.monotonic() - t0
 
 
-def check_bus(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResult]:
+def run_scenario(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResult]:
     """The paper's scenario from the host, then the refusal's WAV out of the speech container."""
     endpoint = f"tcp/127.0.0.1:{stack.router_port}"
     status = subprocess.run([sys.executable, "-m", "services.cli", "status", "--json", "--connect", endpoint],
-                            capture_output=True, text=True, timeout=60, cwd=ROOT)
+                            capture_output=True, text=True, timeout=60, cwd=ROOT, check=False)
     rows = json.loads(status.stdout or "{}")
     not_ok = [n for n in SERVICES if not (rows.get(n, {}).get("alive")
                                           and (rows[n].get("health") or {}).get("status") == "ok")]
@@ -182,7 +182,8 @@ def check_bus(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResult]:
 
 
 def image_size_mb() -> float:
-    out = subprocess.run(["docker", "image", "inspect", "-f", "{{.Size}}", IMAGE], capture_output=True, text=True)
+    out = subprocess.run(["docker", "image", "inspect", "-f", "{{.Size}}", IMAGE], capture_output=True, text=True,
+                         check=False)
     return int(out.stdout.strip() or 0) / 1e6
 
 
@@ -216,7 +217,7 @@ def main() -> int:
         else:
             log(f"every container healthy {times['up'] + times['healthy']:.1f} s after `up`")
             with tempfile.TemporaryDirectory(prefix="hri-compose-check-") as tmp:
-                results = timed("scenario", times, lambda: check_bus(stack, Path(tmp), problems))  # type: ignore[assignment]
+                results = timed("scenario", times, lambda: run_scenario(stack, Path(tmp), problems))  # type: ignore[assignment]
     except (RuntimeError, subprocess.TimeoutExpired) as exc:
         problems.append(str(exc))
     finally:

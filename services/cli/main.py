@@ -16,7 +16,16 @@ import zenoh
 from rich.console import Console
 
 from schemas.keys import SERVICES, Keys
-from schemas.messages import Command, Health, HealthStatus, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
+from schemas.messages import (
+    Command,
+    Health,
+    HealthStatus,
+    Mark,
+    MarkObservation,
+    SceneCommand,
+    Shape,
+    VoiceCommand,
+)
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT

@@ -14,6 +14,7 @@
                  said: "Sorry, I cannot do it."}
 
 ("go" is sent, not said: the voice service does not accept a synthesised "go", see paper.yaml.)
+
 Every field of `expect` is optional; a step without `expect` only has to happen.
 """
 

@@ -9,7 +9,6 @@ import textwrap
 from pathlib import Path
 
 import pytest
-
 from rich.console import Console
 
 from schemas import Command, Shape
