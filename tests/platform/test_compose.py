@@ -58,6 +58,12 @@ def test_the_synthetic_camera_shows_nothing_until_told() -> None:
     assert COMPOSE["services"]["vision"]["environment"]["HRI_VISION_SOURCE"] == "${HRI_VISION_SOURCE:-synthetic:none}"
 
 
+def test_the_voice_engine_is_the_services_own_default_unless_set() -> None:
+    """No pinned engine: the scenarios expect what the voice service recognises by default."""
+    environment = COMPOSE["services"]["voice"]["environment"]
+    assert "HRI_VOICE_ENGINE" in environment and environment["HRI_VOICE_ENGINE"] is None  # passed through
+
+
 def test_devices_are_mapped_where_needed_with_simulation_default() -> None:
     services = COMPOSE["services"]
     assert any(d.endswith(":/dev/ttyUSB0") for d in services["motion"]["devices"])
