@@ -1,8 +1,8 @@
 """The compose stack on a real Docker engine, checked end to end from the host (run by tools/compose-check).
 
 Builds the project image once, brings docker-compose.yml up under its own project name (its own volume,
-router ports picked free on 127.0.0.1, so a user's own stack is never touched), waits until every
-service container reports healthy, then runs the paper's scenario against the stack from the host:
+image tag and router ports picked free on 127.0.0.1, so a user's own stack is never touched), waits until
+every service container reports healthy, then runs the paper's scenario against the stack from the host:
 spoken commands as WAV files written into the voice container's spool folder, cards shown to the
 synthetic camera through the bus (the message `hri send scene` publishes), and the refused "go" checked
 with its spoken reply fetched from the speech container as a WAV. Tears the stack down and prints the
@@ -37,8 +37,8 @@ from services.runtime import ServiceContext, client_config
 from services.speech.player import file_stem
 
 ROOT = Path(__file__).resolve().parents[1]
-PROJECT = "hri-check"
-IMAGE = "hri-op2:latest"
+PROJECT = f"hri-check-{os.getpid()}"  # its own containers, network and volume: checks may run side by side
+IMAGE = f"hri-op2:check-{os.getpid()}"  # and its own image tag (HRI_IMAGE), removed at the end
 SPOOL = "/var/lib/hri/voice-spool"
 SPEECH = "/var/lib/hri/speech"
 REFUSAL = "Sorry, I cannot do it."
@@ -57,7 +57,7 @@ class Stack:
         self.router_port = router_port
         # The stack's defaults, whatever this shell has set (HRI_VOICE_SOURCE=mic, say).
         self.env = {k: v for k, v in os.environ.items() if not k.startswith(("HRI_", "ZENOH_"))}
-        self.env.update(HRI_ROUTER_PORT=str(router_port), HRI_REST_PORT=str(rest_port))
+        self.env.update(HRI_ROUTER_PORT=str(router_port), HRI_REST_PORT=str(rest_port), HRI_IMAGE=IMAGE)
 
     def run(self, *args: str, input: bytes | None = None, check: bool = True, capture: bool = False,
             output: IO[bytes] | None = None, timeout: float = 900) -> subprocess.CompletedProcess[bytes]:
@@ -155,7 +155,8 @@ def run_scenario(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResul
         t0 = time.monotonic()
 
         def on_step(r: StepResult) -> None:
-            log(f"  step {r.index:>2} {r.step.label():<14} {'ok' if r.ok else 'FAIL: ' + '; '.join(r.problems)}")
+            outcome = "ok" if r.ok else "FAIL: " + "; ".join(r.problems)
+            log(f"  step {r.index:>2} {r.step.label():<14} {outcome}")
 
         results = runner.run(load("paper"), on_step)
         problems += [f"step {r.index} {r.step.label()}: {'; '.join(r.problems)}" for r in results if not r.ok]
@@ -182,8 +183,8 @@ def run_scenario(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResul
 
 
 def image_size_mb() -> float:
-    out = subprocess.run(["docker", "image", "inspect", "-f", "{{.Size}}", IMAGE], capture_output=True, text=True,
-                         check=False)
+    out = subprocess.run(["docker", "image", "inspect", "-f", "{{.Size}}", IMAGE], capture_output=True,
+                         text=True, check=False)
     return int(out.stdout.strip() or 0) / 1e6
 
 
@@ -207,8 +208,8 @@ def main() -> int:
     try:
         stack.run("down", "--volumes", "--remove-orphans", capture=True)  # a fresh volume, as a new user
         with BUILD_LOG.open("wb") as build_log:
-            timed("build", times, lambda: stack.run("build", *build_args, *([] if args.cached else ["--no-cache"]),
-                                                    output=build_log))
+            no_cache = [] if args.cached else ["--no-cache"]
+            timed("build", times, lambda: stack.run("build", *build_args, *no_cache, output=build_log))
         log(f"image {IMAGE}: {image_size_mb():.0f} MB")
         timed("up", times, lambda: stack.run("up", "-d", "--no-build", capture=True))
         bad = timed("healthy", times, lambda: stack.wait_healthy(args.healthy_timeout))
@@ -217,18 +218,22 @@ def main() -> int:
         else:
             log(f"every container healthy {times['up'] + times['healthy']:.1f} s after `up`")
             with tempfile.TemporaryDirectory(prefix="hri-compose-check-") as tmp:
-                results = timed("scenario", times, lambda: run_scenario(stack, Path(tmp), problems))  # type: ignore[assignment]
+                t0 = time.monotonic()
+                results = run_scenario(stack, Path(tmp), problems)
+                times["scenario"] = time.monotonic() - t0
     except (RuntimeError, subprocess.TimeoutExpired) as exc:
         problems.append(str(exc))
     finally:
         if problems:
             stack.run("logs", "--no-color", "--tail", "25", check=False)
+        size = image_size_mb()
         if not args.keep:
             timed("down", times, lambda: stack.run("down", "--volumes", "--timeout", "15", check=False,
                                                     capture=True))
+            subprocess.run(["docker", "image", "rm", IMAGE], capture_output=True, check=False)  # the tag only
     passed = sum(r.ok for r in results)
     log("times: " + ", ".join(f"{k} {v:.1f} s" for k, v in times.items())
-        + f"; image {IMAGE} {image_size_mb():.0f} MB; paper scenario {passed}/{len(results)} steps as expected")
+        + f"; image {size:.0f} MB; paper scenario {passed}/{len(results)} steps as expected")
     for p in problems:
         log(f"problem: {p}")
     log("PASS" if not problems else "FAIL")

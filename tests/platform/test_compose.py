@@ -36,7 +36,7 @@ def test_every_service_runs_an_importable_module_against_the_router() -> None:
         assert importlib.util.find_spec(cmd[2]) is not None, cmd[2]
         assert importlib.util.find_spec(f"{cmd[2]}.__main__") is not None
         assert svc["environment"]["HRI_ZENOH_CONNECT"] == f"tcp/zenoh:{router_port}"
-        assert "zenoh" in svc["depends_on"] and svc["image"] == "hri-op2:latest"
+        assert "zenoh" in svc["depends_on"] and svc["image"] == "${HRI_IMAGE:-hri-op2:latest}"
 
 
 def test_one_image_is_built_once_for_the_five_services() -> None:
