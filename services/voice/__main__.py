@@ -18,7 +18,7 @@ from services.voice.engine import DEFAULT_ENGINE, ENGINES, EngineError, make_eng
 from services.voice.service import NAME, VoiceSettings, check_settings, serve
 from services.voice.sources import trim_to_speech
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 SourceOption = Annotated[
     str | None,
