@@ -1,6 +1,6 @@
 """End-to-end figures across the five real processes on the simulated OP2.
 
-    python bench/system_latency.py [--commands 20] [--stops 8]
+    python bench/system_latency.py [--commands 20] [--stops 8] [--vision-fps 30]
 
 - command -> servo: a `VoiceCommand` published (as the voice service would) to the first SYNC_WRITE on
   the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
@@ -137,13 +137,16 @@ def main() -> None:
     ap.add_argument("--commands", type=int, default=20)
     ap.add_argument("--stops", type=int, default=8)
     ap.add_argument("--utterances", type=int, default=8)
+    ap.add_argument("--vision-fps", type=float, default=30.0, help="the synthetic camera's frame rate")
     args = ap.parse_args()
     out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
-    with simulated_robot(out, robot="bench", participant="bench", env={"HRI_LOG_LEVEL": "warning"}) as sim:
+    env = {"HRI_LOG_LEVEL": "warning", "HRI_VISION_FPS": f"{args.vision_fps:g}"}
+    with simulated_robot(out, robot="bench", participant="bench", env=env) as sim:
         f = measure(sim, args)
     print(f"command published -> first servo write carrying it:  {pcts(f.cmd)}")
     print(f"X shown -> frame reported with confirmed X:           {pcts(f.seen)}")
-    print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}")
+    print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}"
+          f"   ({args.vision_fps:g} fps camera)")
     print(f"X shown -> standing still (double support):           {pcts(f.halted)}")
     print(f"WAV in spool -> VoiceCommand published:               {pcts(f.heard)}")
     print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in f.rss.items())

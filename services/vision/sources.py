@@ -5,14 +5,19 @@
     camera:0 | camera:/dev/video0    V4L2 camera; a grabber thread keeps only the newest frame
     path/to/video.mp4                a video file (anything FFmpeg decodes)
     path/to/folder | 'frames/*.png'  images in name order
-    synthetic:<scenario>             rendered marks on cards (scenario: none, cycle, paper, or a file)
+    synthetic | synthetic:<scenario> rendered marks on cards (scenario: none, the default, holds
+                                     nothing up until told; cycle, paper, or a schedule file)
 
-A source that cannot be opened raises `SourceError` naming the source and the alternatives.
+A spec that can never work (an unknown `scheme:`, an unknown synthetic scenario, a bad schedule)
+raises `SourceConfigError` at once; a source that cannot be opened now (no camera, missing file)
+raises `SourceError` naming the source and the alternatives, and may work on a later attempt.
+The synthetic scene's generator (and scikit-image behind it) is imported only for a synthetic source.
 """
 
 from __future__ import annotations
 
 import glob as globlib
+import re
 import threading
 import time
 from dataclasses import dataclass
@@ -22,21 +27,29 @@ from typing import Protocol
 import cv2
 import numpy as np
 
+from typing import TYPE_CHECKING
+
 from schemas.messages import Shape
 from services.runtime import get_logger
-from services.vision.synthetic import Scene, SceneGenerator, Variation
+
+if TYPE_CHECKING:
+    from services.vision.synthetic import Scene, SceneGenerator
 
 log = get_logger("vision.sources")
 
 ALTERNATIVES = (
-    "camera:0, camera:/dev/video0, a video file (clip.mp4), an image folder or glob "
-    "('frames/*.png'), or synthetic:paper / synthetic:cycle / synthetic:none"
+    "camera:0, camera:/dev/video0, a video file (clip.mp4), an image folder or glob ('frames/*.png'), "
+    "or synthetic (nothing held up until told, as synthetic:none) / synthetic:paper / synthetic:cycle"
 )
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm"}
 
 
 class SourceError(RuntimeError):
     """The source cannot be opened or has failed; the message says which and what else to use."""
+
+
+class SourceConfigError(SourceError):
+    """The spec itself is wrong: retrying cannot help."""
 
 
 class EndOfStream(Exception):
@@ -65,10 +78,19 @@ def open_source(spec: str, *, loop: bool = False, seed: int = 0) -> FrameSource:
     if not spec:
         raise SourceError(f"empty vision source; use one of: {ALTERNATIVES}")
     if spec.startswith("camera:"):
+        if not spec.split(":", 1)[1]:
+            raise SourceConfigError(f"vision source {spec!r}: camera needs a number or device; use one of: {ALTERNATIVES}")
         return CameraSource(spec)
-    if spec.startswith("synthetic:"):
-        return SyntheticSource(spec, seed=seed)
+    if spec == "synthetic" or spec.startswith("synthetic:"):
+        source = SyntheticSource(spec, seed=seed)
+        source.load_schedule()
+        return source
     path = Path(spec).expanduser()
+    scheme = re.match(r"^([A-Za-z][A-Za-z0-9+.-]+):", spec)
+    if scheme and not path.exists() and "://" not in spec:
+        raise SourceConfigError(
+            f"vision source {spec!r}: unknown scheme {scheme.group(1)!r}; use one of: {ALTERNATIVES}"
+        )
     if path.is_dir():
         files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
         return ImageFolderSource(spec, files, loop=loop)
@@ -253,7 +275,7 @@ BUILTIN_SCENARIOS: dict[str, list[tuple[float, Shape | None]]] = {
     ],
 }
 
-DEMO_VARIATION = Variation(
+DEMO_VARIATION = dict(
     size=(70.0, 200.0),
     rotation_deg=25.0,
     tilt_deg=30.0,
@@ -263,8 +285,10 @@ DEMO_VARIATION = Variation(
     noise=5.0,
     jpeg=(70, 95),
     distractors=(2, 5),
+    border=(0.2, 0.6),
 )
-"""A steadier scene than the benchmark's: a person holding a card up to the robot."""
+"""A steadier scene than the benchmark's: a person holding a card up to the robot (the fields of
+`synthetic.Variation`, kept as plain values so that this module does not import the generator)."""
 
 
 def parse_schedule(text: str, origin: str = "<schedule>") -> list[tuple[float, Shape | None]]:
@@ -306,12 +330,12 @@ class SyntheticSource:
         seed: int = 0,
         width: int = 640,
         height: int = 480,
-        variation: Variation = DEMO_VARIATION,
+        fps: float = 15.0,
     ) -> None:
         self.spec = spec
-        self.default_fps: float | None = 15.0
-        self.scenario = spec.split(":", 1)[1] or "none"
-        self._seed, self._size, self._variation = seed, (width, height), variation
+        self.default_fps: float | None = fps
+        self.scenario = (spec.split(":", 1)[1] if ":" in spec else "") or "none"
+        self._seed, self._size = seed, (width, height)
         self._schedule: list[tuple[float, Shape | None]] = []
         self._gen: SceneGenerator | None = None
         self._scene: Scene | None = None
@@ -323,20 +347,29 @@ class SyntheticSource:
         self._t0 = 0.0
         self._index = 0
 
-    def open(self) -> None:
+    def load_schedule(self) -> None:
+        """Read the scenario; SourceConfigError if it is neither a built-in nor a readable schedule."""
         if self.scenario in BUILTIN_SCENARIOS:
             self._schedule = BUILTIN_SCENARIOS[self.scenario]
-        else:
-            path = Path(self.scenario).expanduser()
-            if not path.is_file():
-                raise SourceError(
-                    f"synthetic scenario {self.scenario!r} is neither a built-in "
-                    f"({', '.join(BUILTIN_SCENARIOS)}) nor a schedule file; use one of: "
-                    f"{ALTERNATIVES}"
-                )
+            return
+        path = Path(self.scenario).expanduser()
+        if not path.is_file():
+            raise SourceConfigError(
+                f"synthetic scenario {self.scenario!r} is neither a built-in "
+                f"({', '.join(BUILTIN_SCENARIOS)}) nor a schedule file; use one of: {ALTERNATIVES}"
+            )
+        try:
             self._schedule = parse_schedule(path.read_text(errors="replace"), str(path))
+        except SourceError as exc:
+            raise SourceConfigError(str(exc)) from None
+
+    def open(self) -> None:
+        if not self._schedule:
+            self.load_schedule()
         if self._gen is None:
-            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=self._variation)
+            from services.vision.synthetic import SceneGenerator, Variation
+
+            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=Variation(**DEMO_VARIATION))  # type: ignore[arg-type]
         self._t0 = time.monotonic()
 
     def set_shape(self, shape: Shape | None) -> None:
