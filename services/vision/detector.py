@@ -52,6 +52,7 @@ class DetectorConfig:
     min_hole_contrast: float = 0.7  # hole brightness above ink, relative to the margin's
     max_surround_ink: float = 0.03  # share of the card near the mark that other ink may cover ...
     clutter_radius: float = 0.15  # ... within this fraction of its size
+    letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 35.0  # margin mean minus ink mean, grey levels: print on paper, not a shadow
     max_margin_texture: float = 0.25  # margin grey std / (margin - ink): a card is plain, gravel is not
@@ -263,7 +264,44 @@ def _on_card(
         on_card = np.isin(labels, np.flatnonzero(inside)) & close
         if int(on_card.sum()) > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return None
+    dark = ink + 0.3 * (paper - ink)
+    cut = ink + 0.5 * (paper - ink)
+    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
+        return None
     return float(mean[0][0])
+
+
+def _letter_beside(
+    g_roi: np.ndarray, filled: np.ndarray, dist: np.ndarray, extent: float, dark: float, paper_cut: float, gap: float
+) -> bool:
+    """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
+    within `gap` x the mark's extent, made of strokes (not a solid blob) and wholly in view of the
+    region looked at (the background beyond a card's edge runs on out of it)."""
+    ink = np.where((g_roi <= dark) & (filled == 0), np.uint8(255), np.uint8(0))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    if n <= 1:
+        return False
+    h, w = ink.shape
+    sx, sy, sw, sh, area = (stats[:, k] for k in range(5))
+    size, thin = np.maximum(sw, sh), np.minimum(sw, sh)
+    letters = np.flatnonzero(
+        (sx > 0) & (sy > 0) & (sx + sw < w) & (sy + sh < h)
+        & (size >= 0.45 * extent) & (size <= 2.0 * extent) & (thin >= 0.15 * extent)
+        & (area <= 0.65 * sw * sh)
+    )
+    for j in letters:
+        x, y, cw, ch = (int(v) for v in stats[j, :4])
+        mine = labels[y : y + ch, x : x + cw] == j
+        nearest = float(dist[y : y + ch, x : x + cw][mine].min())
+        if not 1.5 < nearest <= gap * extent:  # touching: part of the mark
+            continue
+        # printed on the same paper: light all round it (unlike the background beyond a card's edge)
+        x0, y0, x1, y1 = max(0, x - 4), max(0, y - 4), min(w, x + cw + 4), min(h, y + ch + 4)
+        sub = (labels[y0:y1, x0:x1] == j).astype(np.uint8)
+        ring = cv2.dilate(sub, np.ones((7, 7), np.uint8)) - cv2.dilate(sub, np.ones((3, 3), np.uint8))
+        if float(np.mean(g_roi[y0:y1, x0:x1][ring > 0] > paper_cut)) >= 0.8:
+            return True
+    return False
 
 
 def _clear_frames(

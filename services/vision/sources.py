@@ -33,7 +33,7 @@ from schemas.messages import Shape
 from services.runtime import get_logger
 
 if TYPE_CHECKING:
-    from services.vision.synthetic import Scene, SceneGenerator
+    from services.vision.synthetic import SceneGenerator
 
 log = get_logger("vision.sources")
 
@@ -338,10 +338,8 @@ class SyntheticSource:
         self._seed, self._size = seed, (width, height)
         self._schedule: list[tuple[float, Shape | None]] = []
         self._gen: SceneGenerator | None = None
-        self._scene: Scene | None = None
-        self._backdrop: np.ndarray | None = None
+        self._stills: dict[Shape | None, np.ndarray] = {}
         self._override: tuple[Shape | None] | None = None
-        self._still: np.ndarray | None = None
         self._noise = np.zeros((height, width, 3), np.int16)
         self._lock = threading.Lock()
         self._t0 = 0.0
@@ -370,6 +368,14 @@ class SyntheticSource:
             from services.vision.synthetic import SceneGenerator, Variation
 
             self._gen = SceneGenerator(*self._size, seed=self._seed, variation=Variation(**DEMO_VARIATION))  # type: ignore[arg-type]
+            # one card pose per shape in front of one backdrop, rendered now (about 40 ms each), so
+            # that a new shape shows on the very next frame; each frame adds fresh sensor noise
+            backdrop = None
+            for shape in (None, *Shape):
+                scene = self._gen.scene(shape)
+                backdrop = scene.background if backdrop is None else backdrop
+                scene.background = backdrop  # the room stays; only the card changes
+                self._stills[shape] = self._gen.render(scene)[0].astype(np.int16)
         self._t0 = time.monotonic()
 
     def set_shape(self, shape: Shape | None) -> None:
@@ -391,18 +397,9 @@ class SyntheticSource:
     def read(self, timeout: float) -> Frame | None:
         if self._gen is None:
             raise SourceError(f"{self.spec} is not open")
-        shape = self.current_shape()
-        if self._scene is None or self._scene.shape != shape:
-            scene = self._gen.scene(shape)
-            if self._backdrop is None:
-                self._backdrop = scene.background
-            scene.background = self._backdrop  # the room stays; only the card changes
-            self._scene = scene
-            # rendering costs ~40 ms; do it once per scene, then only add fresh sensor noise per frame
-            self._still = self._gen.render(scene)[0].astype(np.int16)
-        assert self._still is not None
+        still = self._stills[self.current_shape()]
         cv2.randn(self._noise, np.zeros(3), np.full(3, 3.0))
-        image = np.clip(self._still + self._noise, 0, 255).astype(np.uint8)
+        image = np.clip(still + self._noise, 0, 255).astype(np.uint8)
         self._index += 1
         return Frame(image, time.time(), self._index)
 
