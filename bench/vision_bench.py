@@ -175,8 +175,10 @@ def _generator(split: str, seed: int) -> FrameFn:
 
 def _tables(r: dict[str, Any]) -> str:
     lines = [
-        f"split {r['split']}, {r['frames']} frames, seed {r['seed']}, {r['resolution']}, "
-        f"OpenCV {r['opencv']}, {r['threads']} thread",
+        (
+            f"split {r['split']}, {r['frames']} frames, seed {r['seed']}, {r['resolution']}, "
+            f"OpenCV {r['opencv']}, {r['threads']} thread"
+        ),
         "",
         "class      frames  precision  recall  false  missed",
     ]
@@ -192,8 +194,10 @@ def _tables(r: dict[str, Any]) -> str:
     m = r["ms_per_frame"]
     lines += [
         "",
-        f"frames/s on one thread: {r['fps_single_thread']} over all frames, "
-        f"{r['fps_single_thread_best_pass']} best pass over {TIMED_FRAMES} frames in memory",
+        (
+            f"frames/s on one thread: {r['fps_single_thread']} over all frames, "
+            f"{r['fps_single_thread_best_pass']} best pass over {TIMED_FRAMES} frames in memory"
+        ),
         f"ms per frame: mean {m['mean']}, p50 {m['p50']}, p99 {m['p99']}, max {m['max']}",
     ]
     return "\n".join(lines)

@@ -80,7 +80,9 @@ def main(
         return
     # invalid configuration: one line on stderr and exit 2, before any session is opened
     try:
-        window = Confirmation(safe=DebounceConfig.parse(debounce), danger=DebounceConfig.parse(danger_debounce))
+        window = Confirmation(
+            safe=DebounceConfig.parse(debounce), danger=DebounceConfig.parse(danger_debounce)
+        )
         open_source(source, loop=loop, seed=seed)  # builds (does not open) the source: checks the spec
     except (ValueError, SourceConfigError) as exc:
         typer.echo(f"vision: invalid configuration: {exc}", err=True)

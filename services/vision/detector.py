@@ -242,7 +242,7 @@ def _on_card(
     if cv2.countNonZero(cv2.bitwise_and(light, band)) < cfg.min_band_paper * band_n:
         return None
     # the card: light regions touching the band
-    n, labels = cv2.connectedComponents(light, connectivity=8)
+    _, labels = cv2.connectedComponents(light, connectivity=8)
     touching = np.unique(labels[(band > 0) & (light > 0)])
     card = np.where(np.isin(labels, touching[touching > 0]), np.uint8(255), np.uint8(0))
     near = cv2.inRange(dist, 1.5, max(3.0, cfg.surround * extent))
@@ -252,7 +252,7 @@ def _on_card(
         return None
     # dark things enclosed by the card (not reaching the edge of the region looked at) are on it
     other = cv2.bitwise_not(cv2.bitwise_or(card, filled))
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(other, connectivity=4)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(other, connectivity=4)
     h, w = other.shape
     sx, sy, sw, sh = stats[:, 0], stats[:, 1], stats[:, 2], stats[:, 3]
     inside = (sx > 0) & (sy > 0) & (sx + sw < w) & (sy + sh < h)
@@ -272,7 +272,13 @@ def _on_card(
 
 
 def _letter_beside(
-    g_roi: np.ndarray, filled: np.ndarray, dist: np.ndarray, extent: float, dark: float, paper_cut: float, gap: float
+    g_roi: np.ndarray,
+    filled: np.ndarray,
+    dist: np.ndarray,
+    extent: float,
+    dark: float,
+    paper_cut: float,
+    gap: float,
 ) -> bool:
     """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
     within `gap` x the mark's extent, made of strokes (not a solid blob) and wholly in view of the
@@ -285,8 +291,13 @@ def _letter_beside(
     sx, sy, sw, sh, area = (stats[:, k] for k in range(5))
     size, thin = np.maximum(sw, sh), np.minimum(sw, sh)
     letters = np.flatnonzero(
-        (sx > 0) & (sy > 0) & (sx + sw < w) & (sy + sh < h)
-        & (size >= 0.45 * extent) & (size <= 2.0 * extent) & (thin >= 0.15 * extent)
+        (sx > 0)
+        & (sy > 0)
+        & (sx + sw < w)
+        & (sy + sh < h)
+        & (size >= 0.45 * extent)
+        & (size <= 2.0 * extent)
+        & (thin >= 0.15 * extent)
         & (area <= 0.65 * sw * sh)
     )
     for j in letters:

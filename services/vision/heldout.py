@@ -28,6 +28,7 @@ It differs from `synthetic.py` in how frames are made, not only in its seed:
 from __future__ import annotations
 
 import io
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -71,8 +72,28 @@ INKS: tuple[tuple[int, int, int], ...] = (  # RGB
     (90, 30, 120),
 )
 SKIN: tuple[tuple[int, int, int], ...] = ((235, 195, 170), (210, 160, 125), (170, 120, 85), (110, 75, 55))
-WORDS: tuple[str, ...] = ("EXIT", "BOX", "OXO", "TOXIC", "ZOO", "NO", "XO", "OX", "ROBOT", "STOP", "OPEN",
-                          "FOX", "MAX 20", "ONE WAY", "XEROX", "MOTOR", "TAXI", "oxygen", "look", "box 0")
+WORDS: tuple[str, ...] = (
+    "EXIT",
+    "BOX",
+    "OXO",
+    "TOXIC",
+    "ZOO",
+    "NO",
+    "XO",
+    "OX",
+    "ROBOT",
+    "STOP",
+    "OPEN",
+    "FOX",
+    "MAX 20",
+    "ONE WAY",
+    "XEROX",
+    "MOTOR",
+    "TAXI",
+    "oxygen",
+    "look",
+    "box 0",
+)
 
 
 @dataclass(frozen=True)
@@ -119,8 +140,9 @@ class HeldOutGenerator:
         blur = float(rng.uniform(0, 20)) if rng.random() < 0.7 else 0.0
         img = self._camera(bg, blur)
         if label is not None:
-            label = HeldOutLabel(label.shape, label.box, label.size, label.tilt_deg, blur,
-                                 label.finger_near, label.filled)
+            label = HeldOutLabel(
+                label.shape, label.box, label.size, label.tilt_deg, blur, label.finger_near, label.filled
+            )
         return img, label
 
     # ------------------------------------------------------------------ scene
@@ -149,7 +171,9 @@ class HeldOutGenerator:
     def _clutter(self, img: Image.Image) -> None:
         rng, w, h = self.rng, self.width, self.height
         d = ImageDraw.Draw(img)
-        kind = ["words", "sign", "square", "disc", "triangle", "face", "cable", "texture"][int(rng.integers(8))]
+        kind = ["words", "sign", "square", "disc", "triangle", "face", "cable", "texture"][
+            int(rng.integers(8))
+        ]
         cx, cy = float(rng.uniform(0, w)), float(rng.uniform(0, h))
         s = float(math.exp(rng.uniform(math.log(25), math.log(220))))
         col = _ink(rng) if rng.random() < 0.6 else tuple(int(v) for v in rng.integers(0, 256, 3))
@@ -163,11 +187,18 @@ class HeldOutGenerator:
             d.text((cx, cy), text, fill=col, font=font)
         elif kind == "sign":  # a prohibition sign: red ring and bar on white
             r = s / 2
-            d.ellipse((cx - r, cy - r, cx + r, cy + r), fill=(240, 240, 235), outline=(200, 20, 20),
-                      width=max(2, int(0.15 * s)))
+            d.ellipse(
+                (cx - r, cy - r, cx + r, cy + r),
+                fill=(240, 240, 235),
+                outline=(200, 20, 20),
+                width=max(2, int(0.15 * s)),
+            )
             a = math.radians(45)
-            d.line((cx - r * math.cos(a), cy - r * math.sin(a), cx + r * math.cos(a), cy + r * math.sin(a)),
-                   fill=(200, 20, 20), width=max(2, int(0.12 * s)))
+            d.line(
+                (cx - r * math.cos(a), cy - r * math.sin(a), cx + r * math.cos(a), cy + r * math.sin(a)),
+                fill=(200, 20, 20),
+                width=max(2, int(0.12 * s)),
+            )
         elif kind == "square":
             pts = _poly(cx, cy, s / 2, 4, float(rng.uniform(0, 90)))
             if rng.random() < 0.5:
@@ -237,8 +268,17 @@ class HeldOutGenerator:
         for _ in range(40):
             target = (float(rng.uniform(0, self.width)), float(rng.uniform(0, self.height)))
             hm = _homography(ccx, ccy, 1.0 / k, rot, tilt, axis, target)
-            mc = _project(hm, np.array([[mark_box[0], mark_box[1]], [mark_box[2], mark_box[1]],
-                                        [mark_box[2], mark_box[3]], [mark_box[0], mark_box[3]]]))
+            mc = _project(
+                hm,
+                np.array(
+                    [
+                        [mark_box[0], mark_box[1]],
+                        [mark_box[2], mark_box[1]],
+                        [mark_box[2], mark_box[3]],
+                        [mark_box[0], mark_box[3]],
+                    ]
+                ),
+            )
             if mc.min() >= 3 and mc[:, 0].max() <= self.width - 3 and mc[:, 1].max() <= self.height - 3:
                 break
             if shape is None:
@@ -262,7 +302,12 @@ class HeldOutGenerator:
         return HeldOutLabel(shape, box, float(max(box[2], box[3])), tilt, 0.0, finger_near, filled)
 
     def _draw_mark(
-        self, canvas: Image.Image, mask: Image.Image, shape: Shape, box: tuple[float, ...], ink: tuple[int, ...]
+        self,
+        canvas: Image.Image,
+        mask: Image.Image,
+        shape: Shape,
+        box: tuple[float, ...],
+        ink: tuple[int, ...],
     ) -> bool:
         rng = self.rng
         x0, y0, x1, y1 = box
@@ -288,15 +333,22 @@ class HeldOutGenerator:
                 d.line(pts, fill=255, width=stroke, joint="curve")
                 if rng.random() < 0.5:  # round caps
                     for px, py in (pts[0], pts[-1]):
-                        d.ellipse((px - stroke / 2, py - stroke / 2, px + stroke / 2, py + stroke / 2), fill=255)
+                        d.ellipse(
+                            (px - stroke / 2, py - stroke / 2, px + stroke / 2, py + stroke / 2), fill=255
+                        )
         elif shape is Shape.O and style == 1 and self.fonts:
             self._glyph(d, "O", box)
         elif shape is Shape.O:
             if style == 2:
                 t = np.linspace(0, 2 * math.pi, 60)
                 wob = 1 + 0.03 * np.sin(3 * t + rng.uniform(0, 6))
-                pts = [(cx + (w / 2 - stroke / 2) * wb * math.cos(a), cy + (h / 2 - stroke / 2) * wb * math.sin(a))
-                       for a, wb in zip(t, wob)]
+                pts = [
+                    (
+                        cx + (w / 2 - stroke / 2) * wb * math.cos(a),
+                        cy + (h / 2 - stroke / 2) * wb * math.sin(a),
+                    )
+                    for a, wb in zip(t, wob)
+                ]
                 d.line(pts, fill=255, width=stroke, joint="curve")
             else:
                 d.ellipse(box, outline=255, width=stroke)
@@ -345,7 +397,9 @@ class HeldOutGenerator:
             d.rectangle(box, fill=ink)
         else:
             word = str(rng.choice(WORDS))
-            font = _font(self.fonts[int(rng.integers(len(self.fonts)))], max(8, int(s / max(2, len(word)) * 1.4)))
+            font = _font(
+                self.fonts[int(rng.integers(len(self.fonts)))], max(8, int(s / max(2, len(word)) * 1.4))
+            )
             d.text((x0, (y0 + y1) / 2), word, fill=ink, font=font, anchor="lm")
 
     def _fingers(self, canvas: Image.Image, card: tuple[float, ...], mark: tuple[float, ...]) -> bool:
@@ -382,12 +436,16 @@ class HeldOutGenerator:
                     dy == 0 and my0 - width / 2 < sy < my1 + width / 2
                 )
                 gap = float(rng.uniform(0.02, 0.3)) * msize
-                reach = max(0.3 * width, room - gap) if in_line else float(rng.uniform(0.3, 1.0)) * room + width
+                reach = (
+                    max(0.3 * width, room - gap) if in_line else float(rng.uniform(0.3, 1.0)) * room + width
+                )
                 length = 3 * width + reach
                 ex, ey = sx + dx * length, sy + dy * length
                 d.line((sx, sy, ex, ey), fill=(*shade, 255), width=int(width) + 2)
-                d.ellipse((ex - width / 2 - 1, ey - width / 2 - 1, ex + width / 2 + 1, ey + width / 2 + 1),
-                          fill=(*shade, 255))
+                d.ellipse(
+                    (ex - width / 2 - 1, ey - width / 2 - 1, ex + width / 2 + 1, ey + width / 2 + 1),
+                    fill=(*shade, 255),
+                )
                 d.line((sx, sy, ex, ey), fill=(*skin, 255), width=int(width))
                 d.ellipse((ex - width / 2, ey - width / 2, ex + width / 2, ey + width / 2), fill=(*skin, 255))
                 if in_line and room - reach < 0.25 * msize + width / 2:
@@ -405,7 +463,9 @@ class HeldOutGenerator:
         r2 = ((xx - w / 2) / (w / 2)) ** 2 + ((yy - h / 2) / (h / 2)) ** 2
         vignette = 1 - float(rng.uniform(0, 0.45)) * r2 / 2
         ang = float(rng.uniform(0, 2 * math.pi))
-        grad = 1 + float(rng.uniform(0, 0.7)) * ((xx / w - 0.5) * math.cos(ang) + (yy / h - 0.5) * math.sin(ang))
+        grad = 1 + float(rng.uniform(0, 0.7)) * (
+            (xx / w - 0.5) * math.cos(ang) + (yy / h - 0.5) * math.sin(ang)
+        )
         light = (gain * vignette * grad)[..., None] * cast
         a = a * light
         a = np.clip(a, 0, 255)
@@ -419,7 +479,7 @@ class HeldOutGenerator:
             c = n // 2
             th = float(rng.uniform(0, math.pi))
             for s in np.linspace(-blur / 2, blur / 2, 4 * n):
-                kernel[int(round(c + s * math.sin(th))), int(round(c + s * math.cos(th)))] += 1
+                kernel[round(c + s * math.sin(th)), round(c + s * math.cos(th))] += 1
             kernel /= kernel.sum()
             arr = cv2.filter2D(arr, -1, kernel, borderType=cv2.BORDER_REFLECT)
         # shot noise: variance grows with the signal
@@ -467,8 +527,13 @@ def _paper(rng: Rng) -> tuple[int, int, int]:
 
 
 def _poly(cx: float, cy: float, r: float, n: int, rot: float) -> list[tuple[float, float]]:
-    return [(cx + r * math.cos(math.radians(rot + 360 * i / n)), cy + r * math.sin(math.radians(rot + 360 * i / n)))
-            for i in range(n)]
+    return [
+        (
+            cx + r * math.cos(math.radians(rot + 360 * i / n)),
+            cy + r * math.sin(math.radians(rot + 360 * i / n)),
+        )
+        for i in range(n)
+    ]
 
 
 def _jitter(rng: Rng, pts: list[tuple[float, float]], amount: float) -> list[tuple[float, float]]:
@@ -476,9 +541,14 @@ def _jitter(rng: Rng, pts: list[tuple[float, float]], amount: float) -> list[tup
     out: list[tuple[float, float]] = []
     closed = len(pts) > 2
     seq = [*pts, pts[0]] if closed else pts
-    for (ax, ay), (bx, by) in zip(seq, seq[1:]):
+    for (ax, ay), (bx, by) in itertools.pairwise(seq):
         for t in np.linspace(0, 1, 6, endpoint=False):
-            out.append((ax + t * (bx - ax) + rng.normal(0, amount / 3), ay + t * (by - ay) + rng.normal(0, amount / 3)))
+            out.append(
+                (
+                    ax + t * (bx - ax) + rng.normal(0, amount / 3),
+                    ay + t * (by - ay) + rng.normal(0, amount / 3),
+                )
+            )
     if not closed:
         out.append(seq[-1])
     return out
@@ -496,7 +566,13 @@ def _inset(verts: list[tuple[float, float]], stroke: float) -> list[tuple[float,
 
 
 def _homography(
-    cx: float, cy: float, scale: float, rot: float, tilt: float, axis: float, target: tuple[float, float],
+    cx: float,
+    cy: float,
+    scale: float,
+    rot: float,
+    tilt: float,
+    axis: float,
+    target: tuple[float, float],
     focal: float = 650.0,
 ) -> np.ndarray:
     """Canvas pixels -> frame pixels: centre, scale, rotate in plane, tilt about an in-plane axis at

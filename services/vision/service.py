@@ -142,7 +142,9 @@ def _run(
             retry.reset()
             debounce.reset()  # a reopened source starts a new scene
             last_frame = next_due = time.monotonic()
-            ctx.set_status(HealthStatus.OK, error=None, alternatives=None, retry_in_s=None, source=settings.source)
+            ctx.set_status(
+                HealthStatus.OK, error=None, alternatives=None, retry_in_s=None, source=settings.source
+            )
             ctx.log.info("vision source open", source=settings.source)
         assert source is not None
         try:

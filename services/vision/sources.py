@@ -22,12 +22,10 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import cv2
 import numpy as np
-
-from typing import TYPE_CHECKING
 
 from schemas.messages import Shape
 from services.runtime import get_logger
@@ -79,7 +77,9 @@ def open_source(spec: str, *, loop: bool = False, seed: int = 0) -> FrameSource:
         raise SourceError(f"empty vision source; use one of: {ALTERNATIVES}")
     if spec.startswith("camera:"):
         if not spec.split(":", 1)[1]:
-            raise SourceConfigError(f"vision source {spec!r}: camera needs a number or device; use one of: {ALTERNATIVES}")
+            raise SourceConfigError(
+                f"vision source {spec!r}: camera needs a number or device; use one of: {ALTERNATIVES}"
+            )
         return CameraSource(spec)
     if spec == "synthetic" or spec.startswith("synthetic:"):
         source = SyntheticSource(spec, seed=seed)
@@ -275,18 +275,18 @@ BUILTIN_SCENARIOS: dict[str, list[tuple[float, Shape | None]]] = {
     ],
 }
 
-DEMO_VARIATION = dict(
-    size=(70.0, 200.0),
-    rotation_deg=25.0,
-    tilt_deg=30.0,
-    light=0.4,
-    dim=(0.7, 1.05),
-    blur=2.0,
-    noise=5.0,
-    jpeg=(70, 95),
-    distractors=(2, 5),
-    border=(0.2, 0.6),
-)
+DEMO_VARIATION: dict[str, object] = {
+    "size": (70.0, 200.0),
+    "rotation_deg": 25.0,
+    "tilt_deg": 30.0,
+    "light": 0.4,
+    "dim": (0.7, 1.05),
+    "blur": 2.0,
+    "noise": 5.0,
+    "jpeg": (70, 95),
+    "distractors": (2, 5),
+    "border": (0.2, 0.6),
+}
 """A steadier scene than the benchmark's: a person holding a card up to the robot (the fields of
 `synthetic.Variation`, kept as plain values so that this module does not import the generator)."""
 
@@ -367,7 +367,8 @@ class SyntheticSource:
         if self._gen is None:
             from services.vision.synthetic import SceneGenerator, Variation
 
-            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=Variation(**DEMO_VARIATION))  # type: ignore[arg-type]
+            variation = Variation(**DEMO_VARIATION)  # type: ignore[arg-type]
+            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=variation)
             # one card pose per shape in front of one backdrop, rendered now (about 40 ms each), so
             # that a new shape shows on the very next frame; each frame adds fresh sensor noise
             backdrop = None

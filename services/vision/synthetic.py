@@ -350,7 +350,14 @@ class SceneGenerator:
         card = np.empty((int(ch), int(cw), 3), np.uint8)
         card[:] = scene.paper
         mark_pts = _draw_mark(
-            card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k, scene.ink, scene.skew, scene.filled
+            card,
+            scene.shape,
+            (cw / 2, ch / 2),
+            s * k,
+            scene.stroke * s * k,
+            scene.ink,
+            scene.skew,
+            scene.filled,
         )
         if scene.fingers:
             # fingers over the card's bottom edge, their tips stopping short of the mark
@@ -361,10 +368,28 @@ class SceneGenerator:
                 fx = cw / 2 + (f - (scene.fingers - 1) / 2) * 1.1 * fw + self.rng.uniform(-0.3, 0.3) * s * k
                 centre = (int(fx), int(tip + length / 2))
                 axes = (int(fw / 2), int(length / 2 + fw / 2))
-                cv2.ellipse(card, centre, axes, float(self.rng.uniform(-12, 12)), 0, 360, (95, 125, 175), -1,
-                            cv2.LINE_AA)
-                cv2.ellipse(card, centre, (max(1, axes[0] - 2), max(1, axes[1] - 2)), 0, 0, 360,
-                            (120, 150, 200), -1, cv2.LINE_AA)
+                cv2.ellipse(
+                    card,
+                    centre,
+                    axes,
+                    float(self.rng.uniform(-12, 12)),
+                    0,
+                    360,
+                    (95, 125, 175),
+                    -1,
+                    cv2.LINE_AA,
+                )
+                cv2.ellipse(
+                    card,
+                    centre,
+                    (max(1, axes[0] - 2), max(1, axes[1] - 2)),
+                    0,
+                    0,
+                    360,
+                    (120, 150, 200),
+                    -1,
+                    cv2.LINE_AA,
+                )
         if scene.hand:
             # fingers holding a bottom corner of the card
             hc = (int(cw * self.rng.choice([0.0, 1.0])), int(ch))

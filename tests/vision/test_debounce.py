@@ -62,7 +62,13 @@ T = Detection(Shape.TRIANGLE, 0.7, (200, 10, 40, 40))
 def test_danger_acts_on_the_first_frame_and_is_held_two_more() -> None:
     deb = Debouncer()  # danger 1/3, safe 3/4
     assert _run(deb, [[X], [], [], [], [T], [], [T]]) == [
-        {Shape.X}, {Shape.X}, {Shape.X}, set(), {Shape.TRIANGLE}, {Shape.TRIANGLE}, {Shape.TRIANGLE}
+        {Shape.X},
+        {Shape.X},
+        {Shape.X},
+        set(),
+        {Shape.TRIANGLE},
+        {Shape.TRIANGLE},
+        {Shape.TRIANGLE},
     ]
 
 

@@ -69,8 +69,10 @@ def test_narrow_card_border_next_to_the_mark(detector: MarkDetector) -> None:
     gen = SceneGenerator(seed=zlib.crc32(b"narrow_border") % 1000, variation=MILD.only(border=(0.05, 0.1)))
     want = {Shape.X: PER_SHAPE - 1, Shape.O: PER_SHAPE - 1, Shape.TRIANGLE: PER_SHAPE - 3}
     for shape in SHAPES:
-        hits = sum(_correct(detector.detect(img), shape, labels[0].box) for img, labels in
-                   (gen.frame(shape) for _ in range(PER_SHAPE)))
+        hits = sum(
+            _correct(detector.detect(img), shape, labels[0].box)
+            for img, labels in (gen.frame(shape) for _ in range(PER_SHAPE))
+        )
         assert hits >= want[shape], f"narrow border: found {hits}/{PER_SHAPE} {shape.value} marks"
 
 

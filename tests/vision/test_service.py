@@ -79,7 +79,10 @@ def test_video_file_end_to_end(
     assert 0.5 <= x.confidence <= 1.0 and x.box[2] > 20
     h = cast(
         Health,
-        wait_for(lambda: (x := bus.query_health("vision")) is not None and x.detail.get("finished") and x, timeout=5),
+        wait_for(
+            lambda: (x := bus.query_health("vision")) is not None and x.detail.get("finished") and x,
+            timeout=5,
+        ),
     )
     assert h.status is HealthStatus.OK and h.published == len(plan)
     assert proc.poll() is None  # a finished file leaves the service up
@@ -122,7 +125,8 @@ def test_missing_source_degrades_and_keeps_running(
     h = cast(
         Health,
         wait_for(
-            lambda: (x := bus.query_health("vision")) is not None and x.status is HealthStatus.DEGRADED and x, timeout=20
+            lambda: (x := bus.query_health("vision")) is not None and x.status is HealthStatus.DEGRADED and x,
+            timeout=20,
         ),
     )
     assert source in h.detail["error"]
@@ -168,12 +172,21 @@ def test_detect_command_prints_one_observation_per_image(tmp_path: Path) -> None
 
 @pytest.mark.parametrize(
     ("source", "says"),
-    [("rtsq:cam", "unknown scheme 'rtsq'"), ("synthetic:nosuch", "neither a built-in"), ("camera:", "camera needs")],
+    [
+        ("rtsq:cam", "unknown scheme 'rtsq'"),
+        ("synthetic:nosuch", "neither a built-in"),
+        ("camera:", "camera needs"),
+    ],
 )
 def test_invalid_source_spec_exits_2_with_one_line(source: str, says: str) -> None:
     env = {**os.environ, "HRI_VISION_SOURCE": source, "HRI_ZENOH_CONNECT": "tcp/127.0.0.1:9"}
     done = subprocess.run(
-        [sys.executable, "-m", "services.vision"], env=env, capture_output=True, text=True, timeout=60
+        [sys.executable, "-m", "services.vision"],
+        check=False,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
@@ -183,6 +196,11 @@ def test_invalid_source_spec_exits_2_with_one_line(source: str, says: str) -> No
 def test_bad_debounce_exits_2() -> None:
     env = {**os.environ, "HRI_VISION_SOURCE": "synthetic", "HRI_VISION_DANGER_DEBOUNCE": "4/2"}
     done = subprocess.run(
-        [sys.executable, "-m", "services.vision"], env=env, capture_output=True, text=True, timeout=60
+        [sys.executable, "-m", "services.vision"],
+        check=False,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
