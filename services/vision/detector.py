@@ -52,6 +52,8 @@ class DetectorConfig:
     min_hole_contrast: float = 0.7  # hole brightness above ink, relative to the margin's
     max_surround_ink: float = 0.03  # share of the card near the mark that other ink may cover ...
     clutter_radius: float = 0.15  # ... within this fraction of its size
+    safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
+    safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 35.0  # margin mean minus ink mean, grey levels: print on paper, not a shadow
@@ -195,6 +197,13 @@ class MarkDetector:
         paper = _on_card(g_roi, filled, ink, blob.outer, cfg)
         if paper is None:
             return None
+        if (
+            shape is Shape.O
+            and cfg.safe_margin > 0
+            and not _clear_margin(g_roi, bin_roi, filled, ink, blob.outer, cfg)
+        ):
+            # a false O would lift a danger: the safe mark must also have the wide clear margin
+            return None
         if blob.holes:
             # a hole is paper: empty of other ink and about as bright as the card (a big filled disc
             # or triangle, hollowed by the local threshold, has a dark 'hole')
@@ -269,6 +278,27 @@ def _on_card(
     if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
         return None
     return float(mean[0][0])
+
+
+def _clear_margin(
+    g_roi: np.ndarray,
+    bin_roi: np.ndarray,
+    filled: np.ndarray,
+    ink: float,
+    outer: np.ndarray,
+    cfg: DetectorConfig,
+) -> bool:
+    """The strict context for the safe mark: every pixel within `safe_margin` x the extent of the
+    outline is plain paper (at most `max_surround_ink` ink, spread at most `max_margin_texture` of the
+    contrast), whatever the card's shape - fingers or a card edge there make the O wait."""
+    extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(outer)), 1.0))
+    dist = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
+    ring = cv2.inRange(dist, 1.5, max(3.0, cfg.safe_margin * extent))
+    ring_n = cv2.countNonZero(ring)
+    if ring_n == 0 or cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.safe_max_ink * ring_n:
+        return False
+    mean, std = cv2.meanStdDev(g_roi, mask=ring)
+    return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
 
 
 def _letter_beside(

@@ -63,11 +63,12 @@ def test_each_variation_finds_every_shape(detector: MarkDetector, name: str) -> 
 
 
 def test_narrow_card_border_next_to_the_mark(detector: MarkDetector) -> None:
-    """A border of 5-10 % of the mark's width: X and O almost always; a triangle whose base nearly
+    """A border of 5-10 % of the mark's width: an X almost always; a triangle whose base nearly
     touches the card's edge is missed about a third of the time (the narrow band beside it is then
-    partly background): a known limit."""
+    partly background): a known limit. An O needs a clear margin of 10 % of its size on purpose (a
+    false O lifts a danger), so on these cards it is found only when the border is wide enough."""
     gen = SceneGenerator(seed=zlib.crc32(b"narrow_border") % 1000, variation=MILD.only(border=(0.05, 0.1)))
-    want = {Shape.X: PER_SHAPE - 1, Shape.O: PER_SHAPE - 1, Shape.TRIANGLE: PER_SHAPE - 3}
+    want = {Shape.X: PER_SHAPE - 1, Shape.O: PER_SHAPE - 4, Shape.TRIANGLE: PER_SHAPE - 3}
     for shape in SHAPES:
         hits = sum(
             _correct(detector.detect(img), shape, labels[0].box)
