@@ -558,7 +558,8 @@ def _inset(verts: list[tuple[float, float]], stroke: float) -> list[tuple[float,
     """The polygon shrunk towards its centroid so that its edges move in by `stroke`."""
     p = np.array(verts, np.float64)
     c = p.mean(axis=0)
-    area = 0.5 * abs(np.cross(p[1] - p[0], p[2] - p[0])) if len(p) == 3 else 0.0
+    (ux, uy), (vx, vy) = p[1] - p[0], p[2] - p[0]
+    area = 0.5 * abs(ux * vy - uy * vx) if len(p) == 3 else 0.0
     perim = float(np.sum(np.hypot(*(np.roll(p, -1, axis=0) - p).T)))
     inr = 2 * area / perim if perim else 1.0
     f = max(0.05, (inr - stroke) / inr)

@@ -22,16 +22,13 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import cv2
 import numpy as np
 
 from schemas.messages import Shape
 from services.runtime import get_logger
-
-if TYPE_CHECKING:
-    from services.vision.synthetic import SceneGenerator
 
 log = get_logger("vision.sources")
 
@@ -337,7 +334,6 @@ class SyntheticSource:
         self.scenario = (spec.split(":", 1)[1] if ":" in spec else "") or "none"
         self._seed, self._size = seed, (width, height)
         self._schedule: list[tuple[float, Shape | None]] = []
-        self._gen: SceneGenerator | None = None
         self._stills: dict[Shape | None, np.ndarray] = {}
         self._override: tuple[Shape | None] | None = None
         self._noise = np.zeros((height, width, 3), np.int16)
@@ -364,19 +360,21 @@ class SyntheticSource:
     def open(self) -> None:
         if not self._schedule:
             self.load_schedule()
-        if self._gen is None:
-            from services.vision.synthetic import SceneGenerator, Variation
+        if not self._stills:
+            from services.vision.synthetic import SKIMAGE_BACKGROUNDS, SceneGenerator, Variation
 
             variation = Variation(**DEMO_VARIATION)  # type: ignore[arg-type]
-            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=variation)
+            room = (SKIMAGE_BACKGROUNDS[self._seed % len(SKIMAGE_BACKGROUNDS)],)  # one room: less memory
+            gen = SceneGenerator(*self._size, seed=self._seed, variation=variation, backgrounds=room)
             # one card pose per shape in front of one backdrop, rendered now (about 40 ms each), so
-            # that a new shape shows on the very next frame; each frame adds fresh sensor noise
+            # that a new shape shows on the very next frame; each frame adds fresh sensor noise. The
+            # generator (and its bank of background images) is not kept.
             backdrop = None
             for shape in (None, *Shape):
-                scene = self._gen.scene(shape)
+                scene = gen.scene(shape)
                 backdrop = scene.background if backdrop is None else backdrop
                 scene.background = backdrop  # the room stays; only the card changes
-                self._stills[shape] = self._gen.render(scene)[0].astype(np.int16)
+                self._stills[shape] = gen.render(scene)[0]
         self._t0 = time.monotonic()
 
     def set_shape(self, shape: Shape | None) -> None:
@@ -396,11 +394,11 @@ class SyntheticSource:
         return self._schedule[-1][1]
 
     def read(self, timeout: float) -> Frame | None:
-        if self._gen is None:
+        if not self._stills:
             raise SourceError(f"{self.spec} is not open")
         still = self._stills[self.current_shape()]
         cv2.randn(self._noise, np.zeros(3), np.full(3, 3.0))
-        image = np.clip(still + self._noise, 0, 255).astype(np.uint8)
+        image = cv2.add(still, self._noise, dtype=cv2.CV_8U)  # saturating
         self._index += 1
         return Frame(image, time.time(), self._index)
 

@@ -129,12 +129,13 @@ class SceneGenerator:
         seed: int = 0,
         variation: Variation = Variation(),
         use_skimage: bool = True,
+        backgrounds: tuple[str, ...] = SKIMAGE_BACKGROUNDS,
     ) -> None:
         self.width = width
         self.height = height
         self.variation = variation
         self.rng = np.random.default_rng(seed)
-        self.bank = _load_backgrounds() if use_skimage else []
+        self.bank = _load_backgrounds(backgrounds) if use_skimage else []
         self.face = _load_face() if use_skimage else None
 
     # ------------------------------------------------------------------ public
@@ -635,14 +636,14 @@ def _procedural_background(rng: Rng, w: int, h: int) -> np.ndarray:
     return img
 
 
-def _load_backgrounds() -> list[np.ndarray]:
+def _load_backgrounds(names: tuple[str, ...] = SKIMAGE_BACKGROUNDS) -> list[np.ndarray]:
     try:
         from skimage import data
     except ImportError:
         log.info("scikit-image not importable: procedural backgrounds only")
         return []
     bank = []
-    for name in SKIMAGE_BACKGROUNDS:
+    for name in names:
         try:
             img = np.asarray(getattr(data, name)())
         except (AttributeError, OSError, ValueError) as exc:  # needs a download, or a changed API
