@@ -149,7 +149,7 @@ def main() -> None:
         f = measure(sim, args)
     print(f"command published -> first servo write carrying it:  {pcts(f.cmd)}")
     print(f"X shown -> frame reported with confirmed X:           {pcts(f.seen)}")
-    print(f"X shown -> stop goal published by the reasoner:     {pcts(f.stop_goal)}")
+    print(f"X shown -> stop goal published by the reasoner:       {pcts(f.stop_goal)}")
     print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}"
           f"   ({args.vision_fps:g} fps camera)")
     print(f"X shown -> standing still (double support):           {pcts(f.halted)}")
