@@ -204,3 +204,15 @@ def test_bad_debounce_exits_2() -> None:
         timeout=60,
     )
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+
+
+def test_retry_backoff_doubles_to_a_cap_and_warns_once_per_failure() -> None:
+    from services.vision.service import _Backoff
+
+    b = _Backoff(2.0, 30.0)
+    steps = [b.next("no camera") for _ in range(6)]
+    assert [d for d, _ in steps] == [2.0, 4.0, 8.0, 16.0, 30.0, 30.0]
+    assert [first for _, first in steps] == [True] + [False] * 5
+    assert b.next("another error")[1] is True
+    b.reset()
+    assert b.next("no camera") == (2.0, True)
