@@ -179,31 +179,27 @@ def test_detect_command_prints_one_observation_per_image(tmp_path: Path) -> None
     ],
 )
 def test_invalid_source_spec_exits_2_with_one_line(source: str, says: str) -> None:
-    env = {**os.environ, "HRI_VISION_SOURCE": source, "HRI_ZENOH_CONNECT": "tcp/127.0.0.1:9"}
-    done = subprocess.run(
-        [sys.executable, "-m", "services.vision"],
-        check=False,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    done = _run_vision(HRI_VISION_SOURCE=source, HRI_ZENOH_CONNECT="tcp/127.0.0.1:9")
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and says in lines[0] and "synthetic:none" in lines[0]
 
 
 def test_bad_debounce_exits_2() -> None:
-    env = {**os.environ, "HRI_VISION_SOURCE": "synthetic", "HRI_VISION_DANGER_DEBOUNCE": "4/2"}
-    done = subprocess.run(
+    done = _run_vision(HRI_VISION_SOURCE="synthetic", HRI_VISION_DANGER_DEBOUNCE="4/2")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+
+
+def _run_vision(**env: str) -> subprocess.CompletedProcess[str]:
+    """`python -m services.vision` with extra environment, to completion (it must exit by itself)."""
+    return subprocess.run(
         [sys.executable, "-m", "services.vision"],
         check=False,
-        env=env,
+        env={**os.environ, **env},
         capture_output=True,
         text=True,
         timeout=60,
     )
-    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
 
 
 def test_retry_backoff_doubles_to_a_cap_and_warns_once_per_failure() -> None:
