@@ -1,12 +1,13 @@
 """End-to-end figures across the five real processes on the simulated OP2.
 
-    python bench/system_latency.py [--commands 20] [--stops 8]
+    python bench/system_latency.py [--commands 20] [--stops 8] [--vision-fps 30]
 
 - command -> servo: a `VoiceCommand` published (as the voice service would) to the first SYNC_WRITE on
   the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
   service when the driver writes it), alternating "yes" (nod) and "no" (shake) while standing;
-- X shown -> halted: the synthetic camera starts showing an X while the robot walks; time to the
-  first frame reported with the confirmed X, to the first servo write of the `stop` goal, and to the
+- X shown -> halted: the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
+  while the robot walks; time to the first frame reported with the confirmed X, to the reasoner's
+  `stop` goal, to the first servo write of that goal, and to the
   robot standing still in double support (walking ends at the next half-cycle boundary);
 - spoken -> heard: a synthesised WAV dropped in the voice spool to its `VoiceCommand`;
 - the resident memory (RSS) of the launcher with its router and the five services.
@@ -48,6 +49,7 @@ class Figures:
 
     cmd: list[float]
     seen: list[float]
+    stop_goal: list[float]
     stop_write: list[float]
     halted: list[float]
     heard: list[float]
@@ -88,7 +90,7 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
             cmd_lat.append(state.first_write - stamp)
         settle(Posture.STANDING)
 
-    seen_lat, stop_write_lat, halted_lat = [], [], []
+    seen_lat, stop_goal_lat, stop_write_lat, halted_lat = [], [], [], []
     for _ in range(args.stops):
         scene.put(SceneCommand(shape=Shape.O))
         time.sleep(0.6)
@@ -109,6 +111,8 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
                                         and e.msg.posture == Posture.STANDING and e.msg.action is None), None), 5)
         if obs:
             seen_lat.append(obs.stamp - shown)
+        if goal:
+            stop_goal_lat.append(goal.stamp - shown)
         if stop_state:
             stop_write_lat.append(stop_state.first_write - shown)
         if halted:
@@ -129,7 +133,7 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
     pids = {n: launcher.pid(n) for n in SERVICES}
     rss = {n: rss_mib(p) for n, p in pids.items() if p}
     rss["launcher+router"] = rss_mib(os.getpid())
-    return Figures(cmd_lat, seen_lat, stop_write_lat, halted_lat, heard_lat, rss)
+    return Figures(cmd_lat, seen_lat, stop_goal_lat, stop_write_lat, halted_lat, heard_lat, rss)
 
 
 def main() -> None:
@@ -137,13 +141,17 @@ def main() -> None:
     ap.add_argument("--commands", type=int, default=20)
     ap.add_argument("--stops", type=int, default=8)
     ap.add_argument("--utterances", type=int, default=8)
+    ap.add_argument("--vision-fps", type=float, default=30.0, help="the synthetic camera's frame rate")
     args = ap.parse_args()
     out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
-    with simulated_robot(out, robot="bench", participant="bench", env={"HRI_LOG_LEVEL": "warning"}) as sim:
+    env = {"HRI_LOG_LEVEL": "warning", "HRI_VISION_FPS": f"{args.vision_fps:g}"}
+    with simulated_robot(out, robot="bench", participant="bench", env=env) as sim:
         f = measure(sim, args)
     print(f"command published -> first servo write carrying it:  {pcts(f.cmd)}")
     print(f"X shown -> frame reported with confirmed X:           {pcts(f.seen)}")
-    print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}")
+    print(f"X shown -> stop goal published by the reasoner:       {pcts(f.stop_goal)}")
+    print(f"X shown -> first servo write of the stop goal:        {pcts(f.stop_write)}"
+          f"   ({args.vision_fps:g} fps camera)")
     print(f"X shown -> standing still (double support):           {pcts(f.halted)}")
     print(f"WAV in spool -> VoiceCommand published:               {pcts(f.heard)}")
     print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in f.rss.items())

@@ -15,9 +15,10 @@ from schemas.messages import MarkObservation
 from services.runtime import run_service
 from services.runtime.cli import ConnectOption, RobotOption
 from services.vision.annotate import annotate
-from services.vision.debounce import DebounceConfig
+from services.vision.debounce import Confirmation, DebounceConfig
 from services.vision.detector import MarkDetector
 from services.vision.service import NAME, VisionSettings, serve
+from services.vision.sources import SourceConfigError, SourceError, open_source
 
 app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
@@ -27,7 +28,7 @@ SourceOption = Annotated[
         "--source",
         envvar="HRI_VISION_SOURCE",
         help="camera:0, camera:/dev/video0, a video file, an image folder or glob, "
-        "synthetic:<none|cycle|paper|schedule-file>",
+        "synthetic (nothing held up until told) or synthetic:<none|cycle|paper|schedule-file>",
     ),
 ]
 FpsOption = Annotated[
@@ -44,7 +45,15 @@ DebounceOption = Annotated[
     typer.Option(
         "--debounce",
         envvar="HRI_VISION_DEBOUNCE",
-        help="K/N: a mark is published once seen in K of the last N frames",
+        help="K/N for the safe mark O: published once seen in K of the last N frames",
+    ),
+]
+DangerDebounceOption = Annotated[
+    str,
+    typer.Option(
+        "--danger-debounce",
+        envvar="HRI_VISION_DANGER_DEBOUNCE",
+        help="K/N for the danger marks X and TRIANGLE (1/N: act on the first frame)",
     ),
 ]
 LoopOption = Annotated[
@@ -61,17 +70,25 @@ def main(
     connect: ConnectOption = None,
     source: SourceOption = "camera:0",
     fps: FpsOption = None,
-    debounce: DebounceOption = "3/5",
+    debounce: DebounceOption = "3/4",
+    danger_debounce: DangerDebounceOption = "1/3",
     loop: LoopOption = False,
     seed: SeedOption = 0,
 ) -> None:
     """Run the vision service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
+    # invalid configuration: one line on stderr and exit 2, before any session is opened
     try:
-        window = DebounceConfig.parse(debounce)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--debounce") from None
+        window = Confirmation(
+            safe=DebounceConfig.parse(debounce), danger=DebounceConfig.parse(danger_debounce)
+        )
+        open_source(source, loop=loop, seed=seed)  # builds (does not open) the source: checks the spec
+    except (ValueError, SourceConfigError) as exc:
+        typer.echo(f"vision: invalid configuration: {exc}", err=True)
+        raise typer.Exit(2) from None
+    except SourceError:  # missing now (no camera, no file): the service reports it and retries
+        pass
     settings = VisionSettings(source=source, fps=fps, debounce=window, loop=loop, seed=seed)
     raise typer.Exit(run_service(NAME, partial(serve, settings=settings), robot=robot, connect=connect))
 

@@ -1,18 +1,30 @@
-"""k-of-n temporal filter: a mark is confirmed once seen in at least k of the last n frames.
+"""Asymmetric confirmation: a danger mark acts on its first confident frame, the safe mark only once
+it has been seen over several frames.
 
-Per shape, not per position: the robot only cares whether an X, O or triangle is being held up.
-A mark first seen at frame t is confirmed at frame t + k - 1 at the earliest (k - 1 frame periods
-of latency); it stays confirmed until it has been missing for n - k + 1 frames. One or two noisy
-frames (up to k - 1 in any n) neither raise nor drop a mark.
+Stopping is the safe direction and lifting a danger the dangerous one, so the two kinds of mark are
+filtered differently, each by a k-of-n window per shape (per shape, not per position: the robot only
+cares whether an X, O or triangle is being held up):
+
+- X and TRIANGLE (danger), default 1 of 3: published from the first frame in which the detector
+  reports one (no added latency); held for two more frames after it was last seen, so one or two
+  dropped detections do not flicker it.
+- O (safe), default 3 of 4: published from its third sighting within four frames (two frame periods
+  of added latency at the earliest: 67 ms at 30 fps, 133 ms at 15 fps), so a single false O never
+  clears a danger; released after two frames without it.
+
+A mark first seen at frame t is confirmed at frame t + k - 1 at the earliest and stays confirmed
+until it has been missing for n - k + 1 frames.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from schemas.messages import Shape
 from services.vision.detector import Detection
+
+DANGER_SHAPES = frozenset({Shape.X, Shape.TRIANGLE})
 
 
 @dataclass(frozen=True)
@@ -37,12 +49,31 @@ class DebounceConfig:
         return f"{self.k}/{self.n}"
 
 
-class Debouncer:
-    """Feed every frame's detections; get back the confirmed marks."""
+@dataclass(frozen=True)
+class Confirmation:
+    """The k-of-n windows for danger marks (X, TRIANGLE) and for the safe mark (O)."""
 
-    def __init__(self, config: DebounceConfig | None = None) -> None:
-        self.config = config or DebounceConfig()
-        self._history: dict[Shape, deque[Detection | None]] = {s: deque(maxlen=self.config.n) for s in Shape}
+    danger: DebounceConfig = field(default_factory=lambda: DebounceConfig(1, 3))
+    safe: DebounceConfig = field(default_factory=lambda: DebounceConfig(3, 4))
+
+    def for_shape(self, shape: Shape) -> DebounceConfig:
+        return self.danger if shape in DANGER_SHAPES else self.safe
+
+    def __str__(self) -> str:
+        return f"danger {self.danger}, safe {self.safe}"
+
+
+class Debouncer:
+    """Feed every frame's detections; get back the confirmed marks. A single `DebounceConfig`
+    applies the same window to every shape."""
+
+    def __init__(self, config: Confirmation | DebounceConfig | None = None) -> None:
+        if isinstance(config, DebounceConfig):
+            config = Confirmation(danger=config, safe=config)
+        self.config = config or Confirmation()
+        self._history: dict[Shape, deque[Detection | None]] = {
+            s: deque(maxlen=self.config.for_shape(s).n) for s in Shape
+        }
 
     def update(self, detections: list[Detection]) -> list[Detection]:
         confirmed: list[Detection] = []
@@ -50,7 +81,7 @@ class Debouncer:
             mine = [d for d in detections if d.shape == shape]
             history.append(max(mine, key=lambda d: d.confidence) if mine else None)
             hits = [d for d in history if d is not None]
-            if len(hits) >= self.config.k:
+            if len(hits) >= self.config.for_shape(shape).k:
                 latest = hits[-1]
                 mean_conf = sum(d.confidence for d in hits) / len(hits)
                 confirmed.append(Detection(shape, mean_conf, latest.box))

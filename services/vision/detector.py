@@ -46,13 +46,21 @@ class DetectorConfig:
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
-    surround: float = 0.3  # clear margin around a mark, as a fraction of its size
+    surround: float = 0.3  # how far around a mark the card is inspected, as a fraction of its size
+    border: float = 0.05  # the narrowest card border next to a mark that is judged, fraction of its size
+    min_band_paper: float = 0.75  # share of that border band that must be paper
     min_hole_contrast: float = 0.7  # hole brightness above ink, relative to the margin's
-    max_surround_ink: float = 0.02  # fraction of the margin that may be ink
+    max_surround_ink: float = 0.03  # share of the card near the mark that other ink may cover ...
+    clutter_radius: float = 0.15  # ... within this fraction of its size
+    safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
+    safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
+    letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 35.0  # margin mean minus ink mean, grey levels: print on paper, not a shadow
     max_margin_texture: float = 0.25  # margin grey std / (margin - ink): a card is plain, gravel is not
     min_confidence: float = 0.5
+    frame_margin: float = 0.04  # pre-test: a thin frame this far around a component's box ...
+    frame_max_ink: float = 0.4  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
 
@@ -145,7 +153,9 @@ class MarkDetector:
         keep[0] = False  # background label
         candidates = np.flatnonzero(keep)
         if len(candidates):
-            candidates = candidates[_clear_frames(binary, stats[candidates])]
+            candidates = candidates[
+                _clear_frames(binary, stats[candidates], cfg.frame_margin, cfg.frame_max_ink)
+            ]
         out: list[Detection] = []
         for i in candidates:
             det = self._judge(g, binary, labels, int(i), stats[i])
@@ -162,55 +172,181 @@ class MarkDetector:
         cfg = self.config
         x, y, w, h = (int(v) for v in stat[:4])
         size = float(max(w, h))
-        pad = math.ceil(cfg.surround * size) + 2
-        x0, y0 = max(0, x - pad), max(0, y - pad)
-        x1, y1 = min(g.shape[1], x + w + pad), min(g.shape[0], y + h + pad)
-        comp = np.where(labels[y0:y1, x0:x1] == i, np.uint8(255), np.uint8(0))
-        blob = _blob(comp, size)
+        # the shape first, on the component's own box (cheap: most candidates end here)
+        own = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
+        blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
         if blob is None:
             return None
         judged = _classify(blob)
         if judged is None:
             return None
         shape, conf = judged
+        # then the card, with room for whatever lies on it within `surround` of the mark
+        pad = math.ceil(3 * cfg.surround * size) + 2
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(g.shape[1], x + w + pad), min(g.shape[0], y + h + pad)
+        comp = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        comp[y - y0 : y - y0 + h, x - x0 : x - x0 + w] = own
+        shift = np.array([[[x - x0 - 1, y - y0 - 1]]], np.int32)
+        blob = _Blob(blob.outer + shift, [c + shift for c in blob.holes], blob.area, blob.size)
         filled = np.zeros_like(comp)
         cv2.drawContours(filled, [blob.outer], -1, 255, cv2.FILLED)
         bin_roi = binary[y0:y1, x0:x1]
         g_roi = g[y0:y1, x0:x1]
-        # the clear margin: everything within `surround` x the mark's extent of its outline - the extent
-        # is sqrt(hull area), not the box: a rotated X's box is 1.4 times wider, its card is not
-        m = cfg.surround * math.sqrt(cv2.contourArea(cv2.convexHull(blob.outer)))
-        dist = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
-        ring = cv2.inRange(dist, 1.5, max(m, 3.0))  # skip the blurred edge of the outline
-        ring_n = cv2.countNonZero(ring)
-        if ring_n == 0:
-            return None
-        if cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.max_surround_ink * ring_n:
-            return None
-        paper_mean, paper_std = cv2.meanStdDev(g_roi, mask=ring)
-        paper, texture = float(paper_mean[0][0]), float(paper_std[0][0])
         ink = cv2.mean(g_roi, mask=comp)[0]
-        if paper < 20 or ink > cfg.max_contrast_ratio * paper or paper - ink < cfg.min_contrast:
+        paper = _on_card(g_roi, filled, ink, blob.outer, cfg)
+        if paper is None:
             return None
-        # ink-like shapes turn up in textures (gravel, bark, hair) whose surroundings vary almost as
-        # much as the 'ink' differs from them; the card around a printed mark is plain by comparison
-        if texture > cfg.max_margin_texture * (paper - ink):
+        if (
+            shape is Shape.O
+            and cfg.safe_margin > 0
+            and not _clear_margin(g_roi, bin_roi, filled, ink, blob.outer, cfg)
+        ):
+            # a false O would lift a danger: the safe mark must also have the wide clear margin
             return None
         if blob.holes:
-            # a hole is paper: empty of other ink and about as bright as the margin (a big filled
-            # disc, hollowed by the local threshold, has a dark 'hole')
+            # a hole is paper: empty of other ink and about as bright as the card (a big filled disc
+            # or triangle, hollowed by the local threshold, has a dark 'hole')
             holes = cv2.subtract(filled, comp)
             n_hole = cv2.countNonZero(holes)
-            if n_hole == 0 or cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
+            if n_hole == 0:
                 return None
             hole_level = cv2.minMaxLoc(g_roi, mask=holes)[1]  # brightest: a small hole is blurred
             if hole_level - ink < cfg.min_hole_contrast * (paper - ink):
+                # a dark hole: only a filled triangle may have one, and then it is all ink
+                hole_mean = cv2.mean(g_roi, mask=holes)[0]
+                if shape is not Shape.TRIANGLE or hole_mean - ink > 0.35 * (paper - ink):
+                    return None
+            elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
         return Detection(shape, conf, (x, y, w, h))
 
 
+def _on_card(
+    g_roi: np.ndarray, filled: np.ndarray, ink: float, outer: np.ndarray, cfg: DetectorConfig
+) -> float | None:
+    """The card test: is the mark (filled outline `filled`, mean grey `ink`) printed on a plain light
+    card? Returns the card's grey level, or None.
+
+    The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
+    `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
+    brighter than the ink); the card is then every light pixel connected to that band. Within
+    `surround` x the extent, that card must be plain, and anything dark that the card encloses (other
+    ink on it: the next letters of a word, the stones of gravel around a 'stone ring') may cover at
+    most `max_surround_ink` of it. Dark things that reach in from outside the card (fingers, the
+    background beyond a narrow card edge) are not on the card and do not count against the mark.
+    The extent is sqrt(hull area), not the box: a rotated X's box is 1.4 times wider, its card is not.
+    """
+    extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(outer)), 1.0))
+    dist = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
+    band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # skip the blurred outline
+    band_n = cv2.countNonZero(band)
+    if band_n == 0:
+        return None
+    paper = float(np.median(g_roi[band > 0]))
+    if paper < 20 or ink > cfg.max_contrast_ratio * paper or paper - ink < cfg.min_contrast:
+        return None
+    light = np.where(g_roi > ink + 0.5 * (paper - ink), np.uint8(255), np.uint8(0))
+    light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
+    if cv2.countNonZero(cv2.bitwise_and(light, band)) < cfg.min_band_paper * band_n:
+        return None
+    # the card: light regions touching the band
+    _, labels = cv2.connectedComponents(light, connectivity=8)
+    touching = np.unique(labels[(band > 0) & (light > 0)])
+    card = np.where(np.isin(labels, touching[touching > 0]), np.uint8(255), np.uint8(0))
+    near = cv2.inRange(dist, 1.5, max(3.0, cfg.surround * extent))
+    card_near = cv2.bitwise_and(card, near)
+    mean, std = cv2.meanStdDev(g_roi, mask=card_near)
+    if float(std[0][0]) > cfg.max_margin_texture * (paper - ink):
+        return None
+    # dark things enclosed by the card (not reaching the edge of the region looked at) are on it
+    other = cv2.bitwise_not(cv2.bitwise_or(card, filled))
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(other, connectivity=4)
+    h, w = other.shape
+    sx, sy, sw, sh = stats[:, 0], stats[:, 1], stats[:, 2], stats[:, 3]
+    inside = (sx > 0) & (sy > 0) & (sx + sw < w) & (sy + sh < h)
+    inside[0] = False
+    if inside.any():
+        # from the border band outwards: nearer, the mark's own blurred edge is neither ink nor paper
+        halo = max(2.5, cfg.border * extent)
+        close = (dist >= halo) & (dist <= max(halo + 1.0, cfg.clutter_radius * extent))
+        on_card = np.isin(labels, np.flatnonzero(inside)) & close
+        if int(on_card.sum()) > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
+            return None
+    dark = ink + 0.3 * (paper - ink)
+    cut = ink + 0.5 * (paper - ink)
+    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
+        return None
+    return float(mean[0][0])
+
+
+def _clear_margin(
+    g_roi: np.ndarray,
+    bin_roi: np.ndarray,
+    filled: np.ndarray,
+    ink: float,
+    outer: np.ndarray,
+    cfg: DetectorConfig,
+) -> bool:
+    """The strict context for the safe mark: every pixel within `safe_margin` x the extent of the
+    outline is plain paper (at most `max_surround_ink` ink, spread at most `max_margin_texture` of the
+    contrast), whatever the card's shape - fingers or a card edge there make the O wait."""
+    extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(outer)), 1.0))
+    dist = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
+    ring = cv2.inRange(dist, 1.5, max(3.0, cfg.safe_margin * extent))
+    ring_n = cv2.countNonZero(ring)
+    if ring_n == 0 or cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.safe_max_ink * ring_n:
+        return False
+    mean, std = cv2.meanStdDev(g_roi, mask=ring)
+    return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
+
+
+def _letter_beside(
+    g_roi: np.ndarray,
+    filled: np.ndarray,
+    dist: np.ndarray,
+    extent: float,
+    dark: float,
+    paper_cut: float,
+    gap: float,
+) -> bool:
+    """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
+    within `gap` x the mark's extent, made of strokes (not a solid blob) and wholly in view of the
+    region looked at (the background beyond a card's edge runs on out of it)."""
+    ink = np.where((g_roi <= dark) & (filled == 0), np.uint8(255), np.uint8(0))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    if n <= 1:
+        return False
+    h, w = ink.shape
+    sx, sy, sw, sh, area = (stats[:, k] for k in range(5))
+    size, thin = np.maximum(sw, sh), np.minimum(sw, sh)
+    letters = np.flatnonzero(
+        (sx > 0)
+        & (sy > 0)
+        & (sx + sw < w)
+        & (sy + sh < h)
+        & (size >= 0.45 * extent)
+        & (size <= 2.0 * extent)
+        & (thin >= 0.15 * extent)
+        & (area <= 0.65 * sw * sh)
+    )
+    for j in letters:
+        x, y, cw, ch = (int(v) for v in stats[j, :4])
+        mine = labels[y : y + ch, x : x + cw] == j
+        nearest = float(dist[y : y + ch, x : x + cw][mine].min())
+        if not 1.5 < nearest <= gap * extent:  # touching: part of the mark
+            continue
+        # printed on the same paper: light all round it (unlike the background beyond a card's edge)
+        x0, y0, x1, y1 = max(0, x - 4), max(0, y - 4), min(w, x + cw + 4), min(h, y + ch + 4)
+        sub = (labels[y0:y1, x0:x1] == j).astype(np.uint8)
+        ring = cv2.dilate(sub, np.ones((7, 7), np.uint8)) - cv2.dilate(sub, np.ones((3, 3), np.uint8))
+        if float(np.mean(g_roi[y0:y1, x0:x1][ring > 0] > paper_cut)) >= 0.8:
+            return True
+    return False
+
+
 def _clear_frames(
-    binary: np.ndarray, stats: np.ndarray, margin: float = 0.1, max_ink: float = 0.2
+    binary: np.ndarray, stats: np.ndarray, margin: float = 0.04, max_ink: float = 0.4
 ) -> np.ndarray:
     """Cheap vectorised pre-test: little ink in a thin frame just outside each box (a mark sits on
     a card; a blob of texture or a letter in a word does not). Boolean mask over `stats` rows."""
@@ -281,8 +417,19 @@ def _classify(b: _Blob) -> tuple[Shape, float] | None:
     if len(b.holes) == 1:
         return _ring_like(b)
     if not b.holes:
-        return _cross(b)
+        return _cross(b) or _filled_triangle(b)
     return None
+
+
+def _filled_triangle(b: _Blob) -> tuple[Shape, float] | None:
+    """A solid triangle (on a card: the card test decides whether it is a mark or clutter)."""
+    hull_area = cv2.contourArea(cv2.convexHull(b.outer))
+    if hull_area <= 0 or b.area / hull_area < 0.93:
+        return None
+    fill = _triangle_fill(b.outer, b.area)
+    if fill < 0.85:
+        return None
+    return Shape.TRIANGLE, 1.0 - 0.5 * (1 - fill) / 0.15
 
 
 def _ring_like(b: _Blob) -> tuple[Shape, float] | None:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
-from services.vision.debounce import DebounceConfig, Debouncer
+from services.vision.debounce import Confirmation, Debouncer
 from services.vision.detector import MarkDetector
 from services.vision.preview import PreviewPublisher
 from services.vision.sources import (
@@ -33,9 +33,10 @@ NAME = "vision"
 class VisionSettings:
     source: str = "camera:0"
     fps: float | None = None  # cap; None: the source's own rate (camera) or its default
-    debounce: DebounceConfig = field(default_factory=DebounceConfig)
+    debounce: Confirmation = field(default_factory=Confirmation)
     loop: bool = False  # replay a video file or image folder forever
-    retry_s: float = 2.0  # wait between attempts to open a missing source
+    retry_s: float = 2.0  # first wait before another attempt to open a missing source ...
+    max_retry_s: float = 30.0  # ... doubling up to this
     stall_s: float = 2.0  # a camera silent this long is reported
     seed: int = 0  # synthetic scenes
 
@@ -117,6 +118,7 @@ def _run(
     preview: PreviewPublisher | None = None,
 ) -> None:
     opened = False
+    retry = _Backoff(settings.retry_s, settings.max_retry_s)
     source: FrameSource | None = None
     last_frame = time.monotonic()
     next_due = time.monotonic()
@@ -125,19 +127,26 @@ def _run(
             try:
                 source = holder.open()
             except SourceError as exc:
-                ctx.set_status(HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES)
-                ctx.log.warning(
+                delay, first = retry.next(str(exc))
+                ctx.set_status(
+                    HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES, retry_in_s=delay
+                )
+                # one warning per distinct failure; the repeats (with a growing wait) at debug level
+                (ctx.log.warning if first else ctx.log.debug)(
                     "vision source unavailable, retrying",
                     source=settings.source,
                     error=str(exc),
-                    retry_in_s=settings.retry_s,
+                    retry_in_s=delay,
                 )
-                ctx.wait(settings.retry_s)
+                ctx.wait(delay)
                 continue
             opened = True
+            retry.reset()
             debounce.reset()  # a reopened source starts a new scene
             last_frame = next_due = time.monotonic()
-            ctx.set_status(HealthStatus.OK, error=None, alternatives=None, source=settings.source)
+            ctx.set_status(
+                HealthStatus.OK, error=None, alternatives=None, retry_in_s=None, source=settings.source
+            )
             ctx.log.info("vision source open", source=settings.source)
         assert source is not None
         try:
@@ -182,6 +191,7 @@ def _run(
             ctx.log.warning("frame skipped", frame=frame.index, error=str(exc))
             continue
         stats.add(time.perf_counter() - t0)
+        # here the frame (frame.image) and this frame's detections (found) are both at hand
         confirmed = debounce.update(found)
         obs = pub.put(
             MarkObservation(stamp=frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
@@ -200,3 +210,22 @@ def _run(
             delay = next_due - time.monotonic()
             if delay > 0 and ctx.wait(delay):
                 return
+
+
+class _Backoff:
+    """Waits between attempts to open a missing source: `first_s`, doubling up to `max_s`."""
+
+    def __init__(self, first_s: float, max_s: float) -> None:
+        self.first_s, self.max_s = first_s, max(first_s, max_s)
+        self._delay = 0.0
+        self._last_error: str | None = None
+
+    def next(self, error: str) -> tuple[float, bool]:
+        """The wait before the next attempt, and whether this failure is new (worth a warning)."""
+        first = error != self._last_error
+        self._last_error = error
+        self._delay = self.first_s if self._delay == 0 else min(self.max_s, 2 * self._delay)
+        return self._delay, first
+
+    def reset(self) -> None:
+        self._delay, self._last_error = 0.0, None

@@ -5,14 +5,19 @@
     camera:0 | camera:/dev/video0    V4L2 camera; a grabber thread keeps only the newest frame
     path/to/video.mp4                a video file (anything FFmpeg decodes)
     path/to/folder | 'frames/*.png'  images in name order
-    synthetic:<scenario>             rendered marks on cards (scenario: none, cycle, paper, or a file)
+    synthetic | synthetic:<scenario> rendered marks on cards (scenario: none, the default, holds
+                                     nothing up until told; cycle, paper, or a schedule file)
 
-A source that cannot be opened raises `SourceError` naming the source and the alternatives.
+A spec that can never work (an unknown `scheme:`, an unknown synthetic scenario, a bad schedule)
+raises `SourceConfigError` at once; a source that cannot be opened now (no camera, missing file)
+raises `SourceError` naming the source and the alternatives, and may work on a later attempt.
+The synthetic scene's generator (and scikit-image behind it) is imported only for a synthetic source.
 """
 
 from __future__ import annotations
 
 import glob as globlib
+import re
 import threading
 import time
 from dataclasses import dataclass
@@ -24,19 +29,22 @@ import numpy as np
 
 from schemas.messages import Shape
 from services.runtime import get_logger
-from services.vision.synthetic import Scene, SceneGenerator, Variation
 
 log = get_logger("vision.sources")
 
 ALTERNATIVES = (
-    "camera:0, camera:/dev/video0, a video file (clip.mp4), an image folder or glob "
-    "('frames/*.png'), or synthetic:paper / synthetic:cycle / synthetic:none"
+    "camera:0, camera:/dev/video0, a video file (clip.mp4), an image folder or glob ('frames/*.png'), "
+    "or synthetic (nothing held up until told, as synthetic:none) / synthetic:paper / synthetic:cycle"
 )
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm"}
 
 
 class SourceError(RuntimeError):
     """The source cannot be opened or has failed; the message says which and what else to use."""
+
+
+class SourceConfigError(SourceError):
+    """The spec itself is wrong: retrying cannot help."""
 
 
 class EndOfStream(Exception):
@@ -65,10 +73,21 @@ def open_source(spec: str, *, loop: bool = False, seed: int = 0) -> FrameSource:
     if not spec:
         raise SourceError(f"empty vision source; use one of: {ALTERNATIVES}")
     if spec.startswith("camera:"):
+        if not spec.split(":", 1)[1]:
+            raise SourceConfigError(
+                f"vision source {spec!r}: camera needs a number or device; use one of: {ALTERNATIVES}"
+            )
         return CameraSource(spec)
-    if spec.startswith("synthetic:"):
-        return SyntheticSource(spec, seed=seed)
+    if spec == "synthetic" or spec.startswith("synthetic:"):
+        source = SyntheticSource(spec, seed=seed)
+        source.load_schedule()
+        return source
     path = Path(spec).expanduser()
+    scheme = re.match(r"^([A-Za-z][A-Za-z0-9+.-]+):", spec)
+    if scheme and not path.exists() and "://" not in spec:
+        raise SourceConfigError(
+            f"vision source {spec!r}: unknown scheme {scheme.group(1)!r}; use one of: {ALTERNATIVES}"
+        )
     if path.is_dir():
         files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
         return ImageFolderSource(spec, files, loop=loop)
@@ -253,18 +272,20 @@ BUILTIN_SCENARIOS: dict[str, list[tuple[float, Shape | None]]] = {
     ],
 }
 
-DEMO_VARIATION = Variation(
-    size=(70.0, 200.0),
-    rotation_deg=25.0,
-    tilt_deg=30.0,
-    light=0.4,
-    dim=(0.7, 1.05),
-    blur=2.0,
-    noise=5.0,
-    jpeg=(70, 95),
-    distractors=(2, 5),
-)
-"""A steadier scene than the benchmark's: a person holding a card up to the robot."""
+DEMO_VARIATION: dict[str, object] = {
+    "size": (70.0, 200.0),
+    "rotation_deg": 25.0,
+    "tilt_deg": 30.0,
+    "light": 0.4,
+    "dim": (0.7, 1.05),
+    "blur": 2.0,
+    "noise": 5.0,
+    "jpeg": (70, 95),
+    "distractors": (2, 5),
+    "border": (0.2, 0.6),
+}
+"""A steadier scene than the benchmark's: a person holding a card up to the robot (the fields of
+`synthetic.Variation`, kept as plain values so that this module does not import the generator)."""
 
 
 def parse_schedule(text: str, origin: str = "<schedule>") -> list[tuple[float, Shape | None]]:
@@ -306,37 +327,54 @@ class SyntheticSource:
         seed: int = 0,
         width: int = 640,
         height: int = 480,
-        variation: Variation = DEMO_VARIATION,
+        fps: float = 15.0,
     ) -> None:
         self.spec = spec
-        self.default_fps: float | None = 15.0
-        self.scenario = spec.split(":", 1)[1] or "none"
-        self._seed, self._size, self._variation = seed, (width, height), variation
+        self.default_fps: float | None = fps
+        self.scenario = (spec.split(":", 1)[1] if ":" in spec else "") or "none"
+        self._seed, self._size = seed, (width, height)
         self._schedule: list[tuple[float, Shape | None]] = []
-        self._gen: SceneGenerator | None = None
-        self._scene: Scene | None = None
-        self._backdrop: np.ndarray | None = None
+        self._stills: dict[Shape | None, np.ndarray] = {}
         self._override: tuple[Shape | None] | None = None
-        self._still: np.ndarray | None = None
         self._noise = np.zeros((height, width, 3), np.int16)
         self._lock = threading.Lock()
         self._t0 = 0.0
         self._index = 0
 
-    def open(self) -> None:
+    def load_schedule(self) -> None:
+        """Read the scenario; SourceConfigError if it is neither a built-in nor a readable schedule."""
         if self.scenario in BUILTIN_SCENARIOS:
             self._schedule = BUILTIN_SCENARIOS[self.scenario]
-        else:
-            path = Path(self.scenario).expanduser()
-            if not path.is_file():
-                raise SourceError(
-                    f"synthetic scenario {self.scenario!r} is neither a built-in "
-                    f"({', '.join(BUILTIN_SCENARIOS)}) nor a schedule file; use one of: "
-                    f"{ALTERNATIVES}"
-                )
+            return
+        path = Path(self.scenario).expanduser()
+        if not path.is_file():
+            raise SourceConfigError(
+                f"synthetic scenario {self.scenario!r} is neither a built-in "
+                f"({', '.join(BUILTIN_SCENARIOS)}) nor a schedule file; use one of: {ALTERNATIVES}"
+            )
+        try:
             self._schedule = parse_schedule(path.read_text(errors="replace"), str(path))
-        if self._gen is None:
-            self._gen = SceneGenerator(*self._size, seed=self._seed, variation=self._variation)
+        except SourceError as exc:
+            raise SourceConfigError(str(exc)) from None
+
+    def open(self) -> None:
+        if not self._schedule:
+            self.load_schedule()
+        if not self._stills:
+            from services.vision.synthetic import SKIMAGE_BACKGROUNDS, SceneGenerator, Variation
+
+            variation = Variation(**DEMO_VARIATION)  # type: ignore[arg-type]
+            room = (SKIMAGE_BACKGROUNDS[self._seed % len(SKIMAGE_BACKGROUNDS)],)  # one room: less memory
+            gen = SceneGenerator(*self._size, seed=self._seed, variation=variation, backgrounds=room)
+            # one card pose per shape in front of one backdrop, rendered now (about 40 ms each), so
+            # that a new shape shows on the very next frame; each frame adds fresh sensor noise. The
+            # generator (and its bank of background images) is not kept.
+            backdrop = None
+            for shape in (None, *Shape):
+                scene = gen.scene(shape)
+                backdrop = scene.background if backdrop is None else backdrop
+                scene.background = backdrop  # the room stays; only the card changes
+                self._stills[shape] = gen.render(scene)[0]
         self._t0 = time.monotonic()
 
     def set_shape(self, shape: Shape | None) -> None:
@@ -356,20 +394,11 @@ class SyntheticSource:
         return self._schedule[-1][1]
 
     def read(self, timeout: float) -> Frame | None:
-        if self._gen is None:
+        if not self._stills:
             raise SourceError(f"{self.spec} is not open")
-        shape = self.current_shape()
-        if self._scene is None or self._scene.shape != shape:
-            scene = self._gen.scene(shape)
-            if self._backdrop is None:
-                self._backdrop = scene.background
-            scene.background = self._backdrop  # the room stays; only the card changes
-            self._scene = scene
-            # rendering costs ~40 ms; do it once per scene, then only add fresh sensor noise per frame
-            self._still = self._gen.render(scene)[0].astype(np.int16)
-        assert self._still is not None
+        still = self._stills[self.current_shape()]
         cv2.randn(self._noise, np.zeros(3), np.full(3, 3.0))
-        image = np.clip(self._still + self._noise, 0, 255).astype(np.uint8)
+        image = cv2.add(still, self._noise, dtype=cv2.CV_8U)  # saturating
         self._index += 1
         return Frame(image, time.time(), self._index)
 

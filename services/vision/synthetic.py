@@ -62,11 +62,15 @@ class Variation:
     tilt_deg: float = 50.0  # out-of-plane tilt, uniform in 0..this
     light: float = 0.6  # uneven lighting strength, 0 (flat) .. 1 (strong gradient and shadow)
     dim: tuple[float, float] = (0.45, 1.1)  # overall exposure gain
-    blur: float = 7.0  # longest motion blur, pixels
+    blur: float = 14.0  # longest motion blur, pixels
     noise: float = 10.0  # largest Gaussian sensor-noise sigma, grey levels
     jpeg: tuple[int, int] = (45, 95)  # JPEG quality range (0 disables)
     distractors: tuple[int, int] = (2, 7)  # how many clutter objects
     kinds: tuple[str, ...] = DISTRACTORS
+    border: tuple[float, float] = (0.06, 0.6)  # card border beside the mark, fraction of its width
+    colour_ink: float = 0.35  # share of marks in red, blue or green ink instead of dark grey
+    filled_triangle: float = 0.25  # share of triangle marks drawn filled
+    fingers: float = 0.4  # share of cards with fingers reaching towards the mark
 
     def only(self, **changes: object) -> Variation:
         return replace(self, **changes)  # type: ignore[arg-type]
@@ -82,6 +86,10 @@ MILD = Variation(
     noise=2.0,
     jpeg=(0, 0),
     distractors=(0, 0),
+    border=(0.35, 0.65),
+    colour_ink=0.0,
+    filled_triangle=0.0,
+    fingers=0.0,
 )
 """A clean scene: one variation at a time is added to this in the tests."""
 
@@ -106,6 +114,9 @@ class Scene:
     jpeg: int
     skew: float = 0.0  # hand-drawn irregularity: X arm angle offset (deg)
     hand: bool = True
+    filled: bool = False  # a filled triangle
+    fingers: int = 0  # fingers reaching from a card edge towards the mark
+    finger_gap: float = 0.2  # how far short of the mark they stop, fraction of its width
 
 
 class SceneGenerator:
@@ -118,12 +129,13 @@ class SceneGenerator:
         seed: int = 0,
         variation: Variation = Variation(),
         use_skimage: bool = True,
+        backgrounds: tuple[str, ...] = SKIMAGE_BACKGROUNDS,
     ) -> None:
         self.width = width
         self.height = height
         self.variation = variation
         self.rng = np.random.default_rng(seed)
-        self.bank = _load_backgrounds() if use_skimage else []
+        self.bank = _load_backgrounds(backgrounds) if use_skimage else []
         self.face = _load_face() if use_skimage else None
 
     # ------------------------------------------------------------------ public
@@ -135,8 +147,7 @@ class SceneGenerator:
         v, rng = self.variation, self.rng
         size = float(math.exp(rng.uniform(math.log(v.size[0]), math.log(v.size[1]))))
         size = min(size, 0.9 * min(self.width, self.height))
-        card = (rng.uniform(1.7, 2.3), 0.0)
-        card = (card[0], card[0] * rng.uniform(1.0, 1.35))
+        card = (1 + 2 * rng.uniform(*v.border), 1 + 2 * rng.uniform(*v.border))
         tilt_mag = rng.uniform(0, v.tilt_deg)
         tilt_dir = rng.uniform(0, 2 * math.pi)
         rotation = float(rng.uniform(-v.rotation_deg, v.rotation_deg))
@@ -154,13 +165,16 @@ class SceneGenerator:
             center=(cx, cy),
             card=card,
             paper=tuple(int(np.clip(paper_level + t, 0, 255)) for t in tint),  # type: ignore[arg-type]
-            ink=tuple(int(x) for x in rng.integers(0, 60, size=3)),  # type: ignore[arg-type]
+            ink=_mark_ink(rng, v.colour_ink),
             light=self._lighting(v.light),
             blur=(float(rng.uniform(0, v.blur)), float(rng.uniform(0, 180))),
             noise=float(rng.uniform(0, v.noise)),
             jpeg=int(rng.integers(v.jpeg[0], v.jpeg[1] + 1)) if v.jpeg[1] > 0 else 0,
             skew=float(rng.uniform(-10, 10)),
             hand=bool(rng.random() < 0.6),
+            filled=bool(rng.random() < v.filled_triangle),
+            fingers=int(rng.integers(1, 4)) if rng.random() < v.fingers else 0,
+            finger_gap=float(rng.uniform(0.03, 0.3)),
         )
 
     def _place(
@@ -337,13 +351,59 @@ class SceneGenerator:
         card = np.empty((int(ch), int(cw), 3), np.uint8)
         card[:] = scene.paper
         mark_pts = _draw_mark(
-            card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k, scene.ink, scene.skew
+            card,
+            scene.shape,
+            (cw / 2, ch / 2),
+            s * k,
+            scene.stroke * s * k,
+            scene.ink,
+            scene.skew,
+            scene.filled,
         )
+        if scene.fingers:
+            # fingers over the card's bottom edge, their tips stopping short of the mark
+            fw = 0.2 * s * k
+            tip = ch / 2 + s * k / 2 + scene.finger_gap * s * k
+            length = max(ch - tip, 0.0) + fw
+            for f in range(scene.fingers):
+                fx = cw / 2 + (f - (scene.fingers - 1) / 2) * 1.1 * fw + self.rng.uniform(-0.3, 0.3) * s * k
+                centre = (int(fx), int(tip + length / 2))
+                axes = (int(fw / 2), int(length / 2 + fw / 2))
+                cv2.ellipse(
+                    card,
+                    centre,
+                    axes,
+                    float(self.rng.uniform(-12, 12)),
+                    0,
+                    360,
+                    (95, 125, 175),
+                    -1,
+                    cv2.LINE_AA,
+                )
+                cv2.ellipse(
+                    card,
+                    centre,
+                    (max(1, axes[0] - 2), max(1, axes[1] - 2)),
+                    0,
+                    0,
+                    360,
+                    (120, 150, 200),
+                    -1,
+                    cv2.LINE_AA,
+                )
         if scene.hand:
             # fingers holding a bottom corner of the card
             hc = (int(cw * self.rng.choice([0.0, 1.0])), int(ch))
             cv2.ellipse(
-                card, hc, (int(cw * 0.2), int(ch * 0.16)), 0, 0, 360, (120, 150, 200), -1, cv2.LINE_AA
+                card,
+                hc,
+                (int(cw * 0.2), max(1, int(min(ch * 0.16, 0.9 * (ch - s * k) / 2)))),  # stays in the border
+                0,
+                0,
+                360,
+                (120, 150, 200),
+                -1,
+                cv2.LINE_AA,
             )
         h_mat = _card_homography(
             card.shape[1], card.shape[0], center, 1.0 / k, scene.rotation_deg, scene.tilt
@@ -367,6 +427,7 @@ def _draw_mark(
     t: float,
     ink: tuple[int, int, int],
     skew: float,
+    filled: bool = False,
 ) -> np.ndarray:
     """Draw the mark (width `s`, stroke `t`) centred at `c`; return its outline points for the label."""
     cx, cy = c
@@ -393,8 +454,9 @@ def _draw_mark(
         centre = np.array(c)
         inner = centre + (verts - centre) * max(0.05, (inr - t) / inr)
         cv2.fillPoly(card, [_fixed(verts)], ink, cv2.LINE_AA, shift=4)
-        paper = tuple(int(x) for x in card[0, 0])
-        cv2.fillPoly(card, [_fixed(inner)], paper, cv2.LINE_AA, shift=4)
+        if not filled:
+            paper = tuple(int(x) for x in card[0, 0])
+            cv2.fillPoly(card, [_fixed(inner)], paper, cv2.LINE_AA, shift=4)
         return verts
     if shape is Shape.X:
         h = s / 2 - t / 2
@@ -541,6 +603,14 @@ def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) 
     _paste(img, patch, int(cx - s / 2), int(cy - s / 2))
 
 
+def _mark_ink(rng: Rng, colour_share: float) -> tuple[int, int, int]:
+    """Dark grey ink, or (a `colour_share` of the time) red, blue or green marker ink (BGR)."""
+    if rng.random() >= colour_share:
+        return tuple(int(x) for x in rng.integers(0, 60, size=3))  # type: ignore[return-value]
+    base = ((35, 35, 190), (150, 60, 25), (50, 130, 30))[int(rng.integers(3))]
+    return tuple(int(np.clip(b + rng.integers(-20, 21), 0, 255)) for b in base)  # type: ignore[return-value]
+
+
 def _dark_or_any(rng: Rng) -> tuple[int, int, int]:
     if rng.random() < 0.6:
         return tuple(int(x) for x in rng.integers(0, 70, size=3))  # type: ignore[return-value]
@@ -566,14 +636,14 @@ def _procedural_background(rng: Rng, w: int, h: int) -> np.ndarray:
     return img
 
 
-def _load_backgrounds() -> list[np.ndarray]:
+def _load_backgrounds(names: tuple[str, ...] = SKIMAGE_BACKGROUNDS) -> list[np.ndarray]:
     try:
         from skimage import data
     except ImportError:
         log.info("scikit-image not importable: procedural backgrounds only")
         return []
     bank = []
-    for name in SKIMAGE_BACKGROUNDS:
+    for name in names:
         try:
             img = np.asarray(getattr(data, name)())
         except (AttributeError, OSError, ValueError) as exc:  # needs a download, or a changed API

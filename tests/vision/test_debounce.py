@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from schemas.messages import Shape
-from services.vision.debounce import DebounceConfig, Debouncer
+from services.vision.debounce import Confirmation, DebounceConfig, Debouncer
 from services.vision.detector import Detection
 
 X = Detection(Shape.X, 0.9, (10, 10, 40, 40))
@@ -54,3 +54,34 @@ def test_bad_debounce_specs_are_rejected(text: str) -> None:
 
 def test_parse_round_trips() -> None:
     assert str(DebounceConfig.parse("2/4")) == "2/4"
+
+
+T = Detection(Shape.TRIANGLE, 0.7, (200, 10, 40, 40))
+
+
+def test_danger_acts_on_the_first_frame_and_is_held_two_more() -> None:
+    deb = Debouncer()  # danger 1/3, safe 3/4
+    assert _run(deb, [[X], [], [], [], [T], [], [T]]) == [
+        {Shape.X},
+        {Shape.X},
+        {Shape.X},
+        set(),
+        {Shape.TRIANGLE},
+        {Shape.TRIANGLE},
+        {Shape.TRIANGLE},
+    ]
+
+
+def test_safe_mark_needs_three_of_four_frames() -> None:
+    deb = Debouncer()
+    assert _run(deb, [[O_], [], [O_], [], [O_]]) == [set()] * 5  # every other frame never clears
+    deb.reset()
+    out = _run(deb, [[O_], [O_], [O_], [O_], [], [], []])
+    assert out == [set(), set(), {Shape.O}, {Shape.O}, {Shape.O}, set(), set()]
+
+
+def test_confirmation_windows_are_per_kind() -> None:
+    conf = Confirmation(danger=DebounceConfig(2, 2), safe=DebounceConfig(1, 1))
+    deb = Debouncer(conf)
+    assert _run(deb, [[X, O_], [X], []]) == [{Shape.O}, {Shape.X}, set()]
+    assert str(conf) == "danger 2/2, safe 1/1"

@@ -26,6 +26,15 @@ VARIATIONS: dict[str, Variation] = {
     "noise": MILD.only(noise=12.0),
     "jpeg": MILD.only(jpeg=(30, 50)),
     "clutter": MILD.only(distractors=(5, 8)),
+    # the conditions of issue #13, each alone
+    "fingers_near_mark": MILD.only(fingers=1.0, border=(0.1, 0.4)),
+    "coloured_ink": MILD.only(colour_ink=1.0),
+    "filled_triangle": MILD.only(filled_triangle=1.0),
+    "blur_20px": MILD.only(blur=20.0, size=(90.0, 200.0)),
+    "under_over_exposure": MILD.only(dim=(0.35, 1.5), light=1.0),
+    "jpeg_40_and_noise": MILD.only(jpeg=(40, 45), noise=12.0),
+    "tilt_45": MILD.only(tilt_deg=45.0, rotation_deg=180.0),
+    "fills_frame": MILD.only(size=(300.0, 430.0), border=(0.1, 0.3)),
 }
 
 
@@ -51,6 +60,43 @@ def test_each_variation_finds_every_shape(detector: MarkDetector, name: str) -> 
             wrong = [d for d in found if d.shape != shape and box_overlap(d.box, labels[0].box) > 0.2]
             assert not wrong, f"{name}: {shape.value} mark also read as {wrong}"
         assert hits >= PER_SHAPE - 1, f"{name}: found {hits}/{PER_SHAPE} {shape.value} marks"
+
+
+def test_narrow_card_border_next_to_the_mark(detector: MarkDetector) -> None:
+    """A border of 5-10 % of the mark's width: an X almost always; a triangle whose base nearly
+    touches the card's edge is missed about a third of the time (the narrow band beside it is then
+    partly background): a known limit. An O needs a clear margin of 10 % of its size on purpose (a
+    false O lifts a danger), so on these cards it is found only when the border is wide enough."""
+    gen = SceneGenerator(seed=zlib.crc32(b"narrow_border") % 1000, variation=MILD.only(border=(0.05, 0.1)))
+    want = {Shape.X: PER_SHAPE - 1, Shape.O: PER_SHAPE - 4, Shape.TRIANGLE: PER_SHAPE - 3}
+    for shape in SHAPES:
+        hits = sum(
+            _correct(detector.detect(img), shape, labels[0].box)
+            for img, labels in (gen.frame(shape) for _ in range(PER_SHAPE))
+        )
+        assert hits >= want[shape], f"narrow border: found {hits}/{PER_SHAPE} {shape.value} marks"
+
+
+def test_held_out_generator_frames_are_labelled_and_mostly_found(detector: MarkDetector) -> None:
+    """The independent generator: deterministic, its labels inside the frame, and the detector finds
+    most of its marks (a regression guard; the figures come from bench/vision_bench.py)."""
+    from services.vision.heldout import HeldOutGenerator
+
+    a, b = HeldOutGenerator(seed=3), HeldOutGenerator(seed=3)
+    hits = total = 0
+    for i in range(24):
+        shape = SHAPES[i % 3]
+        img, label = a.frame(shape)
+        img2, label2 = b.frame(shape)
+        # same seed, same scene (the pixels may differ by a grey level in a few places: float filtering)
+        assert label2 == label and img.shape == (480, 640, 3)
+        assert float(np.mean(cv2.absdiff(img, img2))) < 0.5
+        assert label is not None and label.shape is shape
+        x, y, w, h = label.box
+        assert 0 <= x and 0 <= y and x + w <= 640 and y + h <= 480 and min(w, h) >= 8
+        hits += _correct(detector.detect(img), shape, label.box)
+        total += 1
+    assert hits >= total // 2, f"held-out: {hits}/{total}"
 
 
 def test_mark_free_cluttered_frames_give_no_marks(detector: MarkDetector) -> None:
@@ -90,9 +136,14 @@ def _card(draw: str) -> np.ndarray:
     return img
 
 
-@pytest.mark.parametrize("draw", ["square", "filled_square", "disc", "filled_triangle", "word"])
+@pytest.mark.parametrize("draw", ["square", "filled_square", "disc", "word"])
 def test_non_marks_on_a_card_are_rejected(detector: MarkDetector, draw: str) -> None:
     assert detector.detect(_card(draw)) == []
+
+
+def test_a_filled_triangle_on_a_card_is_a_triangle_mark(detector: MarkDetector) -> None:
+    found = detector.detect(_card("filled_triangle"))
+    assert [d.shape for d in found] == [Shape.TRIANGLE]
 
 
 @pytest.mark.parametrize(("draw", "shape"), [("ring", Shape.O), ("cross", Shape.X)])

@@ -4,6 +4,7 @@ driven by SceneCommand, a bad source, SIGTERM; and the `detect` command."""
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -50,7 +51,9 @@ def _stop(proc: subprocess.Popen[bytes]) -> int:
 def test_video_file_end_to_end(
     bus: ServiceContext, keys: Keys, start_service: Callable[..., subprocess.Popen[bytes]], tmp_path: Path
 ) -> None:
-    gen = SceneGenerator(seed=5, variation=MILD)
+    # procedural backdrop: this test is about the timing of confirmation (the scikit-image gravel
+    # behind seed 5 holds a gap pattern the detector reads as a weak X: see the vision README's limits)
+    gen = SceneGenerator(seed=5, variation=MILD, use_skimage=False)
     scene_x, scene_none = gen.scene(Shape.X), gen.scene(None)
     video = tmp_path / "marks.avi"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), 30, (640, 480))
@@ -68,15 +71,18 @@ def test_video_file_end_to_end(
     assert [m.frame for m in msgs] == list(range(1, len(plan) + 1))
     assert all(t0 <= m.stamp <= time.time() for m in msgs)
     shapes = got.shapes()
-    # X shown in frames 9..20: confirmed from its 3rd frame (3 of 5), gone on the 3rd frame without it
-    assert shapes[:10] == [set()] * 10
-    assert shapes[10:22] == [{Shape.X}] * 12
+    # X shown in frames 9..20: a danger mark acts on its first frame (1 of 3) and is held for two more
+    assert shapes[:8] == [set()] * 8
+    assert shapes[8:22] == [{Shape.X}] * 14
     assert shapes[22:] == [set()] * 8
     x = msgs[12].marks[0]
     assert 0.5 <= x.confidence <= 1.0 and x.box[2] > 20
     h = cast(
         Health,
-        wait_for(lambda: (x := bus.query_health("vision")) is not None and x.detail.get("finished") and x, timeout=5),
+        wait_for(
+            lambda: (x := bus.query_health("vision")) is not None and x.detail.get("finished") and x,
+            timeout=5,
+        ),
     )
     assert h.status is HealthStatus.OK and h.published == len(plan)
     assert proc.poll() is None  # a finished file leaves the service up
@@ -107,7 +113,7 @@ def test_synthetic_scene_follows_scene_commands(
     wait_for(lambda: len(got.snapshot()) > n + 5, timeout=10)
     assert proc.poll() is None
     h = bus.query_health("vision")
-    assert h is not None and h.rejected >= 2 and h.detail["debounce"] == "3/5"
+    assert h is not None and h.rejected >= 2 and h.detail["debounce"] == "danger 1/3, safe 3/4"
     assert _stop(proc) == 0
 
 
@@ -119,7 +125,8 @@ def test_missing_source_degrades_and_keeps_running(
     h = cast(
         Health,
         wait_for(
-            lambda: (x := bus.query_health("vision")) is not None and x.status is HealthStatus.DEGRADED and x, timeout=20
+            lambda: (x := bus.query_health("vision")) is not None and x.status is HealthStatus.DEGRADED and x,
+            timeout=20,
         ),
     )
     assert source in h.detail["error"]
@@ -161,3 +168,47 @@ def test_detect_command_prints_one_observation_per_image(tmp_path: Path) -> None
     assert [o.frame for o in lines] == [0, 1, 2]
     assert [[m.shape for m in o.marks] for o in lines] == [[Shape.O], [], [Shape.TRIANGLE]]
     assert sorted(p.name for p in out_dir.iterdir()) == [f"img{i}.annotated.png" for i in range(3)]
+
+
+@pytest.mark.parametrize(
+    ("source", "says"),
+    [
+        ("rtsq:cam", "unknown scheme 'rtsq'"),
+        ("synthetic:nosuch", "neither a built-in"),
+        ("camera:", "camera needs"),
+    ],
+)
+def test_invalid_source_spec_exits_2_with_one_line(source: str, says: str) -> None:
+    done = _run_vision(HRI_VISION_SOURCE=source, HRI_ZENOH_CONNECT="tcp/127.0.0.1:9")
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and says in lines[0] and "synthetic:none" in lines[0]
+
+
+def test_bad_debounce_exits_2() -> None:
+    done = _run_vision(HRI_VISION_SOURCE="synthetic", HRI_VISION_DANGER_DEBOUNCE="4/2")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+
+
+def _run_vision(**env: str) -> subprocess.CompletedProcess[str]:
+    """`python -m services.vision` with extra environment, to completion (it must exit by itself)."""
+    return subprocess.run(
+        [sys.executable, "-m", "services.vision"],
+        check=False,
+        env={**os.environ, **env},
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+def test_retry_backoff_doubles_to_a_cap_and_warns_once_per_failure() -> None:
+    from services.vision.service import _Backoff
+
+    b = _Backoff(2.0, 30.0)
+    steps = [b.next("no camera") for _ in range(6)]
+    assert [d for d, _ in steps] == [2.0, 4.0, 8.0, 16.0, 30.0, 30.0]
+    assert [first for _, first in steps] == [True] + [False] * 5
+    assert b.next("another error")[1] is True
+    b.reset()
+    assert b.next("no camera") == (2.0, True)

@@ -1,0 +1,597 @@
+"""A second, independent frame generator for held-out evaluation (never used for tuning).
+
+It differs from `synthetic.py` in how frames are made, not only in its seed:
+
+- drawing: Pillow (RGBA layers, TrueType glyphs, rounded strokes, hand-drawn jittered strokes) and
+  a perspective warp of the whole rendered card layer by Pillow's `Image.transform`, where
+  `synthetic.py` draws with OpenCV primitives and warps with `cv2.warpPerspective`;
+- backgrounds: scikit-image sample images that the tuning generator never uses (cat, colorwheel,
+  horse, logo, retina, stereo motorcycle, cell, checkerboard, Shepp-Logan phantom, binary blobs,
+  microaneurysms), or a procedural room of wall, shelf and window;
+- cards: other proportions (square to 1.6:1, rounded corners, off-centre marks) and much narrower
+  borders next to the mark (0.04 to 0.35 of the mark's size, versus about 0.35 to 0.65);
+- marks: TrueType glyphs (DejaVu Sans/Serif Bold when installed, Pillow's bundled font otherwise),
+  hand-drawn strokes, rounded caps; filled triangles as well as outlines; X bars at 60 to 120 degrees;
+- ink: black, blue, red, green, brown, purple markers;
+- a hand: two to four fingers and a thumb as skin-coloured capsules over the card's edges and corners,
+  often close to the mark;
+- conditions: tilt to 45 degrees about a random axis, motion blur to 20 px plus defocus, lighting by
+  vignette, gradient and colour cast, exposure gain 0.3 to 1.6 (clipped highlights), shot noise,
+  JPEG quality 40 to 90 through Pillow's encoder;
+- clutter: TrueType words full of O and X (EXIT, BOX, OXO, TOXIC...), prohibition signs, squares,
+  discs, filled triangles off any card, a cat's face, cables, textures, and decoy cards with words,
+  discs or squares.
+
+`HeldOutGenerator(seed).frame(shape)` returns a BGR uint8 frame and a `HeldOutLabel` (or None).
+"""
+
+from __future__ import annotations
+
+import io
+import itertools
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from PIL import Image, ImageDraw, ImageFilter, ImageFont
+
+from schemas.messages import Shape
+
+Box = tuple[int, int, int, int]
+Rng = np.random.Generator
+
+HELDOUT_BACKGROUNDS: tuple[str, ...] = (
+    "cat",
+    "colorwheel",
+    "horse",
+    "logo",
+    "retina",
+    "stereo_motorcycle",
+    "cell",
+    "checkerboard",
+    "shepp_logan_phantom",
+    "binary_blobs",
+    "microaneurysms",
+)
+FONT_FILES: tuple[str, ...] = (
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf",
+    "/usr/share/fonts/truetype/dejavu/DejaVuSerif-Bold.ttf",
+    "/usr/share/fonts/truetype/dejavu/DejaVuSansCondensed-Bold.ttf",
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Bold.ttf",
+)
+INKS: tuple[tuple[int, int, int], ...] = (  # RGB
+    (15, 15, 20),
+    (40, 40, 45),
+    (20, 40, 150),
+    (190, 25, 30),
+    (20, 120, 45),
+    (90, 50, 25),
+    (90, 30, 120),
+)
+SKIN: tuple[tuple[int, int, int], ...] = ((235, 195, 170), (210, 160, 125), (170, 120, 85), (110, 75, 55))
+WORDS: tuple[str, ...] = (
+    "EXIT",
+    "BOX",
+    "OXO",
+    "TOXIC",
+    "ZOO",
+    "NO",
+    "XO",
+    "OX",
+    "ROBOT",
+    "STOP",
+    "OPEN",
+    "FOX",
+    "MAX 20",
+    "ONE WAY",
+    "XEROX",
+    "MOTOR",
+    "TAXI",
+    "oxygen",
+    "look",
+    "box 0",
+)
+
+
+@dataclass(frozen=True)
+class HeldOutLabel:
+    shape: Shape
+    box: Box
+    size: float  # the mark's longest side in the frame, pixels
+    tilt_deg: float  # out-of-plane tilt of the card
+    blur_px: float  # motion blur length
+    finger_near: bool  # a finger within a quarter of the mark's size of it
+    filled: bool  # a filled triangle
+
+
+def _fonts() -> list[Path]:
+    return [Path(f) for f in FONT_FILES if Path(f).is_file()]
+
+
+def _font(path: Path | None, size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
+    if path is None:
+        return ImageFont.load_default(size=size)
+    return ImageFont.truetype(str(path), size)
+
+
+class HeldOutGenerator:
+    """Deterministic for a given seed."""
+
+    def __init__(self, seed: int = 0, width: int = 640, height: int = 480) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.width, self.height = width, height
+        self.bank = _load_bank()
+        self.fonts: list[Path | None] = [*_fonts(), None]
+
+    # ------------------------------------------------------------------ public
+    def frame(self, shape: Shape | None) -> tuple[np.ndarray, HeldOutLabel | None]:
+        rng = self.rng
+        bg = self._background()
+        for _ in range(int(rng.integers(2, 7))):
+            self._clutter(bg)
+        label = None
+        if shape is not None:
+            label = self._held_card(bg, shape)
+        elif rng.random() < 0.5:
+            self._held_card(bg, None)  # a blank or decoy card held up
+        blur = float(rng.uniform(0, 20)) if rng.random() < 0.7 else 0.0
+        img = self._camera(bg, blur)
+        if label is not None:
+            label = HeldOutLabel(
+                label.shape, label.box, label.size, label.tilt_deg, blur, label.finger_near, label.filled
+            )
+        return img, label
+
+    # ------------------------------------------------------------------ scene
+    def _background(self) -> Image.Image:
+        rng, w, h = self.rng, self.width, self.height
+        if self.bank and rng.random() < 0.75:
+            src = self.bank[int(rng.integers(len(self.bank)))]
+            scale = max(w / src.width, h / src.height) * float(rng.uniform(1.0, 1.8))
+            big = src.resize((math.ceil(src.width * scale), math.ceil(src.height * scale)), Image.BILINEAR)
+            x0 = int(rng.integers(0, big.width - w + 1))
+            y0 = int(rng.integers(0, big.height - h + 1))
+            img = big.crop((x0, y0, x0 + w, y0 + h))
+            if rng.random() < 0.5:
+                img = img.transpose(Image.FLIP_TOP_BOTTOM)
+            return img.convert("RGB")
+        # a room: a wall colour, a shelf, a window, a door frame
+        wall = tuple(int(v) for v in rng.integers(60, 200, 3))
+        img = Image.new("RGB", (w, h), wall)  # type: ignore[arg-type]
+        d = ImageDraw.Draw(img)
+        for _ in range(int(rng.integers(2, 6))):
+            x, y = int(rng.integers(-50, w)), int(rng.integers(-50, h))
+            col = tuple(int(v) for v in rng.integers(20, 240, 3))
+            d.rectangle((x, y, x + int(rng.integers(40, 300)), y + int(rng.integers(10, 250))), fill=col)  # type: ignore[arg-type]
+        return img
+
+    def _clutter(self, img: Image.Image) -> None:
+        rng, w, h = self.rng, self.width, self.height
+        d = ImageDraw.Draw(img)
+        kind = ["words", "sign", "square", "disc", "triangle", "face", "cable", "texture"][
+            int(rng.integers(8))
+        ]
+        cx, cy = float(rng.uniform(0, w)), float(rng.uniform(0, h))
+        s = float(math.exp(rng.uniform(math.log(25), math.log(220))))
+        col = _ink(rng) if rng.random() < 0.6 else tuple(int(v) for v in rng.integers(0, 256, 3))
+        if kind == "words":
+            font = _font(self.fonts[int(rng.integers(len(self.fonts)))], max(10, int(s / 2)))
+            text = " ".join(rng.choice(WORDS, size=int(rng.integers(1, 4))))
+            if rng.random() < 0.5:  # on a light sign panel
+                tb = d.textbbox((cx, cy), text, font=font)
+                pad = 0.3 * (tb[3] - tb[1])
+                d.rectangle((tb[0] - pad, tb[1] - pad, tb[2] + pad, tb[3] + pad), fill=_paper(rng))
+            d.text((cx, cy), text, fill=col, font=font)
+        elif kind == "sign":  # a prohibition sign: red ring and bar on white
+            r = s / 2
+            d.ellipse(
+                (cx - r, cy - r, cx + r, cy + r),
+                fill=(240, 240, 235),
+                outline=(200, 20, 20),
+                width=max(2, int(0.15 * s)),
+            )
+            a = math.radians(45)
+            d.line(
+                (cx - r * math.cos(a), cy - r * math.sin(a), cx + r * math.cos(a), cy + r * math.sin(a)),
+                fill=(200, 20, 20),
+                width=max(2, int(0.12 * s)),
+            )
+        elif kind == "square":
+            pts = _poly(cx, cy, s / 2, 4, float(rng.uniform(0, 90)))
+            if rng.random() < 0.5:
+                d.polygon(pts, fill=col)
+            else:
+                d.line([*pts, pts[0]], fill=col, width=max(2, int(s * rng.uniform(0.06, 0.2))), joint="curve")
+        elif kind == "disc":
+            d.ellipse((cx - s / 2, cy - s / 2, cx + s / 2, cy + s / 2), fill=col)
+        elif kind == "triangle":  # filled, off any card: clutter
+            d.polygon(_poly(cx, cy, s / 2, 3, float(rng.uniform(0, 120))), fill=col)
+        elif kind == "face" and self.bank:
+            cat = self.bank[0]  # the cat's face
+            face = cat.crop((110, 20, 300, 210)).resize((max(8, int(s * 1.3)),) * 2)
+            img.paste(face, (int(cx), int(cy)))
+        elif kind == "cable":
+            p = rng.uniform([-60, -60], [w + 60, h + 60], size=(4, 2))
+            t = np.linspace(0, 1, 50)[:, None]
+            c = (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t**2 * p[2] + t**3 * p[3]
+            d.line([tuple(q) for q in c], fill=col, width=int(rng.integers(2, 14)), joint="curve")
+        else:  # texture: a patch of a held-out texture image
+            src = self.bank[int(rng.integers(len(self.bank)))] if self.bank else None
+            if src is not None:
+                patch = src.resize((max(8, int(s * 1.5)),) * 2).convert("RGB")
+                img.paste(patch, (int(cx), int(cy)))
+
+    def _held_card(self, img: Image.Image, shape: Shape | None) -> HeldOutLabel | None:
+        """Render a card (with the mark, or a decoy) and the fingers holding it on a padded RGBA
+        canvas at 2x, warp it into the frame, and return the mark's label."""
+        rng = self.rng
+        size = float(math.exp(rng.uniform(math.log(40), math.log(400))))  # mark size in the frame
+        k = 3.0 if size < 90 else 2.0 if size < 200 else 1.0  # supersampling
+        ms = size * k
+        borders = rng.uniform(0.04, 0.35, size=4) * ms  # left, top, right, bottom
+        mark_w = ms * (float(rng.uniform(0.85, 1.0)) if shape is Shape.O else 1.0)
+        card_w = mark_w + borders[0] + borders[2]
+        card_h = ms + borders[1] + borders[3]
+        aspect = float(rng.uniform(1.0, 1.6))  # stretch the longer way, sometimes
+        if card_w < card_h * aspect and rng.random() < 0.5:
+            extra = card_h * aspect - card_w
+            borders[0] += extra * rng.uniform(0, 1)
+            card_w = card_h * aspect
+            borders[2] = card_w - mark_w - borders[0]
+        pad = 0.6 * max(card_w, card_h)
+        cw, ch = int(card_w + 2 * pad), int(card_h + 2 * pad)
+        canvas = Image.new("RGBA", (cw, ch), (0, 0, 0, 0))
+        mask = Image.new("L", (cw, ch), 0)
+        d = ImageDraw.Draw(canvas)
+        paper = _paper(rng)
+        radius = float(rng.uniform(0, 0.12)) * min(card_w, card_h)
+        card_box = (pad, pad, pad + card_w, pad + card_h)
+        d.rounded_rectangle(card_box, radius=radius, fill=(*paper, 255))
+        mx0, my0 = pad + borders[0], pad + borders[1]
+        mark_box = (mx0, my0, mx0 + mark_w, my0 + ms)
+        filled = False
+        if shape is not None:
+            ink = _ink(rng)
+            filled = self._draw_mark(canvas, mask, shape, mark_box, ink)
+        elif rng.random() < 0.6:
+            self._decoy(canvas, mark_box)
+        finger_near = self._fingers(canvas, card_box, mark_box)
+        # the pose: in-plane rotation, tilt about a random axis, a position that keeps the card in view
+        rot = float(rng.uniform(-180, 180))
+        tilt = float(rng.uniform(0, 45))
+        axis = float(rng.uniform(0, 2 * math.pi))
+        ccx, ccy = pad + card_w / 2, pad + card_h / 2
+        mcx, mcy = (mark_box[0] + mark_box[2]) / 2, (mark_box[1] + mark_box[3]) / 2
+        for _ in range(40):
+            target = (float(rng.uniform(0, self.width)), float(rng.uniform(0, self.height)))
+            hm = _homography(ccx, ccy, 1.0 / k, rot, tilt, axis, target)
+            mc = _project(
+                hm,
+                np.array(
+                    [
+                        [mark_box[0], mark_box[1]],
+                        [mark_box[2], mark_box[1]],
+                        [mark_box[2], mark_box[3]],
+                        [mark_box[0], mark_box[3]],
+                    ]
+                ),
+            )
+            if mc.min() >= 3 and mc[:, 0].max() <= self.width - 3 and mc[:, 1].max() <= self.height - 3:
+                break
+            if shape is None:
+                break
+        else:
+            # the mark cannot fit: shrink it into the middle of the frame
+            hm = _homography(ccx, ccy, 0.6 / k, rot, tilt, axis, (self.width / 2, self.height / 2))
+            hm = hm @ np.array([[1, 0, ccx - mcx], [0, 1, ccy - mcy], [0, 0, 1.0]])
+        inv = np.linalg.inv(hm)
+        inv /= inv[2, 2]
+        coeffs = tuple(float(v) for v in inv.reshape(-1)[:8])
+        warped = canvas.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BICUBIC)
+        img.paste(warped, (0, 0), warped)
+        if shape is None:
+            return None
+        wm = np.asarray(mask.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BILINEAR))
+        ys, xs = np.nonzero(wm > 127)
+        if len(xs) == 0:
+            return None
+        box = (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
+        return HeldOutLabel(shape, box, float(max(box[2], box[3])), tilt, 0.0, finger_near, filled)
+
+    def _draw_mark(
+        self,
+        canvas: Image.Image,
+        mask: Image.Image,
+        shape: Shape,
+        box: tuple[float, ...],
+        ink: tuple[int, ...],
+    ) -> bool:
+        rng = self.rng
+        x0, y0, x1, y1 = box
+        w, h = x1 - x0, y1 - y0
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+        stroke = max(2, int(float(rng.uniform(0.08, 0.2)) * min(w, h)))
+        layer = Image.new("L", canvas.size, 0)
+        d = ImageDraw.Draw(layer)
+        style = int(rng.integers(3))  # 0 geometric, 1 font glyph, 2 hand-drawn
+        filled = False
+        if shape is Shape.X and style == 1 and self.fonts:
+            self._glyph(d, "X", box)
+        elif shape is Shape.X:
+            half = float(rng.uniform(60, 120)) / 2
+            base = 90.0
+            r = min(w, h) / 2 - stroke / 2
+            for a in (base - half, base + half):
+                dx, dy = r * math.cos(math.radians(a)) * 1.3, r * math.sin(math.radians(a))
+                dx = max(-r, min(r, dx))
+                pts = [(cx - dx, cy - dy), (cx + dx, cy + dy)]
+                if style == 2:
+                    pts = _jitter(rng, pts, 0.04 * min(w, h))
+                d.line(pts, fill=255, width=stroke, joint="curve")
+                if rng.random() < 0.5:  # round caps
+                    for px, py in (pts[0], pts[-1]):
+                        d.ellipse(
+                            (px - stroke / 2, py - stroke / 2, px + stroke / 2, py + stroke / 2), fill=255
+                        )
+        elif shape is Shape.O and style == 1 and self.fonts:
+            self._glyph(d, "O", box)
+        elif shape is Shape.O:
+            if style == 2:
+                t = np.linspace(0, 2 * math.pi, 60)
+                wob = 1 + 0.03 * np.sin(3 * t + rng.uniform(0, 6))
+                pts = [
+                    (
+                        cx + (w / 2 - stroke / 2) * wb * math.cos(a),
+                        cy + (h / 2 - stroke / 2) * wb * math.sin(a),
+                    )
+                    for a, wb in zip(t, wob)
+                ]
+                d.line(pts, fill=255, width=stroke, joint="curve")
+            else:
+                d.ellipse(box, outline=255, width=stroke)
+        else:
+            verts = [(cx, y0), (x1, y1), (x0, y1)]
+            if rng.random() < 0.35:
+                d.polygon(verts, fill=255)
+                filled = True
+            else:
+                inset = _inset(verts, stroke)
+                if style == 2:
+                    verts = _jitter(rng, verts, 0.03 * min(w, h))
+                    inset = _jitter(rng, inset, 0.02 * min(w, h))
+                d.polygon(verts, fill=255)
+                d.polygon(inset, fill=0)
+        ink_img = Image.new("RGBA", canvas.size, (*ink, 255))
+        canvas.paste(ink_img, (0, 0), layer)
+        mask.paste(255, (0, 0), layer.point(lambda v: 255 if v > 127 else 0))
+        return filled
+
+    def _glyph(self, d: ImageDraw.ImageDraw, char: str, box: tuple[float, ...]) -> None:
+        rng = self.rng
+        x0, y0, x1, y1 = box
+        path = self.fonts[int(rng.integers(len(self.fonts)))]
+        probe = _font(path, 200)
+        tb = d.textbbox((0, 0), char, font=probe)
+        scale = min((x1 - x0) / (tb[2] - tb[0]), (y1 - y0) / (tb[3] - tb[1]))
+        font = _font(path, max(8, int(200 * scale)))
+        tb = d.textbbox((0, 0), char, font=font)
+        ox = (x0 + x1) / 2 - (tb[0] + tb[2]) / 2
+        oy = (y0 + y1) / 2 - (tb[1] + tb[3]) / 2
+        d.text((ox, oy), char, fill=255, font=font)
+
+    def _decoy(self, canvas: Image.Image, box: tuple[float, ...]) -> None:
+        rng = self.rng
+        d = ImageDraw.Draw(canvas)
+        x0, y0, x1, y1 = box
+        ink = (*_ink(rng), 255)
+        what = int(rng.integers(4))
+        s = min(x1 - x0, y1 - y0)
+        if what == 0:
+            d.ellipse(box, fill=ink)
+        elif what == 1:
+            d.rectangle(box, outline=ink, width=max(2, int(0.12 * s)))
+        elif what == 2:
+            d.rectangle(box, fill=ink)
+        else:
+            word = str(rng.choice(WORDS))
+            font = _font(
+                self.fonts[int(rng.integers(len(self.fonts)))], max(8, int(s / max(2, len(word)) * 1.4))
+            )
+            d.text((x0, (y0 + y1) / 2), word, fill=ink, font=font, anchor="lm")
+
+    def _fingers(self, canvas: Image.Image, card: tuple[float, ...], mark: tuple[float, ...]) -> bool:
+        """Two to four fingers over one edge and a thumb over the opposite one, each a capsule that
+        stops short of the mark. True if a finger tip ends within a quarter of the mark's size of it."""
+        rng = self.rng
+        if rng.random() < 0.25:
+            return False
+        d = ImageDraw.Draw(canvas)
+        skin = SKIN[int(rng.integers(len(SKIN)))]
+        shade = tuple(int(0.7 * v) for v in skin)
+        cx0, cy0, cx1, cy1 = card
+        mx0, my0, mx1, my1 = mark
+        msize = max(mx1 - mx0, my1 - my0)
+        width = max(6.0, float(rng.uniform(0.09, 0.16)) * max(cx1 - cx0, cy1 - cy0))
+        near = False
+        side = int(rng.integers(4))
+        for edge, count in ((side, int(rng.integers(2, 5))), ((side + 2) % 4, 1)):
+            along = float(rng.uniform(0.1, 0.7))
+            for f in range(count):
+                t = along + f * 1.05 * width / max(cx1 - cx0, cy1 - cy0)
+                if t > 1:
+                    break
+                # start outside the card, point inward, end short of the mark
+                if edge == 0:
+                    sx, sy, dx, dy, room = cx0 - 3 * width, cy0 + t * (cy1 - cy0), 1, 0, mx0 - cx0
+                elif edge == 1:
+                    sx, sy, dx, dy, room = cx0 + t * (cx1 - cx0), cy0 - 3 * width, 0, 1, my0 - cy0
+                elif edge == 2:
+                    sx, sy, dx, dy, room = cx1 + 3 * width, cy0 + t * (cy1 - cy0), -1, 0, cx1 - mx1
+                else:
+                    sx, sy, dx, dy, room = cx0 + t * (cx1 - cx0), cy1 + 3 * width, 0, -1, cy1 - my1
+                in_line = (dx == 0 and mx0 - width / 2 < sx < mx1 + width / 2) or (
+                    dy == 0 and my0 - width / 2 < sy < my1 + width / 2
+                )
+                gap = float(rng.uniform(0.02, 0.3)) * msize
+                reach = (
+                    max(0.3 * width, room - gap) if in_line else float(rng.uniform(0.3, 1.0)) * room + width
+                )
+                length = 3 * width + reach
+                ex, ey = sx + dx * length, sy + dy * length
+                d.line((sx, sy, ex, ey), fill=(*shade, 255), width=int(width) + 2)
+                d.ellipse(
+                    (ex - width / 2 - 1, ey - width / 2 - 1, ex + width / 2 + 1, ey + width / 2 + 1),
+                    fill=(*shade, 255),
+                )
+                d.line((sx, sy, ex, ey), fill=(*skin, 255), width=int(width))
+                d.ellipse((ex - width / 2, ey - width / 2, ex + width / 2, ey + width / 2), fill=(*skin, 255))
+                if in_line and room - reach < 0.25 * msize + width / 2:
+                    near = True
+        return near
+
+    # ------------------------------------------------------------------ the camera
+    def _camera(self, img: Image.Image, blur: float) -> np.ndarray:
+        rng, w, h = self.rng, self.width, self.height
+        a = np.asarray(img, np.float32)
+        yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+        # light: exposure, colour cast, vignette, a strong gradient
+        gain = float(rng.uniform(0.3, 1.6))
+        cast = rng.uniform(0.85, 1.15, 3).astype(np.float32)
+        r2 = ((xx - w / 2) / (w / 2)) ** 2 + ((yy - h / 2) / (h / 2)) ** 2
+        vignette = 1 - float(rng.uniform(0, 0.45)) * r2 / 2
+        ang = float(rng.uniform(0, 2 * math.pi))
+        grad = 1 + float(rng.uniform(0, 0.7)) * (
+            (xx / w - 0.5) * math.cos(ang) + (yy / h - 0.5) * math.sin(ang)
+        )
+        light = (gain * vignette * grad)[..., None] * cast
+        a = a * light
+        a = np.clip(a, 0, 255)
+        out = Image.fromarray(a.astype(np.uint8))
+        if rng.random() < 0.4:
+            out = out.filter(ImageFilter.GaussianBlur(float(rng.uniform(0.3, 1.8))))
+        arr = np.asarray(out, np.float32)
+        if blur >= 1.5:
+            n = math.ceil(blur) | 1
+            kernel = np.zeros((n, n), np.float32)
+            c = n // 2
+            th = float(rng.uniform(0, math.pi))
+            for s in np.linspace(-blur / 2, blur / 2, 4 * n):
+                kernel[round(c + s * math.sin(th)), round(c + s * math.cos(th))] += 1
+            kernel /= kernel.sum()
+            arr = cv2.filter2D(arr, -1, kernel, borderType=cv2.BORDER_REFLECT)
+        # shot noise: variance grows with the signal
+        k = float(rng.uniform(0, 0.6))
+        arr = arr + rng.standard_normal(arr.shape).astype(np.float32) * np.sqrt(k * arr + 1.0)
+        out = Image.fromarray(np.clip(arr, 0, 255).astype(np.uint8))
+        buf = io.BytesIO()
+        out.save(buf, format="JPEG", quality=int(rng.integers(40, 91)))
+        buf.seek(0)
+        rgb = np.asarray(Image.open(buf).convert("RGB"))
+        return np.ascontiguousarray(rgb[:, :, ::-1])
+
+
+# ---------------------------------------------------------------------- helpers
+def _load_bank() -> list[Image.Image]:
+    try:
+        from skimage import data
+    except ImportError:
+        return []
+    bank: list[Image.Image] = []
+    for name in HELDOUT_BACKGROUNDS:
+        try:
+            a = np.asarray(getattr(data, name)())
+        except (AttributeError, OSError, ValueError, ImportError):
+            continue
+        if a.dtype == bool:
+            a = np.where(a, 200, 60).astype(np.uint8)
+        elif a.dtype != np.uint8:
+            a = (255 * (a - a.min()) / max(1e-9, float(a.max() - a.min()))).astype(np.uint8)
+        if a.ndim == 3 and a.shape[2] == 4:
+            a = a[:, :, :3]
+        bank.append(Image.fromarray(a).convert("RGB"))
+    return bank
+
+
+def _ink(rng: Rng) -> tuple[int, int, int]:
+    base = np.array(INKS[int(rng.integers(len(INKS)))], np.int64)
+    return tuple(int(v) for v in np.clip(base + rng.integers(-12, 13, 3), 0, 255))  # type: ignore[return-value]
+
+
+def _paper(rng: Rng) -> tuple[int, int, int]:
+    tints = ((250, 250, 248), (245, 240, 222), (232, 232, 232), (250, 246, 205), (228, 236, 246))
+    base = np.array(tints[int(rng.integers(len(tints)))], np.int64)
+    return tuple(int(v) for v in np.clip(base + rng.integers(-10, 6, 3), 0, 255))  # type: ignore[return-value]
+
+
+def _poly(cx: float, cy: float, r: float, n: int, rot: float) -> list[tuple[float, float]]:
+    return [
+        (
+            cx + r * math.cos(math.radians(rot + 360 * i / n)),
+            cy + r * math.sin(math.radians(rot + 360 * i / n)),
+        )
+        for i in range(n)
+    ]
+
+
+def _jitter(rng: Rng, pts: list[tuple[float, float]], amount: float) -> list[tuple[float, float]]:
+    """A hand-drawn stroke: the segments subdivided, each point nudged."""
+    out: list[tuple[float, float]] = []
+    closed = len(pts) > 2
+    seq = [*pts, pts[0]] if closed else pts
+    for (ax, ay), (bx, by) in itertools.pairwise(seq):
+        for t in np.linspace(0, 1, 6, endpoint=False):
+            out.append(
+                (
+                    ax + t * (bx - ax) + rng.normal(0, amount / 3),
+                    ay + t * (by - ay) + rng.normal(0, amount / 3),
+                )
+            )
+    if not closed:
+        out.append(seq[-1])
+    return out
+
+
+def _inset(verts: list[tuple[float, float]], stroke: float) -> list[tuple[float, float]]:
+    """The polygon shrunk towards its centroid so that its edges move in by `stroke`."""
+    p = np.array(verts, np.float64)
+    c = p.mean(axis=0)
+    (ux, uy), (vx, vy) = p[1] - p[0], p[2] - p[0]
+    area = 0.5 * abs(ux * vy - uy * vx) if len(p) == 3 else 0.0
+    perim = float(np.sum(np.hypot(*(np.roll(p, -1, axis=0) - p).T)))
+    inr = 2 * area / perim if perim else 1.0
+    f = max(0.05, (inr - stroke) / inr)
+    return [tuple(v) for v in c + (p - c) * f]  # type: ignore[misc]
+
+
+def _homography(
+    cx: float,
+    cy: float,
+    scale: float,
+    rot: float,
+    tilt: float,
+    axis: float,
+    target: tuple[float, float],
+    focal: float = 650.0,
+) -> np.ndarray:
+    """Canvas pixels -> frame pixels: centre, scale, rotate in plane, tilt about an in-plane axis at
+    angle `axis` (Rodrigues), project with a pinhole of focal length `focal`."""
+    t = np.array([[1, 0, -cx], [0, 1, -cy], [0, 0, 1.0]])
+    r = math.radians(rot)
+    rz = np.array([[math.cos(r), -math.sin(r), 0], [math.sin(r), math.cos(r), 0], [0, 0, 1.0]])
+    k = np.array([math.cos(axis), math.sin(axis), 0.0])
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    a = math.radians(tilt)
+    rt = np.eye(3) + math.sin(a) * kx + (1 - math.cos(a)) * kx @ kx
+    rot3 = rt @ rz
+    # plane point (u, v) -> 3-D (scale*u, scale*v, 0) rotated, then at depth focal
+    m = np.column_stack([rot3[:, 0] * scale, rot3[:, 1] * scale, [0, 0, focal]])
+    proj = np.array([[focal, 0, target[0]], [0, focal, target[1]], [0, 0, 1.0]])
+    return proj @ m @ t
+
+
+def _project(h: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    p = np.column_stack([pts, np.ones(len(pts))]) @ h.T
+    return p[:, :2] / p[:, 2:3]
