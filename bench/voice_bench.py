@@ -7,6 +7,12 @@ synthesiser), and espeak-ng accents and variants outside training; its non-comma
 3-30 dB SNR, room reverberation, band limits, tempo, as in training but with other seeds), then
 trimmed to its speech as the service trims a WAV file.
 
+Besides, the held-out one-edit neighbours of the commands (`corpus.neighbour_split`: dictionary words
+one phoneme insertion, deletion or substitution from a command, split off by pronunciation group with
+a fixed seed before any training) are each rendered 16 times by random held-out voices, clean or noisy,
+and reported in their own row (`one-edit-heldout`), not in "ALL", so that "ALL" stays comparable with
+earlier runs.
+
 Per engine and per family: command accuracy (right command published; an "asked" go, i.e. published
 with a confidence between the reasoner's `^min-confidence` and `^confirm-below`, counts as right when a
 "yes" by the same voice would confirm it, and is reported separately), non-command words accepted, noise
@@ -109,6 +115,24 @@ def heldout_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
     return out
 
 
+NEIGHBOURS = "one-edit-heldout"
+NEIGHBOUR_RENDERINGS = 16
+
+
+def neighbour_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
+    """The held-out one-edit neighbours, each said `NEIGHBOUR_RENDERINGS` times by random held-out
+    voices (half clean, half noisy)."""
+    rng = random.Random(f"bench-neighbours:{seed}")
+    voices = corpus.voices("heldout")
+    out: list[tuple[dataset.Recipe, str]] = []
+    for word in dataset.neighbours(dataset.Sizes(), 12)["heldout"]:
+        for k in range(NEIGHBOUR_RENDERINGS):
+            cond, strength = ("clean", 0.0) if k % 2 == 0 else ("noisy", 1.0)
+            out.append((dataset.Recipe(word, OTHER, rng.choice(voices), rng.choice((0.85, 1.0, 1.15)), 1.0,
+                                       rng.randrange(2**31), strength), cond))
+    return out
+
+
 def _render(job: tuple[dataset.Recipe, str]) -> Item | None:
     r, cond = job
     try:
@@ -118,17 +142,23 @@ def _render(job: tuple[dataset.Recipe, str]) -> Item | None:
     return Item(family(r.voice), r.voice, r.label, r.text, cond, pcm)
 
 
-def heldout_items(seed: int, workers: int) -> list[Item]:
-    jobs = heldout_recipes(seed)
+def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int) -> list[Item]:
     key = hashlib.sha1(repr([1, jobs]).encode()).hexdigest()[:16]  # bump when render_utterance changes
     cache = synth.cache_dir() / f"bench-heldout-{key}.pickle"
     if cache.exists():
-        items = pickle.loads(cache.read_bytes())
+        items: list[Item] = pickle.loads(cache.read_bytes())
     else:
         with multiprocessing.get_context("spawn").Pool(workers) as pool:
             items = [i for i in pool.map(_render, jobs, chunksize=16) if i is not None]
         cache.write_bytes(pickle.dumps(items))
     print(f"held-out clips: {len(items)} of {len(jobs)} rendered", flush=True)
+    return items
+
+
+def heldout_items(seed: int, workers: int) -> list[Item]:
+    items = _rendered(heldout_recipes(seed), workers)
+    items += [Item(NEIGHBOURS, it.voice, it.label, it.text, it.condition, it.pcm)
+              for it in _rendered(neighbour_recipes(seed), workers)]
     for clip in synth.noise_set("heldout"):
         items.append(Item("noise", "", OTHER, clip.text, "noise", read_wav(clip.path)))
     return items
@@ -186,7 +216,7 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
     scores: dict[str, Score] = {}
     for i, it in enumerate(items):
         cmd, conf, dt = results[i]
-        for fam in (it.family, "ALL"):
+        for fam in (it.family,) if it.family == NEIGHBOURS else (it.family, "ALL"):
             s = scores.setdefault(fam, Score(engine_name, fam))
             s.decode_s += dt
             s.audio_s += len(it.pcm) / 2 / SAMPLE_RATE
@@ -291,13 +321,14 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--enrol", action="store_true", help="also measure enrolment on one unseen voice")
     ap.add_argument("--json", type=Path, help="also write the rows here")
+    ap.add_argument("--head", help="spotter head file (default: the committed head)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     print(f"reasoner policy: {policy}", flush=True)
     items = heldout_items(args.seed, args.workers)
     rows: list[dict[str, object]] = []
     for name in args.engines.split(","):
-        engine = make_engine(name)
+        engine = make_engine(name, head_path=args.head if name == "spotter" else None)
         scores, extra = score(name, engine, items, policy)
         for s in sorted(scores, key=lambda s: (s.family != "ALL", s.family)):
             row = s.row()

@@ -12,11 +12,18 @@ Splits differ in how the speech is *made*, not only in seed:
 
 Homophones of a command (same pronunciation in the CMU dictionary, e.g. "know" for "no", "y" and
 "wye" for "why") are never negatives: they are the command.
+
+One-edit neighbours (`neighbour_split`): every dictionary word whose pronunciation is one phoneme
+insertion, deletion or substitution away from a command's ("go" -> glow, goat, so, ago, ...), grouped
+by pronunciation, are split at random with a fixed seed into train / tune / held-out groups *before*
+any training, so the held-out confusable words are systematic and were never seen when fitting or
+choosing thresholds.
 """
 
 from __future__ import annotations
 
 import random
+import re
 from functools import lru_cache
 from pathlib import Path
 
@@ -106,6 +113,80 @@ def negatives_train(n_common: int, seed: int) -> list[str]:
     clean = [w for w in words if w not in bad]
     assert len(clean) == len(words), f"homophone or held-out word in the training negatives: {set(words) - set(clean)}"
     return clean + common_words(n_common, seed)
+
+
+NEIGHBOUR_SEED = 7
+NEIGHBOUR_FRACTIONS = (("train", 0.55), ("tune", 0.15), ("heldout", 0.30))
+
+
+def _phones(pron: str) -> tuple[str, ...]:
+    return tuple(re.sub(r"\d", "", p) for p in pron.split())
+
+
+def one_edit(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
+    """True if phoneme strings `a` and `b` differ by exactly one insertion, deletion or substitution."""
+    if a == b or abs(len(a) - len(b)) > 1:
+        return False
+    if len(a) == len(b):
+        return sum(x != y for x, y in zip(a, b, strict=True)) == 1
+    short, long_ = (a, b) if len(a) < len(b) else (b, a)
+    return any(long_[:i] + long_[i + 1 :] == short for i in range(len(long_)))
+
+
+@lru_cache(maxsize=1)
+def one_edit_neighbours() -> list[tuple[str, ...]]:
+    """Groups of dictionary words one phoneme edit (stress ignored) from a command's pronunciation,
+    words said alike in one group (a word with two pronunciations joins both groups into one);
+    homophones and forms of the commands are left out. Each group's words are shortest first."""
+    prons = _cmudict()
+    commands = [_phones(p) for w in VOCABULARY for p in prons.get(w, [])]
+    bad = forbidden_negatives()
+    by_pron: dict[tuple[str, ...], set[str]] = {}
+    for word, ps in prons.items():
+        if not (word.isalpha() and word.isascii()) or word in bad:
+            continue
+        for pron in ps:
+            ph = _phones(pron)
+            if ph not in commands and any(one_edit(ph, c) for c in commands):
+                by_pron.setdefault(ph, set()).add(word)
+    groups: list[set[str]] = []
+    for _, words in sorted(by_pron.items()):
+        joined = [g for g in groups if g & words]
+        for g in joined:
+            groups.remove(g)
+            words = words | g
+        groups.append(set(words))
+    return sorted((tuple(sorted(g, key=lambda w: (len(w), w))) for g in groups), key=lambda g: g[0])
+
+
+@lru_cache(maxsize=4)
+def neighbour_split(trained: frozenset[str] = frozenset()) -> dict[str, tuple[str, ...]]:
+    """The one-edit neighbours split into `train`, `tune` and `heldout` words, by pronunciation group.
+
+    A group with a word already in a fixed list keeps that list's split (`NEIGHBOURS_TRAIN`,
+    `PHRASES_TRAIN` and `trained`, the sampled dictionary words: train; `OOV_TUNE`: tune;
+    `OOV_HELDOUT`: held-out); the others are shuffled with `NEIGHBOUR_SEED` and cut by
+    `NEIGHBOUR_FRACTIONS`. A held-out group's words are never spoken in train or tune. Train and tune
+    speak every spelling of their groups (a TTS engine reads spellings differently); held-out
+    speaks the group's shortest spelling."""
+    fixed_train = {w for ws in NEIGHBOURS_TRAIN.values() for w in ws} | set(PHRASES_TRAIN) | trained
+    fixed = (("train", fixed_train), ("tune", set(OOV_TUNE)), ("heldout", set(OOV_HELDOUT)))
+    split: dict[str, list[tuple[str, ...]]] = {name: [] for name, _ in NEIGHBOUR_FRACTIONS}
+    free: list[tuple[str, ...]] = []
+    for group in one_edit_neighbours():
+        owner = next((name for name, words in fixed if words.intersection(group)), None)
+        (split[owner] if owner else free).append(group)
+    random.Random(NEIGHBOUR_SEED).shuffle(free)
+    start = 0
+    for i, (name, frac) in enumerate(NEIGHBOUR_FRACTIONS):
+        end = len(free) if i == len(NEIGHBOUR_FRACTIONS) - 1 else start + round(frac * len(free))
+        split[name] += free[start:end]
+        start = end
+    return {
+        "train": tuple(w for g in split["train"] for w in g if w not in fixed_train),
+        "tune": tuple(w for g in split["tune"] for w in g if w not in OOV_TUNE),
+        "heldout": tuple(g[0] for g in split["heldout"] if not set(OOV_HELDOUT).intersection(g)),
+    }
 
 
 def espeak_voices(accents: tuple[str, ...], variants: tuple[str, ...]) -> list[str]:

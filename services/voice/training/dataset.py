@@ -55,20 +55,38 @@ class Sizes:
     engines_positives: int = 200
     """Per command, `engines` split: the training voices of the engines other than espeak-ng."""
     engines_repeats: int = 2
+    neighbour_repeats_all: int = 4
+    """Per train one-edit neighbour (`corpus.neighbour_split`), `neighbours` split, any training voice."""
+    neighbour_repeats_engines: int = 2
+    """And again with the non-espeak training voices only."""
+    tune_neighbour_repeats: int = 4
+    more_positives: int = 300
+    """Per command, `positives` split: more command clips by the training voices (other draws), so
+    that the one-edit neighbours do not outnumber the commands."""
 
 
 def _voice_draw(rng: random.Random, voices: list[str]) -> tuple[str, float, float]:
     return rng.choice(voices), rng.uniform(0.75, 1.35), rng.uniform(0.7, 1.5)
 
 
-def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
-    """Every clip of the `train`, `engines` or `tune` split (the held-out split belongs to the bench).
+def neighbours(sizes: Sizes, seed: int) -> dict[str, tuple[str, ...]]:
+    """The one-edit neighbours of the commands split into train / tune / held-out words, the
+    dictionary words sampled for training counted as train."""
+    pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
+    return corpus.neighbour_split(frozenset(pool))
 
-    `engines` adds clips of the training voices of engines other than espeak-ng (flite kal16 and awb):
+
+def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
+    """Every clip of the `train`, `engines`, `neighbours`, `positives`, `tune` or `neighbours-tune` split (the
+    held-out split belongs to the bench).
+
+    `neighbours` and `neighbours-tune` speak the train and tune one-edit neighbours of the commands
+    (`corpus.neighbour_split`: glow, goat, so, ... for "go"). `engines` adds clips of the training voices of engines other than espeak-ng (flite kal16 and awb):
     in `train` they are 2 of 177 voices, and espeak-ng alone does not teach what speech made from
     recordings sounds like."""
     rng = random.Random(f"{seed}:{split}")
-    voices = corpus.voices("train" if split == "engines" else split)
+    voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train",
+                            "neighbours-tune": "tune"}.get(split, split))
     if split == "engines":
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
@@ -98,6 +116,19 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(word, OTHER, sizes.engines_repeats)
         for word in pool[: sizes.common_words]:
             add(word, OTHER, sizes.engines_repeats)
+        n_noise = 0
+    elif split == "positives":
+        for i, word in enumerate(corpus.VOCABULARY):
+            add(word, i, sizes.more_positives)
+        n_noise = 0
+    elif split in ("neighbours", "neighbours-tune"):
+        words = neighbours(sizes, seed)["train" if split == "neighbours" else "tune"]
+        for word in words:
+            add(word, OTHER, sizes.neighbour_repeats_all if split == "neighbours" else sizes.tune_neighbour_repeats)
+        if split == "neighbours":
+            voices = [v for v in voices if not v.startswith("espeak:")]
+            for word in words:
+                add(word, OTHER, sizes.neighbour_repeats_engines)
         n_noise = 0
     elif split == "tune":
         for i, word in enumerate(corpus.VOCABULARY):
