@@ -11,18 +11,22 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from schemas.access import OPERATOR
 from schemas.keys import SERVICES
 from schemas.messages import Command, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
+from services.cli import keys as deployment_keys
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
+from services.runtime import default_keys_dir
 from services.runtime.cli import ConnectOption, RobotOption
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__)
 send_app = typer.Typer(add_completion=False, no_args_is_help=True,
                        help="Publish one valid message as a service would, for testing by hand.")
 app.add_typer(send_app, name="send")
+app.add_typer(deployment_keys.app, name="keys")
 console = Console()
 if not console.is_terminal and "COLUMNS" not in os.environ:
     console = Console(width=120)  # piped or logged (CI): rich would wrap the tables at 80 columns
@@ -37,13 +41,36 @@ def up(
     only: Annotated[list[str] | None, typer.Option(
         "--only", help=f"Start only these services (repeatable): {', '.join(SERVICES)}")] = None,
     no_restart: Annotated[bool, typer.Option("--no-restart", help="Do not restart crashed services")] = False,
+    keys_dir: Annotated[Path | None, typer.Option("--keys-dir", envvar="HRI_KEYS_DIR", help=(
+        "The deployment's identities (made here by `hri keys init` on first use) "
+        "[default: ~/.local/state/hri/keys]"))] = None,
+    listen: Annotated[list[str] | None, typer.Option("--listen", help=(
+        "Also listen here (repeatable); other machines must use TLS, e.g. tls/0.0.0.0:7448"))] = None,
+    no_operator_writes: Annotated[bool, typer.Option("--no-operator-writes", help=(
+        "Withhold the operator's puts (hri send, the demo)"))] = False,
+    open_bus: Annotated[bool, typer.Option("--open", help=(
+        "No authentication, no access rules: anyone who reaches the router can move the robot "
+        "(a classroom on a closed network)"))] = False,
 ) -> None:
-    """Start the embedded Zenoh router and the five services; Ctrl-C stops them all."""
+    """Start the embedded Zenoh router and the five services; Ctrl-C stops them all.
+
+    Secure by default: every service runs as its own identity, the router listens on loopback,
+    requires credentials and applies the access rules generated from schemas/access.py.
+    """
+    folder = None if open_bus else (keys_dir or default_keys_dir())
     try:
-        launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc)) from None
-    raise typer.Exit(run_until_signalled(launcher))
+        if folder is not None and not deployment_keys.exists(folder):
+            if connect is None:  # the deployment's identities are made where its router runs
+                deployment_keys.init(folder)
+                typer.echo(f"created this deployment's identities in {folder}", err=True)
+            else:  # joining a router: run as anonymous unless its keys were copied here
+                folder = None
+        launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart,
+                            keys_dir=folder, operator_writes=not no_operator_writes, listen=listen or [])
+        raise typer.Exit(run_until_signalled(launcher))
+    except ValueError as exc:  # unknown service, or a ConfigError (listen endpoint, keys)
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
 
 
 @app.command()
@@ -122,7 +149,7 @@ def send_command(
     cmd = None if command.lower() == "none" else _choice(Command, command.lower(), "command")
     msg = VoiceCommand(command=cmd, text=text if text is not None else command, confidence=confidence,
                        engine="hri-send")
-    with probe.client_session(robot, connect) as (session, keys):
+    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.voice_command, msg)
     typer.echo(sent.model_dump_json())
 
@@ -137,7 +164,7 @@ def send_mark(
     """Publish a MarkObservation as the vision service would."""
     marks = [] if shape.lower() == "none" else [
         Mark(shape=_choice(Shape, shape.upper(), "shape"), confidence=confidence, box=(200, 120, 240, 240))]
-    with probe.client_session(robot, connect) as (session, keys):
+    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_marks, MarkObservation(marks=marks, frame=0))
     typer.echo(sent.model_dump_json())
 
@@ -150,7 +177,7 @@ def send_scene(
 ) -> None:
     """Tell a vision service on a synthetic source what card to hold up (frames go through the detector)."""
     value = None if shape.lower() == "none" else _choice(Shape, shape.upper(), "shape")
-    with probe.client_session(robot, connect) as (session, keys):
+    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_scene, SceneCommand(shape=value))
     typer.echo(sent.model_dump_json())
 

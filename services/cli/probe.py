@@ -9,21 +9,39 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from datetime import datetime
 
+import typer
 import zenoh
 from pydantic import BaseModel
 from rich.console import Console
 from rich.table import Table
 
+from schemas.access import OBSERVER
 from schemas.keys import SERVICES, Keys
 from schemas.messages import Header, Health, HealthStatus
-from services.runtime import BusSettings, DecodeError, decode, encode, encoding_for, open_session
+from services.runtime import (
+    BusSettings,
+    ConfigError,
+    DecodeError,
+    SessionRefused,
+    decode,
+    encode,
+    encoding_for,
+    open_session,
+)
 from services.runtime.logs import get_logger
 
 
 @contextmanager
-def client_session(robot: str | None, connect: str | None) -> Iterator[tuple[zenoh.Session, Keys]]:
-    settings = BusSettings.from_env(robot=robot, connect=connect)
-    session = open_session(settings, get_logger("hri"), attempts=3)
+def client_session(robot: str | None, connect: str | None,
+                   identity: str = OBSERVER) -> Iterator[tuple[zenoh.Session, Keys]]:
+    """A session as `identity` (`HRI_CREDENTIALS`, else `<keys dir>/<identity>` when it exists).
+    Exits 2 with one line on stderr when no session can be opened (no router, or refused)."""
+    try:
+        settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity)
+        session = open_session(settings, get_logger("hri"), attempts=3)
+    except (ConfigError, SessionRefused) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
     try:
         yield session, Keys(settings.robot)
     finally:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import threading
 import time
 from collections.abc import Callable
@@ -303,22 +304,55 @@ class ServiceContext:
 
 
 def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh.Session:
-    """Open a session. zenoh clients fail at once when no router answers; retry, logging each time.
+    """Open a session. zenoh clients fail at once when no router answers, or when the router
+    refuses their credentials; retry, logging why each time (a robot waits for its router to come up).
 
-    `attempts=0` retries until stopped by a signal (a robot waits for its router to come up).
+    `attempts=0` retries until stopped by a signal.
     """
     delay, n = 0.2, 0
     while True:
         n += 1
         try:
             return zenoh.open(settings.zenoh_config())
+        except ConfigError:
+            raise
         except Exception as exc:
-            if attempts and n >= attempts:
-                raise
-            log.warning("no zenoh router yet, retrying", endpoints=",".join(settings.connect),
-                        error=str(exc).splitlines()[0][:200], retry_in_s=delay)
+            why, refused = why_not_open(settings)
+            if attempts and (n >= attempts or refused):  # a person waits: say why at once, in one line
+                raise SessionRefused(why) from exc
+            if not attempts:
+                log.warning("cannot open a zenoh session yet, retrying", why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)
+
+
+class SessionRefused(RuntimeError):
+    """No session could be opened; the message is one line saying why and what to do."""
+
+
+def why_not_open(settings: BusSettings) -> tuple[str, bool]:
+    """One line: nobody listens at the endpoints, or a router is there and refused us (True)."""
+    where = ",".join(settings.connect)
+    listening = [e for e in settings.connect if _accepts(e)]
+    if not listening:
+        return f"no zenoh router at {where}; start one (`hri up`) or point HRI_ZENOH_CONNECT at it", False
+    if settings.credentials is None:
+        return (f"the router at {listening[0]} refused an anonymous session; it requires credentials: "
+                "set HRI_CREDENTIALS=<keys dir>/<identity> (see `hri keys init`)"), True
+    return (f"the router at {listening[0]} refused identity {settings.credentials.user!r} "
+            f"({settings.credentials.folder}): wrong password or certificate for this deployment?"), True
+
+
+def _accepts(endpoint: str) -> bool:
+    proto, _, address = endpoint.partition("/")
+    if proto not in ("tcp", "tls") or ":" not in address:
+        return False
+    host, _, port = address.rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port.split("#")[0])), timeout=0.5):
+            return True
+    except (OSError, ValueError):
+        return False
 
 
 def run_service(
@@ -331,7 +365,7 @@ def run_service(
     """Run one service process: open the session, serve `body(ctx)`, close cleanly. Returns an exit code."""
     log = get_logger(name)
     try:
-        settings = BusSettings.from_env(robot=robot, connect=connect)
+        settings = BusSettings.from_env(robot=robot, connect=connect, identity=name)
     except ConfigError as exc:
         log.error("configuration error", error=str(exc))
         return 2
@@ -355,6 +389,9 @@ def run_service(
         session = open_session(settings, log)
     except KeyboardInterrupt:
         return 0
+    except ConfigError as exc:
+        log.error("configuration error", error=str(exc))
+        return 2
     ctx: ServiceContext | None = None
     try:
         ctx = ServiceContext(name, session, Keys(settings.robot))
@@ -362,7 +399,7 @@ def run_service(
         if stop_requested.is_set():
             ctx.stop()
         _watch_parent(ctx)
-        ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect),
+        ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect), identity=settings.who,
                      config_file=str(settings.config_file) if settings.config_file else None)
         body(ctx)
         return 0
