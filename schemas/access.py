@@ -145,10 +145,11 @@ def access_control(robot: str, *, tls: bool = False, operator_writes: bool = Tru
             "policies": policies}
 
 
+def owners(key: str) -> tuple[str, ...]:
+    """Who may put the topic `key` (relative to `hri/<robot>/`), per the table."""
+    return tuple(o for row in ACCESS if row.kind is Kind.TOPIC and row.key == key for o in row.owners)
+
+
 def may_put(identity: str, key: str, *, operator_writes: bool = True) -> bool:
-    """Whether the table lets `identity` put the relative `key` (for tests and `hri keys show`)."""
-    return any(
-        row.kind is Kind.TOPIC and row.key == key and identity in row.owners
-        and (operator_writes or identity != OPERATOR)
-        for row in ACCESS
-    )
+    """Whether the table lets `identity` put the relative `key`."""
+    return identity in owners(key) and (operator_writes or identity != OPERATOR)

@@ -173,17 +173,23 @@ def init(keys_dir: Path, *, hosts: Iterable[str] = (), identities: Iterable[str]
     keys_dir = Path(keys_dir).expanduser()
     if exists(keys_dir) and not force:
         raise ConfigError(f"{keys_dir} already holds identities; use `hri keys rotate` or --force to replace all")
-    if force and keys_dir.exists():
-        shutil.rmtree(keys_dir)
-    keys_dir.mkdir(parents=True, exist_ok=True, mode=0o700)
-    os.chmod(keys_dir, 0o700)
-    ca = Authority.create(keys_dir / "ca")
+    if keys_dir.exists() and any(keys_dir.iterdir()) and not force:
+        raise ConfigError(f"{keys_dir} is not empty; choose another folder or pass --force")
+    # Built aside and renamed into place: a reader never sees half a deployment.
+    keys_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = keys_dir.with_name(f".{keys_dir.name}.{os.getpid()}.new")
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir(mode=0o700)
+    ca = Authority.create(staging / "ca")
     names = list(identities)
     for identity in names:
-        _new_password(keys_dir / identity, identity)
-        ca.issue(keys_dir / identity, identity)
-    ca.issue(keys_dir / "router", "router", server_names=[*ROUTER_NAMES, *hosts])
-    _write_dictionary(keys_dir, names)
+        _new_password(staging / identity, identity)
+        ca.issue(staging / identity, identity)
+    ca.issue(staging / "router", "router", server_names=[*ROUTER_NAMES, *hosts])
+    _write_dictionary(staging, names)
+    if keys_dir.exists():
+        shutil.rmtree(keys_dir)
+    os.replace(staging, keys_dir)
     return names
 
 

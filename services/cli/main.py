@@ -59,14 +59,13 @@ def up(
     """
     folder = None if open_bus else (keys_dir or default_keys_dir())
     try:
-        if folder is not None and not deployment_keys.exists(folder):
-            if connect is None:  # the deployment's identities are made where its router runs
-                deployment_keys.init(folder)
-                typer.echo(f"created this deployment's identities in {folder}", err=True)
-            else:  # joining a router: run as anonymous unless its keys were copied here
-                folder = None
+        if folder is not None and not deployment_keys.exists(folder) and connect is not None:
+            folder = None  # joining a router: anonymous unless this deployment's keys were copied here
         launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart,
                             keys_dir=folder, operator_writes=not no_operator_writes, listen=listen or [])
+        if folder is not None and not deployment_keys.exists(folder):  # made where the router runs
+            deployment_keys.init(folder)
+            typer.echo(f"created this deployment's identities in {folder}", err=True)
         raise typer.Exit(run_until_signalled(launcher))
     except ValueError as exc:  # unknown service, or a ConfigError (listen endpoint, keys)
         typer.echo(f"error: {exc}", err=True)

@@ -13,7 +13,7 @@ import ipaddress
 import json
 import os
 import stat
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import zenoh
@@ -122,6 +122,7 @@ class BusSettings:
     config_file: Path | None = None
     connect: tuple[str, ...] = (DEFAULT_CONNECT,)
     credentials: Credentials | None = None
+    identity: str | None = None
 
     @classmethod
     def from_env(cls, *, robot: str | None = None, connect: str | None = None,
@@ -144,7 +145,15 @@ class BusSettings:
         raw = connect or os.environ.get("HRI_ZENOH_CONNECT") or DEFAULT_CONNECT
         endpoints = parse_endpoints(raw)
         credentials = find_credentials(identity)
-        return cls(robot=robot, config_file=config_file, connect=endpoints, credentials=credentials)
+        return cls(robot=robot, config_file=config_file, connect=endpoints, credentials=credentials,
+                   identity=identity)
+
+    def refreshed(self) -> BusSettings:
+        """Look for the default credentials again (`hri up` may have just made them)."""
+        if self.credentials is not None or self.identity is None:
+            return self
+        found = find_credentials(self.identity)
+        return self if found is None else replace(self, credentials=found)
 
     def zenoh_config(self) -> zenoh.Config:
         if self.config_file is not None:

@@ -15,7 +15,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import FrameType
 from typing import Any, Generic, TypeVar
 
@@ -312,18 +312,36 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
     delay, n = 0.2, 0
     while True:
         n += 1
+        settings = settings.refreshed()
         try:
             return zenoh.open(settings.zenoh_config())
         except ConfigError:
             raise
         except Exception as exc:
-            why, refused = why_not_open(settings)
-            if attempts and (n >= attempts or refused):  # a person waits: say why at once, in one line
+            open_bus = _open_anonymously(settings, log)
+            if open_bus is not None:
+                return open_bus
+            why, _refused = why_not_open(settings)
+            if attempts and n >= attempts:  # a person waits: say why in one line
                 raise SessionRefused(why) from exc
             if not attempts:
                 log.warning("cannot open a zenoh session yet, retrying", why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)
+
+
+def _open_anonymously(settings: BusSettings, log: Any) -> zenoh.Session | None:
+    """A router without authentication refuses clients that offer credentials. Such a router is
+    open to anyone anyway, so join it without them (saying so) rather than not at all."""
+    if settings.credentials is None or settings.config_file is not None:
+        return None
+    try:
+        session = zenoh.open(replace(settings, credentials=None, identity=None).zenoh_config())
+    except Exception:
+        return None
+    log.warning("the router asks no credentials: joined an OPEN bus", endpoints=",".join(settings.connect),
+                identity=settings.who)
+    return session
 
 
 class SessionRefused(RuntimeError):
