@@ -30,6 +30,15 @@ from services.runtime import ServiceContext
 
 NAME = "reasoner"
 
+# Flood limits. Marks and commands wait in bounded queues (the runtime drops the oldest beyond
+# INPUT_QUEUE), and are handed to the agent only while fewer than this many inputs wait for it
+# (else dropped and counted in health `dropped`): a publisher flooding commands can neither grow
+# the reasoner's memory nor queue work in front of an X. Marks get more room than commands, so a
+# command flood never crowds out a danger sign.
+INPUT_QUEUE = 256
+COMMAND_BACKLOG = 16
+MARKS_BACKLOG = 64
+
 
 @dataclass(frozen=True)
 class ReasonerOptions:
@@ -83,12 +92,18 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
                  debugger_port=options.debugger_port)
 
     def on_command(msg: VoiceCommand) -> None:
+        if driver.backlog() >= COMMAND_BACKLOG:
+            ctx.count_drop(keys.voice_command)
+            return
         driver.submit(CommandInput(word=msg.command.value if msg.command else None,
                                    confidence=msg.confidence, stamp=msg.stamp))
 
     def on_marks(msg: MarkObservation) -> None:
         # No mark carries no news (DESIGN.md); only observations with marks reach the agent.
         if msg.marks:
+            if driver.backlog() >= MARKS_BACKLOG:
+                ctx.count_drop(keys.vision_marks)
+                return
             driver.submit(MarksInput(shapes=frozenset(m.shape.value for m in msg.marks), stamp=msg.stamp))
 
     def on_motion(msg: MotionState) -> None:
@@ -101,8 +116,8 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         return out
 
     ctx.subscribe(keys.motion_state, MotionState, on_motion)
-    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks)
-    ctx.subscribe(keys.voice_command, VoiceCommand, on_command)
+    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks, queue=INPUT_QUEUE)
+    ctx.subscribe(keys.voice_command, VoiceCommand, on_command, queue=INPUT_QUEUE)
     ctx.queryable(keys.reasoner_soar, on_soar)
     ctx.thread(lambda: bridge.run_keepalive(driver.responsive), "walk-keepalive")
     ctx.update_detail(ready=True)  # every subscription is declared: inputs are accepted now

@@ -14,6 +14,7 @@ import signal
 import socket
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from types import FrameType
@@ -92,6 +93,7 @@ class ServiceContext:
         self._status = HealthStatus.OK
         self._detail: dict[str, Any] = {}
         self._detail_lock = threading.Lock()
+        self._drops: dict[str, int] = {}
         self._cleanups: list[Callable[[], None]] = []
         self._keep: list[Any] = []  # declared zenoh entities: alive while referenced
         self._token = session.liveliness().declare_token(keys.alive(name))
@@ -128,12 +130,17 @@ class ServiceContext:
         callback: Callable[[M], None],
         *,
         latest_only: bool = False,
+        queue: int | None = None,
     ) -> None:
         """Deliver each valid `model` on `key` to `callback`; log, count and drop anything else.
 
         Callbacks run on Zenoh's threads one at a time and must be short. With
         `latest_only=True` a worker thread calls `callback` with the newest message only
         (a `RingChannel(1)`), for consumers that may fall behind (camera-rate marks).
+        With `queue=n` Zenoh's thread only queues the sample (at most `n`; when full the oldest
+        is dropped and counted in `Health.detail["dropped"]`) and a worker thread validates and
+        delivers: a publisher flooding this key cannot hold up the session's other keys, nor
+        grow this process's memory.
         """
         handle = self._guard(callback, f"subscriber {key}")
 
@@ -142,6 +149,9 @@ class ServiceContext:
             if msg is not None:
                 handle(msg)
 
+        if queue is not None:
+            self._subscribe_bounded(key, on_sample, queue)
+            return
         if not latest_only:
             self._keep.append(self.session.declare_subscriber(key, self._guard(on_sample, key)))
             return
@@ -157,6 +167,44 @@ class ServiceContext:
                 on_sample(sample)
 
         self.thread(drain, f"latest:{key}")
+
+    def _subscribe_bounded(self, key: str, deliver: Callable[[zenoh.Sample], None], size: int) -> None:
+        if size < 1:
+            raise ValueError(f"queue size for {key} must be at least 1, not {size}")
+        pending: deque[zenoh.Sample] = deque(maxlen=size)
+        wake = threading.Event()
+
+        def on_sample(sample: zenoh.Sample) -> None:  # Zenoh's thread: queue and return
+            if len(pending) == size:
+                self.count_drop(key)
+            pending.append(sample)
+            wake.set()
+
+        guarded = self._guard(deliver, key)
+
+        def drain() -> None:
+            while not self.stopping.is_set():
+                try:
+                    sample = pending.popleft()
+                except IndexError:
+                    wake.wait(0.2)
+                    wake.clear()
+                    continue
+                guarded(sample)
+
+        self._keep.append(self.session.declare_subscriber(key, on_sample))
+        self.thread(drain, f"queue:{key}")
+
+    def count_drop(self, key: str, n: int = 1) -> None:
+        """Count messages dropped on `key` because the service could not keep up (a flood)."""
+        short = key[len(self.keys.prefix) + 1:] if key.startswith(self.keys.prefix + "/") else key
+        with self._detail_lock:
+            self._drops[short] = self._drops.get(short, 0) + n
+
+    @property
+    def drops(self) -> dict[str, int]:
+        with self._detail_lock:
+            return dict(self._drops)
 
     def _decode(self, sample: zenoh.Sample, model: type[M]) -> M | None:
         self.counters.bump("received")
@@ -223,6 +271,8 @@ class ServiceContext:
     def health(self) -> Health:
         with self._detail_lock:
             detail = dict(self._detail)
+            if self._drops:
+                detail["dropped"] = dict(self._drops)
         detail["callback_errors"] = self.counters.callback_errors
         detail.setdefault("pid", os.getpid())
         return Health(

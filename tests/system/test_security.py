@@ -19,6 +19,8 @@ from services.runtime import client_config, encode
 from tests.conftest import ROOT
 from tests.system.conftest import Robot
 
+pytestmark = pytest.mark.system
+
 
 def hri_env(robot: Robot, identity: str) -> dict[str, str]:
     env = {**os.environ, "HRI_ROBOT": robot.ctx.robot, "HRI_CREDENTIALS": str(robot.out / "keys" / identity)}
