@@ -371,11 +371,12 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
             open_bus = _open_anonymously(settings, log)
             if open_bus is not None:
                 return open_bus
-            why, _refused = why_not_open(settings)
+            why, refused = why_not_open(settings)
             if attempts and n >= attempts:  # a person waits: say why in one line
                 raise SessionRefused(why) from exc
             if not attempts:
-                log.warning("cannot open a zenoh session yet, retrying", why=why, retry_in_s=delay)
+                log.warning("the router refused this session, retrying" if refused else "no zenoh router yet, retrying",
+                            why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)
 

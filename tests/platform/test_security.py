@@ -8,6 +8,7 @@ import signal
 import stat
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -280,3 +281,35 @@ def test_credentials_still_join_an_open_router(router_endpoint: str, keys_dir: P
 
     settings = BusSettings(connect=(router_endpoint,), credentials=Credentials.load(keys_dir / "observer"))
     open_session(settings, get_logger("test"), attempts=2).close()
+
+
+# ---------------------------------------------------------------------------------------- flooding
+def test_a_bounded_subscription_drops_the_oldest_and_counts(router_endpoint: str, keys: Keys) -> None:
+    from schemas import VoiceCommand
+    from services.runtime import ServiceContext
+
+    bus = ServiceContext("bus", zenoh.open(client_config([router_endpoint])), keys)
+    peer = ServiceContext("peer", zenoh.open(client_config([router_endpoint])), keys)
+    try:
+        got: list[int] = []
+        gate = threading.Event()
+
+        def slow(msg: VoiceCommand) -> None:
+            gate.wait(10)
+            got.append(msg.seq)
+
+        bus.subscribe(keys.voice_command, VoiceCommand, slow, queue=4)
+        pub = peer.publisher(keys.voice_command, VoiceCommand, block=True)
+        wait_for(lambda: pub.matched, timeout=5)
+        for _ in range(50):
+            pub.put(VoiceCommand(command=None, text="x", confidence=0.5, engine="flood"))
+        wait_for(lambda: sum(bus.drops.values()) >= 45, timeout=5)
+        gate.set()
+        wait_for(lambda: len(got) + bus.drops["voice/command"] == 50, timeout=5)
+        assert len(got) <= 5 and got[-1] == 50  # the newest survive
+        health = bus.health()
+        assert health.detail["dropped"] == {"voice/command": 50 - len(got)}
+        assert health.received == len(got)  # counted when validated, after the queue
+    finally:
+        peer.close()
+        bus.close()

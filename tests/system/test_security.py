@@ -4,18 +4,20 @@ identities without the right cannot make it move, and the observer sees everythi
 from __future__ import annotations
 
 import json
+import multiprocessing as mp
 import os
 import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 import zenoh
 
 from schemas import Action, MotionGoal, Posture, VoiceCommand
 from schemas.keys import SERVICES
-from services.runtime import client_config, encode
+from services.runtime import Credentials, client_config, encode
 from tests.conftest import ROOT
 from tests.system.conftest import Robot
 
@@ -88,3 +90,51 @@ def test_status_and_spy_work_as_the_observer(robot: Robot) -> None:
                    cwd=ROOT, env=env, capture_output=True, text=True, timeout=60, check=True)
     time.sleep(1.0)
     assert robot.rec.since(t0, "heard") == [] and robot.rec.since(t0, "goal") == []
+
+
+def _flood(endpoint: str, creds: str, key: str, payload: bytes, seconds: float, rate: float) -> None:
+    """Another process, authenticated as an identity allowed to put `key`, floods it."""
+    session = zenoh.open(client_config([endpoint], Credentials.load(Path(creds))))
+    try:
+        pub = session.declare_publisher(key)
+        t0 = time.perf_counter()
+        sent = 0
+        while (now := time.perf_counter()) - t0 < seconds:
+            while sent < (now - t0) * rate:
+                pub.put(payload)
+                sent += 1
+            time.sleep(0.001)
+    finally:
+        session.close()
+
+
+def rss_mib(pid: int) -> float:
+    line = next(x for x in Path(f"/proc/{pid}/status").read_text().splitlines() if x.startswith("VmRSS:"))
+    return int(line.split()[1]) / 1024
+
+
+def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> None:
+    """`voice` may put commands; flooding them (about 50,000/s asked) must not delay an X's stop
+    behind the flood nor grow the reasoner's memory; the reasoner reports what it dropped.
+    (The latency under flood is measured by bench/security_bench.py.)"""
+    robot.play([{"send": "go", "expect": {"verdict": "obey", "posture": "walking"}}])
+    reasoner = robot.launcher.pid("reasoner")
+    assert reasoner is not None
+    before = rss_mib(reasoner)
+    payload = encode(VoiceCommand(command="go", text="go", confidence=1.0, engine="flood", stamp=1.0))
+    flood = mp.get_context("spawn").Process(target=_flood, args=(
+        robot.launcher.endpoint, str(robot.out / "keys" / "voice"), robot.ctx.keys.voice_command, payload,
+        6.0, 50_000.0))
+    flood.start()
+    try:
+        time.sleep(2.0)  # the flood is in full swing
+        t0 = time.monotonic()
+        robot.play([{"show": "X", "expect": {"situation": "danger", "action": "stop", "posture": "standing"}}])
+        stop = next(g for g in robot.rec.since(t0, "goal") if g.action is Action.STOP)
+        assert stop is not None
+    finally:
+        flood.join(30)
+    health = robot.health("reasoner")
+    assert health is not None and health.detail.get("dropped", {}).get("voice/command", 0) > 0, health
+    assert rss_mib(reasoner) - before < 25, (before, rss_mib(reasoner))
+    assert robot.launcher.pid("reasoner") == reasoner  # it never went down
