@@ -1,6 +1,6 @@
 """What authentication and access control cost, and whether a flood can stop the robot from stopping.
 
-    python bench/security_bench.py [--messages 3000] [--commands 16] [--flood-rate 50000] [--stops 3]
+    python bench/security_bench.py [--messages 3000] [--commands 16] [--rounds 3] [--flood-rate 50000] [--stops 3]
 
 - bus: one-way latency of a `VoiceCommand` from a publisher process to a subscriber process through
   the router (zenoh-python), open / user-password + access rules on loopback TCP / mutual TLS + user-
@@ -44,35 +44,42 @@ from services.runtime import (
 
 
 # ---------------------------------------------------------------------------------------- bus
-def bus(keys: Path, messages: int, rate: float) -> None:
+def bus(keys: Path, messages: int, rate: float, rounds: int) -> None:
+    """The three modes in turn, `rounds` times (a shared machine's load drifts: interleave)."""
     robot = "benchsec"
-    port, tls_port = free_port(), free_port()
-    tcp, tls = loopback_endpoint(port), f"tls/localhost:{tls_port}"
     creds = (keys / "reasoner", keys / "voice")
-    for label, security, endpoint, who in (
-        ("open (no auth, no rules)      ", None, tcp, (None, None)),
-        ("user/password + access rules  ", RouterSecurity(keys, robot=robot), tcp, creds),
-        ("mutual TLS + user/pw + rules  ", RouterSecurity(keys, robot=robot), tls, creds),
-    ):
-        listen = [tcp] if security is None else [tcp, f"tls/127.0.0.1:{tls_port}"]
-        with Router(listen, security):
-            wait_listening(port)
-            lat, _ = bus_latency.run(messages, rate, endpoint, robot, who)
-        ms = [x * 1000 for x in lat]
-        print(f"bus {label} {len(ms)} msgs at {rate:.0f}/s: p50 {bus_latency.pct(ms, 50):.3f} ms   "
-              f"p99 {bus_latency.pct(ms, 99):.3f} ms   max {max(ms):.3f} ms")
+    modes = {"open (no auth, no rules)    ": (None, "tcp", (None, None)),
+             "user/password + access rules": (RouterSecurity(keys, robot=robot), "tcp", creds),
+             "mutual TLS + user/pw + rules": (RouterSecurity(keys, robot=robot), "tls", creds)}
+    samples: dict[str, list[float]] = {label: [] for label in modes}
+    for _ in range(rounds):
+        for label, (security, link, who) in modes.items():
+            port, tls_port = free_port(), free_port()
+            tcp = loopback_endpoint(port)
+            listen = [tcp] if security is None else [tcp, f"tls/127.0.0.1:{tls_port}"]
+            with Router(listen, security):
+                wait_listening(port)
+                endpoint = tcp if link == "tcp" else f"tls/localhost:{tls_port}"
+                lat, _ = bus_latency.run(messages, rate, endpoint, robot, who)
+            samples[label] += [x * 1000 for x in lat]
+    for label, ms in samples.items():
+        print(f"bus, {label}: {len(ms)} msgs at {rate:.0f}/s in {rounds} rounds: "
+              f"p50 {bus_latency.pct(ms, 50):.3f} ms   p99 {bus_latency.pct(ms, 99):.3f} ms")
 
 
 # ---------------------------------------------------------------------------------------- command -> servo
-def servo(commands: int) -> None:
+def servo(commands: int, rounds: int) -> None:
     args = argparse.Namespace(commands=commands, stops=0, utterances=0)
-    for secure in (False, True):
-        out = Path(tempfile.mkdtemp(prefix="hri-secbench-"))
-        with simulated_robot(out, robot="benchservo", participant="bench", env={"HRI_LOG_LEVEL": "warning"},
-                             secure=secure) as sim:
-            figures = system_latency.measure(sim, args)
+    samples: dict[bool, list[float]] = {False: [], True: []}
+    for _ in range(rounds):
+        for secure in (False, True):
+            out = Path(tempfile.mkdtemp(prefix="hri-secbench-"))
+            with simulated_robot(out, robot="benchservo", participant="bench", env={"HRI_LOG_LEVEL": "warning"},
+                                 secure=secure) as sim:
+                samples[secure] += system_latency.measure(sim, args).cmd
+    for secure, xs in samples.items():
         label = "secured" if secure else "open   "
-        print(f"command -> first servo write, {label}: {system_latency.pcts(figures.cmd)}")
+        print(f"command -> first servo write, {label}: {system_latency.pcts(xs)}")
 
 
 # ---------------------------------------------------------------------------------------- flood
@@ -224,6 +231,7 @@ def main() -> None:
     ap.add_argument("--flood-rate", type=float, default=50000.0)
     ap.add_argument("--flood-s", type=float, default=5.0, help="seconds each flood lasts")
     ap.add_argument("--stops", type=int, default=3)
+    ap.add_argument("--rounds", type=int, default=3, help="bus and servo modes are measured in turn this often")
     ap.add_argument("--only", choices=["bus", "servo", "flood"], action="append")
     args = ap.parse_args()
     configure_logging("warning")
@@ -232,9 +240,9 @@ def main() -> None:
     parts = args.only or ["bus", "servo", "flood"]
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
     if "bus" in parts:
-        bus(keys, args.messages, args.rate)
+        bus(keys, args.messages, args.rate, args.rounds)
     if "servo" in parts:
-        servo(args.commands)
+        servo(args.commands, args.rounds)
     if "flood" in parts:
         flood(keys, args.flood_rate, args.stops, args.flood_s)
 

@@ -48,10 +48,12 @@ class Access:
 
 
 def _per_service() -> tuple[Access, ...]:
+    # A service may also ask after itself: a container's health check (`hri status --service`) runs
+    # with the only identity mounted there, the service's own.
     rows: list[Access] = []
     for name in SERVICES:
-        rows.append(Access(f"{name}/health", Kind.QUERYABLE, (name,), READERS, asked_as=("*/health",)))
-        rows.append(Access(f"alive/{name}", Kind.TOKEN, (name,)))
+        rows.append(Access(f"{name}/health", Kind.QUERYABLE, (name,), (*READERS, name), asked_as=("*/health",)))
+        rows.append(Access(f"alive/{name}", Kind.TOKEN, (name,), (name,)))
     return tuple(rows)
 
 
