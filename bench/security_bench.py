@@ -114,10 +114,19 @@ class Watch:
         self.state: MotionState | None = None
         self.writes: dict[str, float] = {}
         self.cond = threading.Condition()
+        self.x_seen: list[tuple[float, float]] = []  # (vision's stamp, arrival here) of observations with an X
+        self._raw = ctx.session.declare_subscriber(ctx.keys.vision_marks, self._marks)  # cheap: no decode
         ctx.subscribe(ctx.keys.motion_goal, MotionGoal, self._goal)
         ctx.subscribe(ctx.keys.motion_state, MotionState, self._state)
         self.scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
         self.voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
+
+    def _marks(self, sample: zenoh.Sample) -> None:
+        raw = sample.payload.to_bytes()
+        if b'"X"' in raw:
+            obs = MarkObservation.model_validate_json(raw)
+            with self.cond:
+                self.x_seen.append((obs.stamp, time.time()))
 
     def _goal(self, g: MotionGoal) -> None:
         with self.cond:
@@ -175,7 +184,7 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
             if not ready:
                 raise SystemExit(f"robot did not come up; see {out / 'services.log'}")
             for variant in (None, *payloads):
-                to_goal, to_write, sent_rates, rss = [], [], [], []
+                to_goal, to_write, to_seen, sent_rates, rss = [], [], [], [], []
                 for _ in range(stops):
                     watch.scene.put(SceneCommand(shape=Shape.O))
                     time.sleep(0.8)
@@ -195,6 +204,9 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
                     watch.scene.put(SceneCommand(shape=Shape.X))
                     stop = watch.wait(lambda: next((g for t, g in watch.goals if t >= shown
                                                     and g.action == Action.STOP), None), 10)
+                    seen = next((stamp for stamp, _ in watch.x_seen if stamp >= shown), None)
+                    if seen:
+                        to_seen.append(seen - shown)
                     if stop:
                         to_goal.append(next(t for t, g in watch.goals if g is stop) - shown)
                         if watch.wait(lambda: stop.goal_id in watch.writes, 5):
@@ -213,6 +225,7 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
                 label = f"flood of {variant} at {sum(sent_rates) / max(1, len(sent_rates)):,.0f}/s" if variant \
                     else "no flood"
                 print(f"{label}:")
+                print(f"   X shown -> vision reports it:      {system_latency.pcts(to_seen)}")
                 print(f"   X shown -> stop goal:              {system_latency.pcts(to_goal)}")
                 print(f"   X shown -> stop's first servo write: {system_latency.pcts(to_write)}")
                 print(f"   reasoner RSS {', '.join(f'{r:.0f}' for r in rss)} MiB; health {drops}; "

@@ -31,13 +31,17 @@ from services.runtime import ServiceContext
 NAME = "reasoner"
 
 # Flood limits. Marks and commands wait in bounded queues (the runtime drops the oldest beyond
-# INPUT_QUEUE), and are handed to the agent only while fewer than this many inputs wait for it
-# (else dropped and counted in health `dropped`): a publisher flooding commands can neither grow
-# the reasoner's memory nor queue work in front of an X. Marks get more room than commands, so a
-# command flood never crowds out a danger sign.
-INPUT_QUEUE = 256
+# INPUT_QUEUE), are handed to the agent only while fewer than *_BACKLOG inputs wait for it, and
+# commands at most COMMAND_RATE a second; the rest are dropped and counted in health `dropped`.
+# A publisher flooding commands can neither grow the reasoner's memory, nor queue work in front of
+# an X, nor keep the agent (and the process's Python threads) too busy to read the next mark.
+# Marks get more room than commands, so a command flood never crowds out a danger sign.
+INPUT_QUEUE = 32
 COMMAND_BACKLOG = 16
 MARKS_BACKLOG = 64
+COMMAND_RATE = 50.0
+"""Commands a second the agent is given at most (HRI_REASONER_COMMAND_RATE; 0: no limit). People
+give a few a second; a flood beyond this would keep the agent, and with it the process, busy."""
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,7 @@ class ReasonerOptions:
     knowledge_file: Path | None = None
     debugger_port: int | None = None
     keepalive_s: float = 0.5
+    command_rate: float = COMMAND_RATE
 
     @classmethod
     def from_env(
@@ -63,7 +68,15 @@ class ReasonerOptions:
             debugger_port = int(raw)
         if knowledge_file is None and os.environ.get("HRI_REASONER_KNOWLEDGE"):
             knowledge_file = Path(os.environ["HRI_REASONER_KNOWLEDGE"])
-        return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port)
+        raw_rate = os.environ.get("HRI_REASONER_COMMAND_RATE", str(COMMAND_RATE))
+        try:
+            command_rate = float(raw_rate)
+        except ValueError:
+            command_rate = -1.0
+        if command_rate < 0:
+            raise ValueError(f"HRI_REASONER_COMMAND_RATE={raw_rate!r} is not a rate (commands a second, 0: no limit)")
+        return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port,
+                   command_rate=command_rate)
 
 
 def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
@@ -116,8 +129,10 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         return out
 
     ctx.subscribe(keys.motion_state, MotionState, on_motion)
-    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks, queue=INPUT_QUEUE)
-    ctx.subscribe(keys.voice_command, VoiceCommand, on_command, queue=INPUT_QUEUE)
+    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks, queue=INPUT_QUEUE,
+                  when=lambda: driver.backlog() < MARKS_BACKLOG)
+    ctx.subscribe(keys.voice_command, VoiceCommand, on_command, queue=INPUT_QUEUE,
+                  when=lambda: driver.backlog() < COMMAND_BACKLOG, rate=options.command_rate or None)
     ctx.queryable(keys.reasoner_soar, on_soar)
     ctx.thread(lambda: bridge.run_keepalive(driver.responsive), "walk-keepalive")
     ctx.update_detail(ready=True)  # every subscription is declared: inputs are accepted now

@@ -51,6 +51,25 @@ class Counters:
             setattr(self, name, getattr(self, name) + n)
 
 
+class TokenBucket:
+    """At most `rate` events a second on average, in bursts of up to `burst` (one thread only)."""
+
+    def __init__(self, rate: float, burst: int) -> None:
+        self.rate = rate
+        self.burst = float(burst)
+        self.tokens = float(burst)
+        self.last = time.monotonic()
+
+    def take(self) -> bool:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.last) * self.rate)
+        self.last = now
+        if self.tokens < 1.0:
+            return False
+        self.tokens -= 1.0
+        return True
+
+
 class TypedPublisher(Generic[H]):
     """Publishes one model on one key, numbering messages with a per-publisher `seq`."""
 
@@ -131,6 +150,8 @@ class ServiceContext:
         *,
         latest_only: bool = False,
         queue: int | None = None,
+        when: Callable[[], bool] | None = None,
+        rate: float | None = None,
     ) -> None:
         """Deliver each valid `model` on `key` to `callback`; log, count and drop anything else.
 
@@ -140,7 +161,10 @@ class ServiceContext:
         With `queue=n` Zenoh's thread only queues the sample (at most `n`; when full the oldest
         is dropped and counted in `Health.detail["dropped"]`) and a worker thread validates and
         delivers: a publisher flooding this key cannot hold up the session's other keys, nor
-        grow this process's memory.
+        grow this process's memory. `when` (with `queue`) holds delivery while it is false, so
+        that nothing is validated that the consumer would only throw away (the queue keeps the
+        newest meanwhile). `rate` (with `queue`) delivers at most that many messages a second
+        (bursts up to `queue`); the rest are dropped unread and counted.
         """
         handle = self._guard(callback, f"subscriber {key}")
 
@@ -150,7 +174,7 @@ class ServiceContext:
                 handle(msg)
 
         if queue is not None:
-            self._subscribe_bounded(key, on_sample, queue)
+            self._subscribe_bounded(key, on_sample, queue, when, rate)
             return
         if not latest_only:
             self._keep.append(self.session.declare_subscriber(key, self._guard(on_sample, key)))
@@ -168,9 +192,11 @@ class ServiceContext:
 
         self.thread(drain, f"latest:{key}")
 
-    def _subscribe_bounded(self, key: str, deliver: Callable[[zenoh.Sample], None], size: int) -> None:
+    def _subscribe_bounded(self, key: str, deliver: Callable[[zenoh.Sample], None], size: int,
+                           when: Callable[[], bool] | None, rate: float | None) -> None:
         if size < 1:
             raise ValueError(f"queue size for {key} must be at least 1, not {size}")
+        bucket = TokenBucket(rate, size) if rate else None
         pending: deque[zenoh.Sample] = deque(maxlen=size)
         wake = threading.Event()
 
@@ -184,11 +210,17 @@ class ServiceContext:
 
         def drain() -> None:
             while not self.stopping.is_set():
+                if when is not None and pending and not when():
+                    self.stopping.wait(0.001)  # the consumer is busy: let the queue shed the oldest
+                    continue
                 try:
                     sample = pending.popleft()
                 except IndexError:
                     wake.wait(0.2)
                     wake.clear()
+                    continue
+                if bucket is not None and not bucket.take():
+                    self.count_drop(key)
                     continue
                 guarded(sample)
 
@@ -368,15 +400,15 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
         except ConfigError:
             raise
         except Exception as exc:
-            open_bus = _open_anonymously(settings, log)
+            why, refused = why_not_open(settings)
+            open_bus = _open_anonymously(settings, log) if refused else None
             if open_bus is not None:
                 return open_bus
-            why, refused = why_not_open(settings)
             if attempts and n >= attempts:  # a person waits: say why in one line
                 raise SessionRefused(why) from exc
             if not attempts:
-                log.warning("the router refused this session, retrying" if refused else "no zenoh router yet, retrying",
-                            why=why, retry_in_s=delay)
+                event = "the router refused this session, retrying" if refused else "no zenoh router yet, retrying"
+                log.warning(event, why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)
 
