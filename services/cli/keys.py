@@ -32,6 +32,7 @@ from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from schemas.access import ACCESS, IDENTITIES, Kind
+from schemas.keys import SERVICES
 from services.runtime.config import (
     DEFAULT_CONNECT,
     ConfigError,
@@ -193,6 +194,20 @@ def init(keys_dir: Path, *, hosts: Iterable[str] = (), identities: Iterable[str]
     return names
 
 
+def hand_to_containers(keys_dir: Path, uid: int, gid: int | None = None) -> None:
+    """Give the router's and the five services' folders to the user the containers run as (the
+    image's `hri`, uid 10001), so that files only their owner may read are readable in there. The
+    CA and the observer's and operator's folders stay with the person who made them."""
+    keys_dir = Path(keys_dir).expanduser()
+    for name in ("router", *SERVICES):
+        folder = keys_dir / name
+        for path in (folder, *folder.iterdir()):
+            try:
+                os.chown(path, uid, uid if gid is None else gid)
+            except PermissionError:
+                raise ConfigError(f"cannot give {path} to uid {uid}: run as root (sudo hri keys ...)") from None
+
+
 def rotate(keys_dir: Path, identity: str) -> None:
     """New password and certificate for one identity (the router must be restarted to see it)."""
     keys_dir = Path(keys_dir).expanduser()
@@ -241,6 +256,11 @@ KeysDir = Annotated[Path | None, typer.Option("--keys-dir", envvar="HRI_KEYS_DIR
                                               help="Keys folder [default: ~/.local/state/hri/keys]")]
 
 
+ContainerUid = Annotated[int | None, typer.Option(
+    "--container-uid", help="For docker compose: give the router's and services' folders to this uid "
+                            "(the image's user is 10001; needs root)")]
+
+
 def _fail(exc: Exception) -> typer.Exit:
     typer.echo(f"error: {exc}", err=True)
     return typer.Exit(2)
@@ -252,11 +272,14 @@ def init_cmd(
     host: Annotated[list[str] | None, typer.Option(
         "--host", help="Another name or address clients use to reach the router (repeatable)")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace every existing secret")] = False,
+    container_uid: ContainerUid = None,
 ) -> None:
     """Create the deployment's identities (five services, observer, operator) and the router's."""
     folder = keys_dir or default_keys_dir()
     try:
         names = init(folder, hosts=host or [], force=force)
+        if container_uid is not None:
+            hand_to_containers(folder, container_uid)
     except ConfigError as exc:
         raise _fail(exc) from None
     typer.echo(f"created {len(names)} identities ({', '.join(names)}) and the router's in {folder}")
@@ -264,11 +287,13 @@ def init_cmd(
 
 @app.command("rotate")
 def rotate_cmd(identity: Annotated[str, typer.Argument(help=f"One of {', '.join(IDENTITIES)}")],
-               keys_dir: KeysDir = None) -> None:
+               keys_dir: KeysDir = None, container_uid: ContainerUid = None) -> None:
     """Give one identity a new password and certificate; restart the router and that service."""
     folder = keys_dir or default_keys_dir()
     try:
         rotate(folder, identity)
+        if container_uid is not None:
+            hand_to_containers(folder, container_uid)
     except ConfigError as exc:
         raise _fail(exc) from None
     typer.echo(f"rotated {identity} in {folder}; restart the router, then copy {folder / identity} "
