@@ -1,6 +1,7 @@
-"""What authentication and access control cost, and whether a flood can stop the robot from stopping.
+"""What authentication and access control cost, and whether a flood keeps the robot from stopping.
 
-    python bench/security_bench.py [--messages 3000] [--commands 16] [--rounds 3] [--flood-rate 50000] [--stops 3]
+    python bench/security_bench.py [--messages 3000] [--commands 16] [--rounds 3]
+                                    [--flood-rate 50000] [--flood-s 5] [--stops 3] [--only bus|servo|flood]
 
 - bus: one-way latency of a `VoiceCommand` from a publisher process to a subscriber process through
   the router (zenoh-python), open / user-password + access rules on loopback TCP / mutual TLS + user-
@@ -23,11 +24,20 @@ import threading
 import time
 from pathlib import Path
 
-import zenoh
-
 import bus_latency  # noqa: I001 - bench siblings, run as `python bench/security_bench.py`
 import system_latency
-from schemas import Action, MarkObservation, MotionGoal, MotionState, Posture, SceneCommand, Shape, VoiceCommand
+import zenoh
+
+from schemas import (
+    Action,
+    MarkObservation,
+    MotionGoal,
+    MotionState,
+    Posture,
+    SceneCommand,
+    Shape,
+    VoiceCommand,
+)
 from schemas.keys import Keys
 from services.cli import keys as deployment_keys
 from services.cli.launcher import Launcher
@@ -48,9 +58,11 @@ def bus(keys: Path, messages: int, rate: float, rounds: int) -> None:
     """The three modes in turn, `rounds` times (a shared machine's load drifts: interleave)."""
     robot = "benchsec"
     creds = (keys / "reasoner", keys / "voice")
-    modes = {"open (no auth, no rules)    ": (None, "tcp", (None, None)),
-             "user/password + access rules": (RouterSecurity(keys, robot=robot), "tcp", creds),
-             "mutual TLS + user/pw + rules": (RouterSecurity(keys, robot=robot), "tls", creds)}
+    modes = {
+        "open (no auth, no rules)    ": (None, "tcp", (None, None)),
+        "user/password + access rules": (RouterSecurity(keys, robot=robot), "tcp", creds),
+        "mutual TLS + user/pw + rules": (RouterSecurity(keys, robot=robot), "tls", creds),
+    }
     samples: dict[str, list[float]] = {label: [] for label in modes}
     for _ in range(rounds):
         for label, (security, link, who) in modes.items():
@@ -63,8 +75,10 @@ def bus(keys: Path, messages: int, rate: float, rounds: int) -> None:
                 lat, _ = bus_latency.run(messages, rate, endpoint, robot, who)
             samples[label] += [x * 1000 for x in lat]
     for label, ms in samples.items():
-        print(f"bus, {label}: {len(ms)} msgs at {rate:.0f}/s in {rounds} rounds: "
-              f"p50 {bus_latency.pct(ms, 50):.3f} ms   p99 {bus_latency.pct(ms, 99):.3f} ms")
+        print(
+            f"bus, {label}: {len(ms)} msgs at {rate:.0f}/s in {rounds} rounds: "
+            f"p50 {bus_latency.pct(ms, 50):.3f} ms   p99 {bus_latency.pct(ms, 99):.3f} ms"
+        )
 
 
 # ---------------------------------------------------------------------------------------- command -> servo
@@ -74,8 +88,9 @@ def servo(commands: int, rounds: int) -> None:
     for _ in range(rounds):
         for secure in (False, True):
             out = Path(tempfile.mkdtemp(prefix="hri-secbench-"))
-            with simulated_robot(out, robot="benchservo", participant="bench", env={"HRI_LOG_LEVEL": "warning"},
-                                 secure=secure) as sim:
+            with simulated_robot(
+                out, robot="benchservo", participant="bench", env={"HRI_LOG_LEVEL": "warning"}, secure=secure
+            ) as sim:
                 samples[secure] += system_latency.measure(sim, args).cmd
     for secure, xs in samples.items():
         label = "secured" if secure else "open   "
@@ -83,8 +98,9 @@ def servo(commands: int, rounds: int) -> None:
 
 
 # ---------------------------------------------------------------------------------------- flood
-def _flood(endpoint: str, creds: str, key: str, payload: bytes, rate: float, seconds: float,
-           out: mp.Queue) -> None:
+def _flood(
+    endpoint: str, creds: str, key: str, payload: bytes, rate: float, seconds: float, out: mp.Queue
+) -> None:
     """Put `payload` on `key` at `rate` per second (batches every millisecond) for `seconds`."""
     session = zenoh.open(client_config([endpoint], Credentials.load(Path(creds))))
     try:
@@ -114,7 +130,9 @@ class Watch:
         self.state: MotionState | None = None
         self.writes: dict[str, float] = {}
         self.cond = threading.Condition()
-        self.x_seen: list[tuple[float, float]] = []  # (vision's stamp, arrival here) of observations with an X
+        self.x_seen: list[
+            tuple[float, float]
+        ] = []  # (vision's stamp, arrival here) of observations with an X
         self._raw = ctx.session.declare_subscriber(ctx.keys.vision_marks, self._marks)  # cheap: no decode
         ctx.subscribe(ctx.keys.motion_goal, MotionGoal, self._goal)
         ctx.subscribe(ctx.keys.motion_state, MotionState, self._state)
@@ -145,11 +163,21 @@ class Watch:
             return self.cond.wait_for(predicate, timeout)
 
     def posture(self, p: Posture, timeout: float = 15) -> bool:
-        return bool(self.wait(lambda: self.state is not None and self.state.posture == p
-                              and (self.state.action is None or p == Posture.WALKING), timeout))
+        return bool(
+            self.wait(
+                lambda: (
+                    self.state is not None
+                    and self.state.posture == p
+                    and (self.state.action is None or p == Posture.WALKING)
+                ),
+                timeout,
+            )
+        )
 
     def say(self, word: str) -> None:
-        self.voice.put(VoiceCommand(command=word, text=word, confidence=0.99, engine="bench", stamp=time.time()))
+        self.voice.put(
+            VoiceCommand(command=word, text=word, confidence=0.99, engine="bench", stamp=time.time())
+        )
 
 
 def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
@@ -164,21 +192,32 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
             log.write(f"{name:<8} | {line}\n")
 
     port = free_port()
-    launcher = Launcher(port=port, robot=robot, env={**simulated_env(out), "HRI_LOG_LEVEL": "warning"},
-                        sink=sink, keys_dir=keys)
+    launcher = Launcher(
+        port=port,
+        robot=robot,
+        env={**simulated_env(out), "HRI_LOG_LEVEL": "warning"},
+        sink=sink,
+        keys_dir=keys,
+    )
     k = Keys(robot)
     payloads = {
-        "VoiceCommand": (k.voice_command, "voice",
-                         encode(VoiceCommand(command="go", text="go", confidence=0.99, engine="flood", stamp=1.0))),
+        "VoiceCommand": (
+            k.voice_command,
+            "voice",
+            encode(VoiceCommand(command="go", text="go", confidence=0.99, engine="flood", stamp=1.0)),
+        ),
         "MarkObservation": (k.vision_marks, "vision", encode(MarkObservation(marks=[], frame=1, stamp=1.0))),
     }
     spawn = mp.get_context("spawn")
     with launcher:
-        ctx = ServiceContext("bench", zenoh.open(client_config([launcher.endpoint],
-                                                               Credentials.load(keys / "operator"))), k)
+        ctx = ServiceContext(
+            "bench", zenoh.open(client_config([launcher.endpoint], Credentials.load(keys / "operator"))), k
+        )
         try:
             watch = Watch(ctx)
-            ready = watch.wait(lambda: watch.state is not None and watch.state.bus_ok and watch.scene.matched, 90)
+            ready = watch.wait(
+                lambda: watch.state is not None and watch.state.bus_ok and watch.scene.matched, 90
+            )
             while not ((h := ctx.query_health("reasoner", 1.0)) and h.detail.get("ready")):
                 time.sleep(0.3)
             if not ready:
@@ -196,14 +235,20 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
                     proc, q = None, spawn.Queue()
                     if variant:
                         key, who, payload = payloads[variant]
-                        proc = spawn.Process(target=_flood, args=(launcher.endpoint, str(keys / who), key, payload,
-                                                                  rate, flood_s, q))
+                        proc = spawn.Process(
+                            target=_flood,
+                            args=(launcher.endpoint, str(keys / who), key, payload, rate, flood_s, q),
+                        )
                         proc.start()
                         time.sleep(2.0)
                     shown = time.time()
                     watch.scene.put(SceneCommand(shape=Shape.X))
-                    stop = watch.wait(lambda: next((g for t, g in watch.goals if t >= shown
-                                                    and g.action == Action.STOP), None), 10)
+                    stop = watch.wait(
+                        lambda: next(
+                            (g for t, g in watch.goals if t >= shown and g.action == Action.STOP), None
+                        ),
+                        10,
+                    )
                     seen = next((stamp for stamp, _ in watch.x_seen if stamp >= shown), None)
                     if seen:
                         to_seen.append(seen - shown)
@@ -222,14 +267,19 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
                     time.sleep(1.0)
                 health = ctx.query_health("reasoner", 2.0)
                 drops = {n: v for n, v in (health.detail if health else {}).items() if "drop" in n}
-                label = f"flood of {variant} at {sum(sent_rates) / max(1, len(sent_rates)):,.0f}/s" if variant \
+                label = (
+                    f"flood of {variant} at {sum(sent_rates) / max(1, len(sent_rates)):,.0f}/s"
+                    if variant
                     else "no flood"
+                )
                 print(f"{label}:")
                 print(f"   X shown -> vision reports it:      {system_latency.pcts(to_seen)}")
                 print(f"   X shown -> stop goal:              {system_latency.pcts(to_goal)}")
                 print(f"   X shown -> stop's first servo write: {system_latency.pcts(to_write)}")
-                print(f"   reasoner RSS {', '.join(f'{r:.0f}' for r in rss)} MiB; health {drops}; "
-                      f"received {health.received if health else '?'}")
+                print(
+                    f"   reasoner RSS {', '.join(f'{r:.0f}' for r in rss)} MiB; health {drops}; "
+                    f"received {health.received if health else '?'}"
+                )
         finally:
             ctx.close()
     log.close()
@@ -244,7 +294,9 @@ def main() -> None:
     ap.add_argument("--flood-rate", type=float, default=50000.0)
     ap.add_argument("--flood-s", type=float, default=5.0, help="seconds each flood lasts")
     ap.add_argument("--stops", type=int, default=3)
-    ap.add_argument("--rounds", type=int, default=3, help="bus and servo modes are measured in turn this often")
+    ap.add_argument(
+        "--rounds", type=int, default=3, help="bus and servo modes are measured in turn this often"
+    )
     ap.add_argument("--only", choices=["bus", "servo", "flood"], action="append")
     args = ap.parse_args()
     configure_logging("warning")

@@ -52,7 +52,9 @@ def _per_service() -> tuple[Access, ...]:
     # with the only identity mounted there, the service's own.
     rows: list[Access] = []
     for name in SERVICES:
-        rows.append(Access(f"{name}/health", Kind.QUERYABLE, (name,), (*READERS, name), asked_as=("*/health",)))
+        rows.append(
+            Access(f"{name}/health", Kind.QUERYABLE, (name,), (*READERS, name), asked_as=("*/health",))
+        )
         rows.append(Access(f"alive/{name}", Kind.TOKEN, (name,), (name,)))
     return tuple(rows)
 
@@ -89,8 +91,10 @@ _MESSAGES: dict[tuple[Kind, str], tuple[tuple[tuple[str, ...], str], ...]] = {
     (Kind.QUERYABLE, "owner"): ((("declare_queryable", "reply"), "ingress"), (("query",), "egress")),
     (Kind.QUERYABLE, "reader"): ((("query",), "ingress"), (("reply",), "egress")),
     (Kind.TOKEN, "owner"): ((("liveliness_token",), "ingress"),),
-    (Kind.TOKEN, "reader"): ((("declare_liveliness_subscriber", "liveliness_query"), "ingress"),
-                             (("liveliness_token",), "egress")),
+    (Kind.TOKEN, "reader"): (
+        (("declare_liveliness_subscriber", "liveliness_query"), "ingress"),
+        (("liveliness_token",), "egress"),
+    ),
 }
 # Every identity learns which subscribers and queryables exist on its robot's keys: a Zenoh client
 # only sends a put that it knows a subscriber for, so the router, not the client, is where a denied
@@ -118,8 +122,9 @@ def grants(identity: str, *, operator_writes: bool = True) -> dict[tuple[tuple[s
     return out
 
 
-def access_control(robot: str, *, tls: bool = False, operator_writes: bool = True,
-                   identities: tuple[str, ...] = IDENTITIES) -> dict[str, Any]:
+def access_control(
+    robot: str, *, tls: bool = False, operator_writes: bool = True, identities: tuple[str, ...] = IDENTITIES
+) -> dict[str, Any]:
     """The router's `access_control` section for robot `robot`: deny by default, allow what the
     table grants. Subjects match a user name on plain TCP (which the router accepts on loopback
     only) and, with `tls`, the same user name *and* certificate common name on TLS links, so a
@@ -133,18 +138,36 @@ def access_control(robot: str, *, tls: bool = False, operator_writes: bool = Tru
         rule_ids = []
         for (messages, flow), keys in grants(identity, operator_writes=operator_writes).items():
             rule_id = f"{identity}:{'+'.join(messages)}:{flow}"
-            rules.append({"id": rule_id, "permission": "allow", "flows": [flow], "messages": list(messages),
-                          "key_exprs": [f"{prefix}/{k}" for k in keys]})
+            rules.append(
+                {
+                    "id": rule_id,
+                    "permission": "allow",
+                    "flows": [flow],
+                    "messages": list(messages),
+                    "key_exprs": [f"{prefix}/{k}" for k in keys],
+                }
+            )
             rule_ids.append(rule_id)
         ids = [f"{identity}@tcp"]
         subjects.append({"id": f"{identity}@tcp", "usernames": [identity], "link_protocols": ["tcp"]})
         if tls:
             ids.append(f"{identity}@tls")
-            subjects.append({"id": f"{identity}@tls", "usernames": [identity], "cert_common_names": [identity],
-                             "link_protocols": ["tls"]})
+            subjects.append(
+                {
+                    "id": f"{identity}@tls",
+                    "usernames": [identity],
+                    "cert_common_names": [identity],
+                    "link_protocols": ["tls"],
+                }
+            )
         policies.append({"id": identity, "rules": rule_ids, "subjects": ids})
-    return {"enabled": True, "default_permission": "deny", "rules": rules, "subjects": subjects,
-            "policies": policies}
+    return {
+        "enabled": True,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    }
 
 
 def owners(key: str) -> tuple[str, ...]:

@@ -68,8 +68,9 @@ def _write_public(path: Path, data: bytes) -> None:
 
 
 def _pem_key(key: ec.EllipticCurvePrivateKey) -> bytes:
-    return key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
-                             serialization.NoEncryption())
+    return key.private_bytes(
+        serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption()
+    )
 
 
 def _pem(cert: x509.Certificate) -> bytes:
@@ -88,15 +89,30 @@ class Authority:
     def create(cls, folder: Path) -> Authority:
         key = ec.generate_private_key(ec.SECP256R1())
         name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "hri deployment CA")])
-        now = datetime.datetime.now(datetime.timezone.utc)
+        now = datetime.datetime.now(datetime.UTC)
         cert = (
-            x509.CertificateBuilder().subject_name(name).issuer_name(name).public_key(key.public_key())
+            x509.CertificateBuilder()
+            .subject_name(name)
+            .issuer_name(name)
+            .public_key(key.public_key())
             .serial_number(x509.random_serial_number())
-            .not_valid_before(now - datetime.timedelta(minutes=5)).not_valid_after(now + datetime.timedelta(days=CA_DAYS))
+            .not_valid_before(now - datetime.timedelta(minutes=5))
+            .not_valid_after(now + datetime.timedelta(days=CA_DAYS))
             .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
-            .add_extension(x509.KeyUsage(digital_signature=True, key_cert_sign=True, crl_sign=True,
-                                         content_commitment=False, key_encipherment=False, data_encipherment=False,
-                                         key_agreement=False, encipher_only=False, decipher_only=False), critical=True)
+            .add_extension(
+                x509.KeyUsage(
+                    digital_signature=True,
+                    key_cert_sign=True,
+                    crl_sign=True,
+                    content_commitment=False,
+                    key_encipherment=False,
+                    data_encipherment=False,
+                    key_agreement=False,
+                    encipher_only=False,
+                    decipher_only=False,
+                ),
+                critical=True,
+            )
             .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
             .sign(key, hashes.SHA256())
         )
@@ -117,21 +133,27 @@ class Authority:
     def issue(self, folder: Path, common_name: str, *, server_names: Iterable[str] = ()) -> None:
         """Write `cert.pem`, `key.pem` (owner-only) and `ca.pem` for `common_name` into `folder`."""
         key = ec.generate_private_key(ec.SECP256R1())
-        now = datetime.datetime.now(datetime.timezone.utc)
+        now = datetime.datetime.now(datetime.UTC)
         names = list(dict.fromkeys(server_names))
         usages = [ExtendedKeyUsageOID.CLIENT_AUTH] + ([ExtendedKeyUsageOID.SERVER_AUTH] if names else [])
         builder = (
             x509.CertificateBuilder()
             .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, common_name)]))
-            .issuer_name(self.cert.subject).public_key(key.public_key())
+            .issuer_name(self.cert.subject)
+            .public_key(key.public_key())
             .serial_number(x509.random_serial_number())
-            .not_valid_before(now - datetime.timedelta(minutes=5)).not_valid_after(now + datetime.timedelta(days=LEAF_DAYS))
+            .not_valid_before(now - datetime.timedelta(minutes=5))
+            .not_valid_after(now + datetime.timedelta(days=LEAF_DAYS))
             .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
             .add_extension(x509.ExtendedKeyUsage(usages), critical=False)
-            .add_extension(x509.AuthorityKeyIdentifier.from_issuer_public_key(self.key.public_key()), critical=False)
+            .add_extension(
+                x509.AuthorityKeyIdentifier.from_issuer_public_key(self.key.public_key()), critical=False
+            )
         )
         if names:
-            builder = builder.add_extension(x509.SubjectAlternativeName([_san(n) for n in names]), critical=False)
+            builder = builder.add_extension(
+                x509.SubjectAlternativeName([_san(n) for n in names]), critical=False
+            )
         cert = builder.sign(self.key, hashes.SHA256())
         _write_private(folder / "key.pem", _pem_key(key))
         _write_public(folder / "cert.pem", _pem(cert))
@@ -165,15 +187,18 @@ def exists(keys_dir: Path) -> bool:
     return (keys_dir / "router" / "dictionary").is_file()
 
 
-def init(keys_dir: Path, *, hosts: Iterable[str] = (), identities: Iterable[str] = IDENTITIES,
-         force: bool = False) -> list[str]:
+def init(
+    keys_dir: Path, *, hosts: Iterable[str] = (), identities: Iterable[str] = IDENTITIES, force: bool = False
+) -> list[str]:
     """Create the CA, the router's credentials and one identity per name. Returns the identities.
 
     Refuses to overwrite an existing deployment unless `force` (that would lock out every
     machine that holds the old secrets)."""
     keys_dir = Path(keys_dir).expanduser()
     if exists(keys_dir) and not force:
-        raise ConfigError(f"{keys_dir} already holds identities; use `hri keys rotate` or --force to replace all")
+        raise ConfigError(
+            f"{keys_dir} already holds identities; use `hri keys rotate` or --force to replace all"
+        )
     if keys_dir.exists() and any(keys_dir.iterdir()) and not force:
         raise ConfigError(f"{keys_dir} is not empty; choose another folder or pass --force")
     # Built aside and renamed into place: a reader never sees half a deployment.
@@ -205,7 +230,9 @@ def hand_to_containers(keys_dir: Path, uid: int, gid: int | None = None) -> None
             try:
                 os.chown(path, uid, uid if gid is None else gid)
             except PermissionError:
-                raise ConfigError(f"cannot give {path} to uid {uid}: run as root (sudo hri keys ...)") from None
+                raise ConfigError(
+                    f"cannot give {path} to uid {uid}: run as root (sudo hri keys ...)"
+                ) from None
 
 
 def rotate(keys_dir: Path, identity: str) -> None:
@@ -250,15 +277,25 @@ def client_config_file(keys_dir: Path, identity: str, connect: str) -> Path:
 
 
 # ---------------------------------------------------------------------------------------- CLI
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Identities of this deployment: passwords, a small CA and certificates.")
-KeysDir = Annotated[Path | None, typer.Option("--keys-dir", envvar="HRI_KEYS_DIR",
-                                              help="Keys folder [default: ~/.local/state/hri/keys]")]
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Identities of this deployment: passwords, a small CA and certificates.",
+)
+KeysDir = Annotated[
+    Path | None,
+    typer.Option("--keys-dir", envvar="HRI_KEYS_DIR", help="Keys folder [default: ~/.local/state/hri/keys]"),
+]
 
 
-ContainerUid = Annotated[int | None, typer.Option(
-    "--container-uid", help="For docker compose: give the router's and services' folders to this uid "
-                            "(the image's user is 10001; needs root)")]
+ContainerUid = Annotated[
+    int | None,
+    typer.Option(
+        "--container-uid",
+        help="For docker compose: give the router's and services' folders to this uid "
+        "(the image's user is 10001; needs root)",
+    ),
+]
 
 
 def _fail(exc: Exception) -> typer.Exit:
@@ -269,8 +306,10 @@ def _fail(exc: Exception) -> typer.Exit:
 @app.command("init")
 def init_cmd(
     keys_dir: KeysDir = None,
-    host: Annotated[list[str] | None, typer.Option(
-        "--host", help="Another name or address clients use to reach the router (repeatable)")] = None,
+    host: Annotated[
+        list[str] | None,
+        typer.Option("--host", help="Another name or address clients use to reach the router (repeatable)"),
+    ] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace every existing secret")] = False,
     container_uid: ContainerUid = None,
 ) -> None:
@@ -286,8 +325,11 @@ def init_cmd(
 
 
 @app.command("rotate")
-def rotate_cmd(identity: Annotated[str, typer.Argument(help=f"One of {', '.join(IDENTITIES)}")],
-               keys_dir: KeysDir = None, container_uid: ContainerUid = None) -> None:
+def rotate_cmd(
+    identity: Annotated[str, typer.Argument(help=f"One of {', '.join(IDENTITIES)}")],
+    keys_dir: KeysDir = None,
+    container_uid: ContainerUid = None,
+) -> None:
     """Give one identity a new password and certificate; restart the router and that service."""
     folder = keys_dir or default_keys_dir()
     try:
@@ -296,13 +338,17 @@ def rotate_cmd(identity: Annotated[str, typer.Argument(help=f"One of {', '.join(
             hand_to_containers(folder, container_uid)
     except ConfigError as exc:
         raise _fail(exc) from None
-    typer.echo(f"rotated {identity} in {folder}; restart the router, then copy {folder / identity} "
-               "to the machine that runs it")
+    typer.echo(
+        f"rotated {identity} in {folder}; restart the router, then copy {folder / identity} "
+        "to the machine that runs it"
+    )
 
 
 @app.command("reissue-router")
-def reissue_router_cmd(host: Annotated[list[str], typer.Option("--host", help="Extra router name (repeatable)")],
-                       keys_dir: KeysDir = None) -> None:
+def reissue_router_cmd(
+    host: Annotated[list[str], typer.Option("--host", help="Extra router name (repeatable)")],
+    keys_dir: KeysDir = None,
+) -> None:
     """A new router certificate that is also valid for the given names or addresses."""
     folder = keys_dir or default_keys_dir()
     try:
@@ -341,8 +387,9 @@ def router_config_cmd(
     robot: Annotated[str, typer.Option(envvar="HRI_ROBOT", help="Robot id the rules cover")] = "op2",
     listen: Annotated[list[str] | None, typer.Option("--listen", help="Listen endpoint (repeatable)")] = None,
     folder: Annotated[str, typer.Option(help="Where the router sees its files (a container mount)")] = "",
-    no_operator_writes: Annotated[bool, typer.Option("--no-operator-writes",
-                                                     help="Withhold the operator's puts")] = False,
+    no_operator_writes: Annotated[
+        bool, typer.Option("--no-operator-writes", help="Withhold the operator's puts")
+    ] = False,
     out: Annotated[Path | None, typer.Option(help="Write here instead of printing")] = None,
     keys_dir: KeysDir = None,
 ) -> None:

@@ -74,7 +74,8 @@ class ReasonerOptions:
         except ValueError:
             command_rate = -1.0
         if command_rate < 0:
-            raise ValueError(f"HRI_REASONER_COMMAND_RATE={raw_rate!r} is not a rate (commands a second, 0: no limit)")
+            raise ValueError(f"HRI_REASONER_COMMAND_RATE={raw_rate!r} is not a rate "
+                             "(commands a second, 0: no limit)")
         return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port,
                    command_rate=command_rate)
 

@@ -103,7 +103,8 @@ class Credentials:
         return out
 
 
-def find_credentials(identity: str | None, env: dict[str, str] | os._Environ[str] = os.environ) -> Credentials | None:
+def find_credentials(identity: str | None,
+                     env: dict[str, str] | os._Environ[str] = os.environ) -> Credentials | None:
     """`HRI_CREDENTIALS` if set, else `<keys dir>/<identity>` if it exists, else None (no auth)."""
     if env.get(CREDENTIALS_ENV):
         return Credentials.load(Path(env[CREDENTIALS_ENV]))
@@ -189,7 +190,8 @@ def client_settings(endpoints: tuple[str, ...] | list[str],
     return out
 
 
-def client_config(endpoints: tuple[str, ...] | list[str], credentials: Credentials | None = None) -> zenoh.Config:
+def client_config(endpoints: tuple[str, ...] | list[str],
+                  credentials: Credentials | None = None) -> zenoh.Config:
     """`client_settings` as a Zenoh configuration."""
     conf = zenoh.Config()
     for key, value in client_settings(endpoints, credentials).items():
@@ -214,7 +216,8 @@ class RouterSecurity:
     def check(self) -> None:
         dictionary = self.folder / "dictionary"
         if not dictionary.is_file():
-            raise ConfigError(f"no router credentials in {self.folder}; run `hri keys init --keys-dir {self.keys_dir}`")
+            raise ConfigError(f"no router credentials in {self.folder}; "
+                              f"run `hri keys init --keys-dir {self.keys_dir}`")
         check_private(dictionary)
 
 
@@ -239,8 +242,8 @@ def check_listen(listen: list[str], security: RouterSecurity | None) -> None:
         if proto == "tls":
             continue
         if not is_loopback(e):
-            raise ConfigError(f"listen endpoint {e} is not loopback: use tls/{e.split('/', 1)[1]} (mutual TLS with "
-                              "the deployment's CA) or run open on purpose (--open)")
+            raise ConfigError(f"listen endpoint {e} is not loopback: use tls/{e.split('/', 1)[1]} "
+                              "(mutual TLS with the deployment's CA) or run open on purpose (--open)")
 
 
 def router_config(listen: list[str], security: RouterSecurity | None = None) -> zenoh.Config:

@@ -407,7 +407,8 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
             if attempts and n >= attempts:  # a person waits: say why in one line
                 raise SessionRefused(why) from exc
             if not attempts:
-                event = "the router refused this session, retrying" if refused else "no zenoh router yet, retrying"
+                event = ("the router refused this session, retrying" if refused
+                         else "no zenoh router yet, retrying")
                 log.warning(event, why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)

@@ -35,7 +35,7 @@ def topic_keys(keys: Keys) -> set[str]:
         attr = getattr(Keys, name)
         if isinstance(attr, property) and name not in ("prefix", "all", "health_all", "alive_all"):
             value = getattr(keys, name)
-            out.add(value[len(keys.prefix) + 1:])
+            out.add(value[len(keys.prefix) + 1 :])
     return out
 
 
@@ -66,13 +66,20 @@ def test_generated_rules_deny_by_default_and_name_only_the_table() -> None:
     acl = access_control("r2", tls=True)
     assert acl["enabled"] and acl["default_permission"] == "deny"
     assert all(r["permission"] == "allow" for r in acl["rules"])
-    puts = {r["id"].split(":")[0]: r["key_exprs"] for r in acl["rules"]
-            if r["messages"] == ["put"] and r["flows"] == ["ingress"]}
+    puts = {
+        r["id"].split(":")[0]: r["key_exprs"]
+        for r in acl["rules"]
+        if r["messages"] == ["put"] and r["flows"] == ["ingress"]
+    }
     assert puts["reasoner"] == ["hri/r2/reasoner/decision", "hri/r2/motion/goal", "hri/r2/speech/say"]
     assert OBSERVER not in puts
-    soar_askers = [r["id"].split(":")[0] for r in acl["rules"]
-                   if r["messages"] == ["query"] and "hri/r2/reasoner/soar" in r["key_exprs"]
-                   and r["flows"] == ["ingress"]]
+    soar_askers = [
+        r["id"].split(":")[0]
+        for r in acl["rules"]
+        if r["messages"] == ["query"]
+        and "hri/r2/reasoner/soar" in r["key_exprs"]
+        and r["flows"] == ["ingress"]
+    ]
     assert soar_askers == [OPERATOR]
     tls_subjects = [s for s in acl["subjects"] if s["link_protocols"] == ["tls"]]
     assert all(s["usernames"] == s["cert_common_names"] for s in tls_subjects)
@@ -118,7 +125,9 @@ def test_init_refuses_to_overwrite_and_rotate_replaces_one_secret(tmp_path: Path
     deployment_keys.rotate(folder, "voice")
     after = {i: (folder / i / "password").read_text() for i in IDENTITIES}
     assert after["voice"] != before["voice"]
-    assert {i: v for i, v in after.items() if i != "voice"} == {i: v for i, v in before.items() if i != "voice"}
+    assert {i: v for i, v in after.items() if i != "voice"} == {
+        i: v for i, v in before.items() if i != "voice"
+    }
     assert f"voice:{after['voice'].strip()}" in (folder / "router" / "dictionary").read_text()
 
 
@@ -146,9 +155,23 @@ def secure_router(keys_dir: Path) -> Iterator[tuple[str, str]]:
     """A secured router process (tcp on loopback and tls) for robot `sec`: (tcp, tls) endpoints."""
     port, tls_port = free_port(), free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services.cli.router", "--keys-dir", str(keys_dir), "--robot", "sec",
-         "--listen", f"tcp/127.0.0.1:{port}", "--listen", f"tls/127.0.0.1:{tls_port}"],
-        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        [
+            sys.executable,
+            "-m",
+            "services.cli.router",
+            "--keys-dir",
+            str(keys_dir),
+            "--robot",
+            "sec",
+            "--listen",
+            f"tcp/127.0.0.1:{port}",
+            "--listen",
+            f"tls/127.0.0.1:{tls_port}",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         wait_listening(port)
         wait_listening(tls_port)
@@ -170,8 +193,9 @@ def refused(endpoint: str, folder: Path | None) -> bool:
     return False
 
 
-def test_no_or_wrong_credentials_open_no_session(secure_router: tuple[str, str], keys_dir: Path,
-                                                 tmp_path: Path) -> None:
+def test_no_or_wrong_credentials_open_no_session(
+    secure_router: tuple[str, str], keys_dir: Path, tmp_path: Path
+) -> None:
     tcp, tls = secure_router
     assert refused(tcp, None)
     other = tmp_path / "other"
@@ -185,12 +209,19 @@ def test_no_or_wrong_credentials_open_no_session(secure_router: tuple[str, str],
 def test_hri_says_in_one_line_why_it_has_no_session(secure_router: tuple[str, str], tmp_path: Path) -> None:
     env = {**os.environ, "HRI_KEYS_DIR": str(tmp_path / "none")}
     env.pop("HRI_CREDENTIALS", None)
-    out = subprocess.run([sys.executable, "-m", "services.cli", "status", "--connect", secure_router[0]],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-m", "services.cli", "status", "--connect", secure_router[0]],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
         f"error: the router at {secure_router[0]} refused an anonymous session; it requires credentials: "
-        "set HRI_CREDENTIALS=<keys dir>/<identity> (see `hri keys init`)"]
+        "set HRI_CREDENTIALS=<keys dir>/<identity> (see `hri keys init`)"
+    ]
 
 
 class Inbox:
@@ -200,12 +231,15 @@ class Inbox:
 
 
 @pytest.mark.parametrize("link", ["tcp", "tls"])
-def test_the_router_drops_puts_the_table_does_not_allow(secure_router: tuple[str, str], keys_dir: Path,
-                                                        link: str) -> None:
+def test_the_router_drops_puts_the_table_does_not_allow(
+    secure_router: tuple[str, str], keys_dir: Path, link: str
+) -> None:
     endpoint = secure_router[0] if link == "tcp" else secure_router[1]
     key = Keys("sec").motion_goal
     motion = open_as(endpoint, keys_dir / "motion")
-    sessions = {name: open_as(endpoint, keys_dir / name) for name in ("reasoner", "observer", "vision", "operator")}
+    sessions = {
+        name: open_as(endpoint, keys_dir / name) for name in ("reasoner", "observer", "vision", "operator")
+    }
     try:
         inbox = Inbox(motion, key)
         pubs = {name: s.declare_publisher(key) for name, s in sessions.items()}
@@ -222,8 +256,9 @@ def test_the_router_drops_puts_the_table_does_not_allow(secure_router: tuple[str
             s.close()
 
 
-def test_a_stolen_password_without_its_certificate_gets_no_rights(secure_router: tuple[str, str],
-                                                                   keys_dir: Path, tmp_path: Path) -> None:
+def test_a_stolen_password_without_its_certificate_gets_no_rights(
+    secure_router: tuple[str, str], keys_dir: Path, tmp_path: Path
+) -> None:
     """On TLS the subject is the user name AND the certificate's common name: the reasoner's
     password presented with the vision certificate opens a session that may do nothing."""
     mixed = tmp_path / "mixed"

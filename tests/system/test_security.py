@@ -44,9 +44,20 @@ def test_strangers_and_identities_without_the_right_cannot_move_the_robot(robot:
             goal = session.declare_publisher(k.motion_goal)
             command = session.declare_publisher(k.voice_command)
             for i in range(5):
-                goal.put(encode(MotionGoal(action=Action.WALK_FORWARD, goal_id=f"{name}-{i}", stamp=time.time(), seq=i)))
-                command.put(encode(VoiceCommand(command="go", text="go", confidence=1.0, engine=name,
-                                                stamp=time.time(), seq=i)))
+                goal.put(
+                    encode(
+                        MotionGoal(
+                            action=Action.WALK_FORWARD, goal_id=f"{name}-{i}", stamp=time.time(), seq=i
+                        )
+                    )
+                )
+                command.put(
+                    encode(
+                        VoiceCommand(
+                            command="go", text="go", confidence=1.0, engine=name, stamp=time.time(), seq=i
+                        )
+                    )
+                )
                 time.sleep(0.05)
         time.sleep(2.5)
     finally:
@@ -59,22 +70,37 @@ def test_strangers_and_identities_without_the_right_cannot_move_the_robot(robot:
     motion = robot.health("motion")
     assert motion is not None and motion.rejected == 0  # nothing even reached it to be rejected
     # The operator may (this deployment grants it): the same "go" makes the robot walk.
-    robot.play([{"send": "go", "expect": {"verdict": "obey", "posture": "walking"}},
-                {"send": "stop", "expect": {"posture": "standing"}}])
+    robot.play(
+        [
+            {"send": "go", "expect": {"verdict": "obey", "posture": "walking"}},
+            {"send": "stop", "expect": {"posture": "standing"}},
+        ]
+    )
 
 
 def test_status_and_spy_work_as_the_observer(robot: Robot) -> None:
     endpoint = robot.launcher.endpoint
     env = hri_env(robot, "observer")
-    out = subprocess.run([sys.executable, "-m", "services.cli", "status", "--json", "--connect", endpoint],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-m", "services.cli", "status", "--json", "--connect", endpoint],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert out.returncode == 0, out.stderr
     rows = json.loads(out.stdout)
     assert all(rows[name]["alive"] and rows[name]["health"]["status"] for name in SERVICES)
 
-    spy = subprocess.Popen([sys.executable, "-m", "services.cli", "spy", "--connect", endpoint], cwd=ROOT,
-                           env={**env, "COLUMNS": "200"}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                           text=True)
+    spy = subprocess.Popen(
+        [sys.executable, "-m", "services.cli", "spy", "--connect", endpoint],
+        cwd=ROOT,
+        env={**env, "COLUMNS": "200"},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         time.sleep(3.0)
         robot.play([{"send": "yes", "expect": {"verdict": "obey"}}])
@@ -86,8 +112,15 @@ def test_status_and_spy_work_as_the_observer(robot: Robot) -> None:
 
     # The observer may not send: `hri send` as the observer is dropped by the router.
     t0 = time.monotonic()
-    subprocess.run([sys.executable, "-m", "services.cli", "send", "command", "go", "--connect", endpoint],
-                   cwd=ROOT, env=env, capture_output=True, text=True, timeout=60, check=True)
+    subprocess.run(
+        [sys.executable, "-m", "services.cli", "send", "command", "go", "--connect", endpoint],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
     time.sleep(1.0)
     assert robot.rec.since(t0, "heard") == [] and robot.rec.since(t0, "goal") == []
 
@@ -122,14 +155,24 @@ def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> N
     assert reasoner is not None
     before = rss_mib(reasoner)
     payload = encode(VoiceCommand(command="go", text="go", confidence=1.0, engine="flood", stamp=1.0))
-    flood = mp.get_context("spawn").Process(target=_flood, args=(
-        robot.launcher.endpoint, str(robot.out / "keys" / "voice"), robot.ctx.keys.voice_command, payload,
-        6.0, 50_000.0))
+    flood = mp.get_context("spawn").Process(
+        target=_flood,
+        args=(
+            robot.launcher.endpoint,
+            str(robot.out / "keys" / "voice"),
+            robot.ctx.keys.voice_command,
+            payload,
+            6.0,
+            50_000.0,
+        ),
+    )
     flood.start()
     try:
         time.sleep(2.0)  # the flood is in full swing
         t0 = time.monotonic()
-        robot.play([{"show": "X", "expect": {"situation": "danger", "action": "stop", "posture": "standing"}}])
+        robot.play(
+            [{"show": "X", "expect": {"situation": "danger", "action": "stop", "posture": "standing"}}]
+        )
         stop = next(g for g in robot.rec.since(t0, "goal") if g.action is Action.STOP)
         assert stop is not None
     finally:
