@@ -180,7 +180,7 @@ class Watch:
         )
 
 
-def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
+def flood(keys: Path, rate: float, stops: int, flood_s: float, kinds: list[str]) -> None:
     robot = "benchflood"
     out = Path(tempfile.mkdtemp(prefix="hri-flood-"))
     (out / "spool").mkdir()
@@ -222,7 +222,7 @@ def flood(keys: Path, rate: float, stops: int, flood_s: float) -> None:
                 time.sleep(0.3)
             if not ready:
                 raise SystemExit(f"robot did not come up; see {out / 'services.log'}")
-            for variant in (None, *payloads):
+            for variant in (None, *[p for p in payloads if p in kinds]):
                 to_goal, to_write, to_seen, sent_rates, rss = [], [], [], [], []
                 for _ in range(stops):
                     watch.scene.put(SceneCommand(shape=Shape.O))
@@ -294,6 +294,7 @@ def main() -> None:
     ap.add_argument("--flood-rate", type=float, default=50000.0)
     ap.add_argument("--flood-s", type=float, default=5.0, help="seconds each flood lasts")
     ap.add_argument("--stops", type=int, default=3)
+    ap.add_argument("--flood-kind", choices=["VoiceCommand", "MarkObservation"], action="append")
     ap.add_argument(
         "--rounds", type=int, default=3, help="bus and servo modes are measured in turn this often"
     )
@@ -309,7 +310,8 @@ def main() -> None:
     if "servo" in parts:
         servo(args.commands, args.rounds)
     if "flood" in parts:
-        flood(keys, args.flood_rate, args.stops, args.flood_s)
+        kinds = args.flood_kind or ["VoiceCommand", "MarkObservation"]
+        flood(keys, args.flood_rate, args.stops, args.flood_s, kinds)
 
 
 if __name__ == "__main__":
