@@ -3,6 +3,7 @@ who can open a session, and what the router lets through."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import stat
@@ -348,3 +349,18 @@ def test_a_bounded_subscription_drops_the_oldest_and_counts(router_endpoint: str
     finally:
         peer.close()
         bus.close()
+
+
+def test_router_config_file_is_a_zenoh_configuration_with_the_rules(keys_dir: Path, tmp_path: Path) -> None:
+    """`hri keys router-config` (for zenohd): the same authentication and rules, paths as mounted."""
+    text = deployment_keys.router_config_file(RouterSecurity(keys_dir, robot="r9"), ["tls/0.0.0.0:7447"],
+                                              "/etc/hri/router")
+    path = tmp_path / "router.json5"
+    path.write_text(text)
+    zenoh.Config.from_file(str(path))  # zenoh accepts it
+    conf = json.loads(text)
+    assert conf["mode"] == "router" and conf["listen"]["endpoints"] == ["tls/0.0.0.0:7447"]
+    assert conf["transport"]["auth"]["usrpwd"]["dictionary_file"] == "/etc/hri/router/dictionary"
+    assert conf["transport"]["link"]["tls"]["enable_mtls"] is True
+    assert conf["access_control"] == access_control("r9", tls=True)
+    assert "password" not in text  # the dictionary stays a file; no secret is copied into the config
