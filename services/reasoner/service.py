@@ -8,6 +8,7 @@ ready, and only then subscribe to marks, commands and motion state.
 from __future__ import annotations
 
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,6 +40,7 @@ NAME = "reasoner"
 INPUT_QUEUE = 32
 COMMAND_BACKLOG = 16
 MARKS_BACKLOG = 64
+SWITCH_INTERVAL_S = 0.0005
 COMMAND_RATE = 50.0
 """Commands a second the agent is given at most (HRI_REASONER_COMMAND_RATE; 0: no limit). People
 give a few a second; a flood beyond this would keep the agent, and with it the process, busy."""
@@ -82,6 +84,9 @@ class ReasonerOptions:
 
 def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     options = options or ReasonerOptions.from_env()
+    # Under a flood the subscription workers are busy in Python; a shorter GIL switch interval (5 ms
+    # by default) lets Zenoh's reading thread in sooner, so the link keeps moving and an X gets through.
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     ctx.update_detail(ready=False)  # until the agent is restored and every subscription declared
     keys = ctx.keys
     store = StateStore(options.state_dir or default_state_dir(ctx.robot), ctx.log)
