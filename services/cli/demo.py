@@ -26,6 +26,38 @@ from services.cli.simrobot import simulated_robot
 from services.cli.utterance import DEFAULT_VOICE
 from services.runtime import configure_logging
 
+MARKER = ".hri-demo"
+"""The file that marks a folder as made by `hri demo`: only such a folder is ever cleared."""
+RUN_OUTPUTS = ("state", "spool", "speech", "timeline.txt", "services.log")
+"""What one run leaves in its output folder; the next run replaces these and nothing else."""
+
+
+class OutputFolderError(ValueError):
+    """`--out` names a folder the demo must not use; nothing was deleted."""
+
+
+def prepare_out(out: Path) -> None:
+    """Make `out` ready for a run: a fresh robot (no state, so no danger latched by an earlier run).
+
+    Deletes only what an earlier demo run left there (`RUN_OUTPUTS`, in a folder with the marker);
+    a non-empty folder the demo did not make is refused untouched.
+    """
+    if out.exists() and not out.is_dir():
+        raise OutputFolderError(f"--out {out} is a file, not a folder; nothing was deleted")
+    if out.is_dir() and not (out / MARKER).is_file() and any(out.iterdir()):
+        raise OutputFolderError(f"--out {out} is not empty and was not made by `hri demo`; nothing was deleted: "
+                                "choose a new or empty folder")
+    for name in RUN_OUTPUTS:
+        path = out / name
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        elif path.exists() or path.is_symlink():
+            path.unlink()
+    out.mkdir(parents=True, exist_ok=True)
+    (out / MARKER).write_text("Made by `hri demo`. Each run replaces " + ", ".join(RUN_OUTPUTS) +
+                              " here, and nothing else.\n")
+
+
 _COLOURS = {"voice": "cyan", "vision": "magenta", "reasoner": "bold yellow", "motion": "green", "speech": "blue"}
 
 
@@ -75,13 +107,15 @@ def problems(results: list[StepResult]) -> list[str]:
 
 def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAULT_VOICE,
              console: Console | None = None) -> int:
+    """Run `scenario` on a fresh simulated robot whose files all live in `out` (its state in out/state).
+
+    Raises `OutputFolderError` (before starting anything) for an `out` it must not use.
+    """
     console = console or Console()
-    configure_logging("warning")  # the timeline is the output; service logs go to services.log
     out = out.resolve()
-    if out.exists():
-        shutil.rmtree(out)  # a fresh robot: no danger latched by an earlier run
+    prepare_out(out)
+    configure_logging("warning")  # the timeline is the output; service logs go to services.log
     port = port or free_port()
-    out.mkdir(parents=True)
     timeline = Timeline(console, out / "timeline.txt")
     console.rule(f"[bold]hri demo: {scenario.name}")
     if scenario.description:

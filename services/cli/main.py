@@ -4,32 +4,73 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 import threading
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
+import zenoh
 from rich.console import Console
 
-from schemas.access import OPERATOR
-from schemas.keys import SERVICES
-from schemas.messages import Command, Mark, MarkObservation, SceneCommand, Shape, VoiceCommand
+from schemas.access import OBSERVER, OPERATOR
+from schemas.keys import SERVICES, Keys
+from schemas.messages import (
+    Command,
+    Health,
+    HealthStatus,
+    Mark,
+    MarkObservation,
+    SceneCommand,
+    Shape,
+    VoiceCommand,
+)
 from services.cli import keys as deployment_keys
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
-from services.runtime import default_keys_dir
+from services.runtime import ConfigError, SessionRefused, configure_logging, default_keys_dir
 from services.runtime.cli import ConnectOption, RobotOption
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__)
-send_app = typer.Typer(add_completion=False, no_args_is_help=True,
+# rich_markup_mode=None: help text is printed as written ("[default: op2]" is not read as Rich markup)
+app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__, rich_markup_mode=None)
+send_app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                        help="Publish one valid message as a service would, for testing by hand.")
 app.add_typer(send_app, name="send")
 app.add_typer(deployment_keys.app, name="keys")
 console = Console()
 if not console.is_terminal and "COLUMNS" not in os.environ:
     console = Console(width=120)  # piped or logged (CI): rich would wrap the tables at 80 columns
+
+NO_ROUTER_HINT = ("start the robot with `hri up` (or `docker compose up`), or point at its router with "
+                  "--connect tcp/HOST:PORT (or HRI_ZENOH_CONNECT)")
+
+
+def fail(message: str, code: int = 1) -> NoReturn:
+    """One line on stderr and a non-zero exit: what a person needs, without a traceback."""
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code)
+
+
+@contextmanager
+def bus(robot: str | None, connect: str | None,
+        identity: str = OBSERVER) -> Iterator[tuple[zenoh.Session, Keys]]:
+    """A session for status/spy/send as `identity`; no router, a refusal or bad settings end the
+    command with one line."""
+    configure_logging(os.environ.get("HRI_LOG_LEVEL") or "error")  # not the session's retry warnings
+    with ExitStack() as stack:
+        try:
+            pair = stack.enter_context(probe.client_session(robot, connect, identity))
+        except ConfigError as exc:
+            fail(f"invalid configuration: {exc}", 2)
+        except probe.BusUnreachable as exc:
+            fail(f"{exc}: {NO_ROUTER_HINT}")
+        except SessionRefused as exc:  # a router is there and refused these credentials (or none)
+            fail(str(exc), 2)
+        yield pair
 
 
 @app.command()
@@ -58,18 +99,25 @@ def up(
     requires credentials and applies the access rules generated from schemas/access.py.
     """
     folder = None if open_bus else (keys_dir or default_keys_dir())
+    if folder is not None and not deployment_keys.exists(folder) and connect is not None:
+        folder = None  # joining a router: anonymous unless this deployment's keys were copied here
     try:
-        if folder is not None and not deployment_keys.exists(folder) and connect is not None:
-            folder = None  # joining a router: anonymous unless this deployment's keys were copied here
         launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart,
                             keys_dir=folder, operator_writes=not no_operator_writes, listen=listen or [])
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    try:
         if folder is not None and not deployment_keys.exists(folder):  # made where the router runs
             deployment_keys.init(folder)
             typer.echo(f"created this deployment's identities in {folder}", err=True)
-        raise typer.Exit(run_until_signalled(launcher))
-    except ValueError as exc:  # unknown service, or a ConfigError (listen endpoint, keys)
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
+        code = run_until_signalled(launcher)
+    except ConfigError as exc:  # a listen endpoint a secure router refuses, unreadable keys
+        fail(str(exc), 2)
+    except zenoh.ZError as exc:  # only the embedded router's listener can fail here
+        why = "the port is in use" if "in use" in str(exc) else str(exc).splitlines()[0][:160]
+        fail(f"cannot start the router on {launcher.endpoint}: {why}; choose another port with --port, "
+             f"or join the router already there with --connect {launcher.endpoint}")
+    raise typer.Exit(code)
 
 
 @app.command()
@@ -78,10 +126,17 @@ def status(
     connect: ConnectOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table")] = False,
     timeout: Annotated[float, typer.Option(help="Seconds to wait for answers")] = 2.0,
+    service: Annotated[str | None, typer.Option(
+        help=f"Only this service ({', '.join(SERVICES)}): exits 0 when it is alive and reports ok "
+             "(the containers' health check)")] = None,
 ) -> None:
-    """Which services are alive, and their health. Exits 1 unless all five are alive."""
-    with probe.client_session(robot, connect) as (session, keys):
-        rows = probe.gather_status(session, keys, timeout)
+    """Which services are alive, and their health. Exits 1 unless all five are alive (1 also when no router
+    answers, 2 for invalid settings)."""
+    if service is not None and service not in SERVICES:
+        raise typer.BadParameter(f"unknown service {service!r}; choose from {', '.join(SERVICES)}",
+                                 param_hint="--service")
+    with bus(robot, connect) as (session, keys):
+        rows = probe.gather_status(session, keys, timeout, service)
     if as_json:
         out = {n: {"alive": r.get("alive", False),
                    "health": r["health"].model_dump(mode="json") if r.get("health") else None}
@@ -89,6 +144,10 @@ def status(
         typer.echo(json.dumps(out, indent=2))
     else:
         console.print(probe.status_table(rows, keys.robot))
+    if service is not None:
+        health = rows[service].get("health")
+        raise typer.Exit(0 if rows[service].get("alive") and isinstance(health, Health)
+                         and health.status is HealthStatus.OK else 1)
     raise typer.Exit(0 if all(rows[s].get("alive") for s in SERVICES) else 1)
 
 
@@ -100,19 +159,22 @@ def spy(
 ) -> None:
     """Live, readable view of the traffic (and services coming and going) until Ctrl-C."""
     stop = threading.Event()
-    with probe.client_session(robot, connect) as (session, keys):
+    with bus(robot, connect) as (session, keys):
         try:
             probe.spy(session, keyexpr or keys.all, keys.prefix, console, stop)
         except KeyboardInterrupt:
             stop.set()
 
 
+OUT_HELP = ("Folder for the spoken WAVs, the timeline, the service logs and the robot's own state; a run "
+            "replaces only what an earlier run left there, and refuses a non-empty folder it did not make")
+
+
 @app.command()
 def demo(
     scenario: Annotated[str, typer.Option(
         help="A built-in scenario name or a YAML scenario file (see services/cli/scenarios/)")] = "paper",
-    out: Annotated[Path, typer.Option(help="Folder for the spoken WAVs, the timeline and the service logs "
-                                           "(emptied first)")] = Path("hri-demo"),
+    out: Annotated[Path, typer.Option(help=OUT_HELP)] = Path("hri-demo"),
     port: Annotated[int, typer.Option(help="Router port on 127.0.0.1 (0: a free one)")] = 0,
     voice: Annotated[str, typer.Option(help="espeak-ng voice that speaks the commands")] = DEFAULT_VOICE,
     list_scenarios: Annotated[bool, typer.Option("--list", help="List the built-in scenarios and exit")] = False,
@@ -122,18 +184,23 @@ def demo(
     Exits 0 when every step turned out as the scenario expects.
     """
     from services.cli import scenario as scenarios
-    from services.cli.demo import run_demo
+    from services.cli.demo import OutputFolderError, run_demo
 
     if list_scenarios:
-        for name in scenarios.builtin_names():
-            typer.echo(f"{name:<24} {scenarios.load(name).description.strip().splitlines()[0][:80]}")
+        for name in scenarios.builtin_names():  # whole descriptions, wrapped at word boundaries
+            typer.echo(textwrap.fill(" ".join(scenarios.load(name).description.split()) or "-", width=100,
+                                     initial_indent=f"{name:<12} ", subsequent_indent=" " * 13))
         raise typer.Exit(0)
     try:
         loaded = scenarios.load(scenario)
     except scenarios.ScenarioError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
-    raise typer.Exit(run_demo(loaded, out, port=port, voice=voice, console=console))
+    try:
+        code = run_demo(loaded, out, port=port, voice=voice, console=console)
+    except OutputFolderError as exc:
+        fail(str(exc), 2)
+    raise typer.Exit(code)
 
 
 @send_app.command("command")
@@ -148,7 +215,7 @@ def send_command(
     cmd = None if command.lower() == "none" else _choice(Command, command.lower(), "command")
     msg = VoiceCommand(command=cmd, text=text if text is not None else command, confidence=confidence,
                        engine="hri-send")
-    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.voice_command, msg)
     typer.echo(sent.model_dump_json())
 
@@ -163,7 +230,7 @@ def send_mark(
     """Publish a MarkObservation as the vision service would."""
     marks = [] if shape.lower() == "none" else [
         Mark(shape=_choice(Shape, shape.upper(), "shape"), confidence=confidence, box=(200, 120, 240, 240))]
-    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_marks, MarkObservation(marks=marks, frame=0))
     typer.echo(sent.model_dump_json())
 
@@ -176,16 +243,18 @@ def send_scene(
 ) -> None:
     """Tell a vision service on a synthetic source what card to hold up (frames go through the detector)."""
     value = None if shape.lower() == "none" else _choice(Shape, shape.upper(), "shape")
-    with probe.client_session(robot, connect, OPERATOR) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_scene, SceneCommand(shape=value))
     typer.echo(sent.model_dump_json())
 
 
 def _choice(enum: type, value: str, what: str):  # type: ignore[no-untyped-def]
+    """`value` as a member of `enum`; the error lists every accepted value, 'none' included."""
     try:
         return enum(value)
     except ValueError:
-        raise typer.BadParameter(f"unknown {what} {value!r}; choose from {', '.join(e.value for e in enum)}") from None
+        choices = ", ".join([*(e.value for e in enum), "none"])
+        raise typer.BadParameter(f"unknown {what} {value!r}; choose from {choices}") from None
 
 
 if __name__ == "__main__":

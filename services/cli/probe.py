@@ -9,7 +9,6 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from datetime import datetime
 
-import typer
 import zenoh
 from pydantic import BaseModel
 from rich.console import Console
@@ -20,7 +19,6 @@ from schemas.keys import SERVICES, Keys
 from schemas.messages import Header, Health, HealthStatus
 from services.runtime import (
     BusSettings,
-    ConfigError,
     DecodeError,
     SessionRefused,
     decode,
@@ -31,17 +29,26 @@ from services.runtime import (
 from services.runtime.logs import get_logger
 
 
+class BusUnreachable(RuntimeError):
+    """No Zenoh router answered where the settings point; the message says where that was."""
+
+
 @contextmanager
 def client_session(robot: str | None, connect: str | None,
                    identity: str = OBSERVER) -> Iterator[tuple[zenoh.Session, Keys]]:
-    """A session as `identity` (`HRI_CREDENTIALS`, else `<keys dir>/<identity>` when it exists).
-    Exits 2 with one line on stderr when no session can be opened (no router, or refused)."""
+    """A client session on the robot's bus as `identity` (`HRI_CREDENTIALS`, else
+    `<keys dir>/<identity>` when it exists). Raises `ConfigError` for bad settings, `BusUnreachable`
+    when no router answers, `SessionRefused` when a router refuses this identity."""
+    settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity)
     try:
-        settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity)
         session = open_session(settings, get_logger("hri"), attempts=3)
-    except (ConfigError, SessionRefused) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
+    except SessionRefused as exc:
+        if exc.refused:
+            raise
+        raise BusUnreachable(f"no Zenoh router answers at {','.join(settings.connect)}") from None
+    except zenoh.ZError:
+        where = f"ZENOH_CONFIG={settings.config_file}" if settings.config_file else ",".join(settings.connect)
+        raise BusUnreachable(f"no Zenoh router answers at {where}") from None
     try:
         yield session, Keys(settings.robot)
     finally:
@@ -49,13 +56,15 @@ def client_session(robot: str | None, connect: str | None,
 
 
 # ---------------------------------------------------------------------------------------- status
-def gather_status(session: zenoh.Session, keys: Keys, timeout: float = 2.0) -> dict[str, dict[str, object]]:
-    """Liveliness and health of every service seen on the bus (and the five expected ones)."""
-    rows: dict[str, dict[str, object]] = {name: {"alive": False, "health": None} for name in SERVICES}
-    for reply in session.liveliness().get(keys.alive_all, timeout=timeout):
+def gather_status(session: zenoh.Session, keys: Keys, timeout: float = 2.0,
+                  service: str | None = None) -> dict[str, dict[str, object]]:
+    """Liveliness and health of every service seen on the bus (and the five expected ones), or of one."""
+    names = [service] if service else SERVICES
+    rows: dict[str, dict[str, object]] = {name: {"alive": False, "health": None} for name in names}
+    for reply in session.liveliness().get(keys.alive(service) if service else keys.alive_all, timeout=timeout):
         if reply.ok is not None:
             rows.setdefault(keys.service_of_alive(str(reply.ok.key_expr)), {"health": None})["alive"] = True
-    for reply in session.get(keys.health_all, timeout=timeout):
+    for reply in session.get(keys.health(service) if service else keys.health_all, timeout=timeout):
         if reply.ok is None:
             continue
         try:
@@ -71,8 +80,9 @@ _STYLE = {HealthStatus.OK: "green", HealthStatus.DEGRADED: "yellow", HealthStatu
 
 def status_table(rows: dict[str, dict[str, object]], robot: str) -> Table:
     table = Table(title=f"hri/{robot}")
-    for col in ("service", "alive", "status", "uptime s", "received", "published", "rejected", "detail"):
+    for col in ("service", "alive", "status", "uptime s", "received", "published", "rejected"):
         table.add_column(col, justify="right" if col in ("uptime s", "received", "published", "rejected") else "left")
+    table.add_column("detail", overflow="fold")  # wrapped between entries, never cut: every value whole
     for name, row in rows.items():
         health = row.get("health")
         alive = "[green]yes[/]" if row.get("alive") else "[red]no[/]"
@@ -80,7 +90,7 @@ def status_table(rows: dict[str, dict[str, object]], robot: str) -> Table:
             detail = ", ".join(f"{k}={v}" for k, v in health.detail.items())
             table.add_row(name, alive, f"[{_STYLE[health.status]}]{health.status.value}[/]",
                           f"{health.uptime_s:.1f}", str(health.received), str(health.published),
-                          str(health.rejected), detail[:80])
+                          str(health.rejected), detail)
         else:
             table.add_row(name, alive, "-", "-", "-", "-", "-", "")
     return table

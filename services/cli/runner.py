@@ -82,6 +82,10 @@ class ScenarioRunner:
             missing.append("a reasoner ready for input")
         return missing
 
+    def speak(self, words: str) -> None:
+        """Say `words` to the robot: a synthesised WAV into the voice service's spool folder."""
+        speak_into(self.spool, words, voice=self.voice)
+
     def _reasoner_ready(self) -> bool:
         """The reasoner's health says `ready` once its agent is restored and it listens to every input."""
         health = self.health("reasoner", timeout=1.0)
@@ -108,7 +112,7 @@ class ScenarioRunner:
         exp = step.expect
         if step.say is not None or step.send is not None:
             if step.say is not None:
-                speak_into(self.spool, step.say, voice=self.voice)
+                self.speak(step.say)
             else:
                 self._voice.put(VoiceCommand(command=step.send, text=step.send.value, confidence=1.0,
                                              engine=SENT_ENGINE))

@@ -1,17 +1,19 @@
 """Scenarios: timed "say" and "show" steps with the outcomes expected of the robot (YAML files).
 
-    name: paper
-    description: The paper's experiment, Fig. 12 a-h
+    name: example
+    description: Stand up, see an X, refuse to walk
     steps:
       - say: stand                      # spoken to the voice service as synthesised audio
-        expect: {verdict: obey, action: stand_up, posture: standing}
+        expect: {heard: stand, verdict: obey, action: stand_up, posture: standing}
       - show: X                         # held up in front of the (synthetic) camera
         expect: {situation: danger}
-      - say: go
-        expect: {verdict: refuse, reason: danger_sign, said: "Sorry, I cannot do it."}
       - wait: 1.0                       # a pause, in seconds
       - send: go                        # a VoiceCommand published directly, as `hri send command`
                                         # would: the recogniser is bypassed, and the timeline says so
+        expect: {heard: go, verdict: refuse, reason: danger_sign, no_action: true,
+                 said: "Sorry, I cannot do it."}
+
+("go" is sent, not said: the voice service does not accept a synthesised "go", see paper.yaml.)
 
 Every field of `expect` is optional; a step without `expect` only has to happen.
 """
@@ -118,5 +120,13 @@ def load(source: str | Path) -> Scenario:
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        lines = [f"  {'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in exc.errors()]
+        lines = [f"  {_where(e['loc'])}: {e['msg']}" for e in exc.errors()]
         raise ScenarioError(f"{where}: invalid scenario:\n" + "\n".join(lines)) from None
+
+
+def _where(loc: tuple[int | str, ...]) -> str:
+    """A validation error's place, with steps counted from 1 as the demo counts them: `step 1, send`."""
+    if len(loc) >= 2 and loc[0] == "steps" and isinstance(loc[1], int):
+        rest = ".".join(str(p) for p in loc[2:])
+        return f"step {loc[1] + 1}" + (f", {rest}" if rest else "")
+    return ".".join(str(p) for p in loc)

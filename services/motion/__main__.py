@@ -22,7 +22,7 @@ from services.motion.simproc import SimProcess
 from services.runtime import get_logger, run_service
 from services.runtime.cli import ConnectOption, RobotOption
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 
 @app.callback(invoke_without_command=True)

@@ -14,7 +14,7 @@ from services.reasoner.soar_cli import query_soar
 from services.runtime import run_service
 from services.runtime.cli import ConnectOption, RobotOption
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 StateDirOption = Annotated[
     Path | None,

@@ -27,7 +27,7 @@ from services.speech.service import NAME, serve
 from services.speech.text import TextRejected, clean_text
 from services.speech.tts import EngineMissing, EspeakNg, SynthesisError
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 EXIT_FAILED = 1
 EXIT_NO_ENGINE = 3

@@ -19,7 +19,7 @@ from services.vision.debounce import DebounceConfig
 from services.vision.detector import MarkDetector
 from services.vision.service import NAME, VisionSettings, serve
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 SourceOption = Annotated[
     str,

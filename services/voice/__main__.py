@@ -17,7 +17,7 @@ from services.voice.engine import ENGINES, EngineError, make_engine
 from services.voice.service import NAME, VoiceSettings, serve
 from services.voice.sources import trim_to_speech
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 SourceOption = Annotated[
     str | None,

@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import io
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
+from rich.console import Console
 
 from schemas import Command, Shape
+from services.cli import scenario as scenario_module
+from services.cli.demo import MARKER, run_demo
 from services.cli.scenario import ScenarioError, builtin_names, load
 from tests.conftest import ROOT
 
@@ -35,7 +40,8 @@ def test_a_scenario_file_by_path(tmp_path: Path) -> None:
         ("name: x\nsteps: []\n", "steps"),
         ("name: x\nsteps:\n  - say: stand\n    show: X\n", "exactly one of say, send, show, wait"),
         ("name: x\nsteps:\n  - show: SQUARE\n", "show must be X, O, TRIANGLE or none"),
-        ("name: x\nsteps:\n  - send: dance\n", "steps.0.send"),
+        ("name: x\nsteps:\n  - send: dance\n", "step 1, send:"),
+        ("name: x\nsteps:\n  - say: stand\n  - say: go\n    show: X\n", "step 2: Value error"),
         ("name: x\nsteps:\n  - say: go\n    expect: {verdict: maybe}\n", "verdict"),
         ("name: x\nsteps:\n  - say: go\n    expect: {colour: red}\n", "colour"),
         ("name: x\nsteps:\n  - wait: 1\n    expect: {verdict: obey}\n", "a wait step can only expect"),
@@ -62,3 +68,28 @@ def test_demo_refuses_a_bad_scenario_before_starting_anything(tmp_path: Path) ->
                           str(tmp_path / "out")], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and "show must be" in out.stderr
     assert not (tmp_path / "out").exists()
+
+
+def _module_example(tmp_path: Path) -> Path:
+    """The YAML example in the scenario module's docstring, as a file."""
+    block = scenario_module.__doc__.split("\n\n")[1]
+    f = tmp_path / "example.yaml"
+    f.write_text(textwrap.dedent(block))
+    return f
+
+
+def test_the_module_example_is_a_valid_scenario(tmp_path: Path) -> None:
+    example = load(_module_example(tmp_path))
+    assert [s.label() for s in example.steps] == ['say "stand"', "show X", "wait 1 s", "send go"]
+    assert example.name not in builtin_names()
+
+
+@pytest.mark.system
+def test_the_module_example_passes_on_the_simulated_robot(tmp_path: Path) -> None:
+    out = tmp_path / "demo"
+    code = run_demo(load(_module_example(tmp_path)), out, console=Console(file=io.StringIO(), width=120))
+    timeline = (out / "timeline.txt").read_text()
+    assert code == 0, timeline
+    assert "step 1: say" in timeline and "step 4: send go" in timeline  # counted from 1, as errors are
+    assert (out / MARKER).is_file() and (out / "state").is_dir()  # the demo's own state folder
+    assert list((out / "speech").glob("*.wav"))  # "Sorry, I cannot do it." was spoken

@@ -22,7 +22,7 @@ import typer
 from services.motion.simbus.bus import SimBus
 from services.motion.simbus.control import apply_command
 
-app = typer.Typer(add_completion=False, help=__doc__)
+app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
 
 @app.command()
