@@ -405,7 +405,7 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
             if open_bus is not None:
                 return open_bus
             if attempts and n >= attempts:  # a person waits: say why in one line
-                raise SessionRefused(why) from exc
+                raise SessionRefused(why, refused=refused) from exc
             if not attempts:
                 event = ("the router refused this session, retrying" if refused
                          else "no zenoh router yet, retrying")
@@ -429,7 +429,12 @@ def _open_anonymously(settings: BusSettings, log: Any) -> zenoh.Session | None:
 
 
 class SessionRefused(RuntimeError):
-    """No session could be opened; the message is one line saying why and what to do."""
+    """No session could be opened; the message is one line saying why and what to do.
+    `refused`: a router is there and refused (else nobody answered)."""
+
+    def __init__(self, why: str, *, refused: bool) -> None:
+        super().__init__(why)
+        self.refused = refused
 
 
 def why_not_open(settings: BusSettings) -> tuple[str, bool]:

@@ -120,3 +120,15 @@ def test_the_build_context_is_only_what_the_image_needs() -> None:
     allowed = {line[1:] for line in ignore if line.startswith("!")}
     copied = set(re.findall(r"^COPY (.+) \S+$", (ROOT / "Dockerfile").read_text(), re.M))
     assert {p for c in copied for p in c.split()} <= allowed
+
+
+def test_the_open_classroom_override_is_explicit() -> None:
+    """docker-compose.open.yml: the router without --keys-dir (it warns OPEN BUS), plain TCP, and the
+    services without credentials; nothing else changes."""
+    override = yaml.safe_load((ROOT / "docker-compose.open.yml").read_text())
+    cmd = override["services"]["zenoh"]["command"]
+    assert cmd[:3] == ["python", "-m", "services.cli.router"] and "--keys-dir" not in cmd
+    for name in SERVICES:
+        assert override["services"][name]["environment"] == {"HRI_ZENOH_CONNECT": "tcp/zenoh:7447",
+                                                              "HRI_CREDENTIALS": ""}
+    assert "OPEN BUS" in (ROOT / "docker-compose.open.yml").read_text()
