@@ -38,8 +38,10 @@ RUN useradd --uid 10001 --user-group --no-create-home --home-dir /var/lib/hri --
  && chown -R hri:hri /var/lib/hri
 USER hri
 
+# Each container runs as the identity whose folder is mounted at /run/secrets/hri (docker-compose.yml).
 ENV PYTHONUNBUFFERED=1 \
-    HRI_ZENOH_CONNECT=tcp/zenoh:7447 \
+    HRI_ZENOH_CONNECT=tls/zenoh:7447 \
+    HRI_CREDENTIALS=/run/secrets/hri \
     HRI_STATE_DIR=/var/lib/hri
 VOLUME ["/var/lib/hri"]
 CMD ["hri", "--help"]

@@ -15,16 +15,22 @@ import argparse
 import multiprocessing as mp
 import statistics
 import time
+from pathlib import Path
 
 import zenoh
 
 from schemas import Keys, VoiceCommand
 from services.cli.router import Router, free_port, loopback_endpoint
-from services.runtime import ServiceContext, client_config
+from services.runtime import Credentials, ServiceContext, client_config
 
 
-def _subscriber(endpoint: str, robot: str, expect: int, ready: mp.Event, out: mp.Queue) -> None:
-    ctx = ServiceContext("bench-sub", zenoh.open(client_config([endpoint])), Keys(robot))
+def _session(endpoint: str, creds: Path | None) -> zenoh.Session:
+    return zenoh.open(client_config([endpoint], Credentials.load(creds) if creds else None))
+
+
+def _subscriber(endpoint: str, robot: str, expect: int, ready: mp.Event, out: mp.Queue,
+                creds: Path | None = None) -> None:
+    ctx = ServiceContext("bench-sub", _session(endpoint, creds), Keys(robot))
     lat: list[float] = []
     times: list[float] = []
 
@@ -45,8 +51,9 @@ def _subscriber(endpoint: str, robot: str, expect: int, ready: mp.Event, out: mp
         ctx.close()
 
 
-def _publisher(endpoint: str, robot: str, count: int, rate: float, start: mp.Event) -> None:
-    ctx = ServiceContext("bench-pub", zenoh.open(client_config([endpoint])), Keys(robot))
+def _publisher(endpoint: str, robot: str, count: int, rate: float, start: mp.Event,
+               creds: Path | None = None) -> None:
+    ctx = ServiceContext("bench-pub", _session(endpoint, creds), Keys(robot))
     try:
         pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
         start.wait(30)
@@ -63,11 +70,13 @@ def _publisher(endpoint: str, robot: str, count: int, rate: float, start: mp.Eve
         ctx.close()
 
 
-def run(count: int, rate: float, endpoint: str, robot: str) -> tuple[list[float], list[float]]:
+def run(count: int, rate: float, endpoint: str, robot: str,
+        creds: tuple[Path | None, Path | None] = (None, None)) -> tuple[list[float], list[float]]:
+    """`creds`: the subscriber's and the publisher's identity folders (None: anonymous)."""
     spawn = mp.get_context("spawn")  # never fork after a zenoh session exists
     ready, out = spawn.Event(), spawn.Queue()
-    sub = spawn.Process(target=_subscriber, args=(endpoint, robot, count, ready, out))
-    pub = spawn.Process(target=_publisher, args=(endpoint, robot, count, rate, ready))
+    sub = spawn.Process(target=_subscriber, args=(endpoint, robot, count, ready, out, creds[0]))
+    pub = spawn.Process(target=_publisher, args=(endpoint, robot, count, rate, ready, creds[1]))
     sub.start()
     pub.start()
     lat, times = out.get(timeout=180)

@@ -124,7 +124,8 @@ def main(
 ) -> None:
     """Print decision latency p50/p99 and the sustained input rate of the reasoner."""
     with tempfile.TemporaryDirectory() as state, \
-            service_rig(f"bench{os.getpid()}", HRI_STATE_DIR=state, HRI_LOG_LEVEL=log_level) as rig:
+            service_rig(f"bench{os.getpid()}", HRI_STATE_DIR=state, HRI_LOG_LEVEL=log_level,
+                        HRI_REASONER_COMMAND_RATE="0") as rig:  # capacity, not the flood limit
         rig.start("reasoner")
         ctx = rig.ctx
         deadline = time.monotonic() + 30

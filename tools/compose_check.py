@@ -1,8 +1,11 @@
 """The compose stack on a real Docker engine, checked end to end from the host (run by tools/compose-check).
 
-Builds the project image once, brings docker-compose.yml up under its own project name (its own volume,
-image tag and router ports picked free on 127.0.0.1, so a user's own stack is never touched), waits until
-every service container reports healthy, then runs the paper's scenario against the stack from the host:
+Makes the deployment's identities (`hri keys init`, in a temporary folder), builds the project image
+once, brings docker-compose.yml up under its own project name (its own volume, image tag and router
+port picked free on 127.0.0.1, so a user's own stack is never touched), waits until every service
+container reports healthy, checks that a session without credentials is refused, then runs the paper's
+scenario against the stack from the host (status as the observer, the runner as the operator, over
+mutual TLS):
 spoken commands as WAV files written into the voice container's spool folder, cards shown to the
 synthetic camera through the bus (the message `hri send scene` publishes), and the refused "go" checked
 with its spoken reply fetched from the speech container as a WAV. Tears the stack down and prints the
@@ -14,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -33,12 +37,14 @@ from services.cli.router import free_port
 from services.cli.runner import ScenarioRunner, StepResult
 from services.cli.scenario import load
 from services.cli.utterance import speak_into
-from services.runtime import ServiceContext, client_config
+from services.cli import keys as deployment_keys
+from services.runtime import ConfigError, Credentials, ServiceContext, client_config
 from services.speech.player import file_stem
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECT = f"hri-check-{os.getpid()}"  # its own containers, network and volume: checks may run side by side
 IMAGE = f"hri-op2:check-{os.getpid()}"  # and its own image tag (HRI_IMAGE), removed at the end
+CONTAINER_UID = 10001  # the image's user, who must own the secrets mounted into the containers
 SPOOL = "/var/lib/hri/voice-spool"
 SPEECH = "/var/lib/hri/speech"
 REFUSAL = "Sorry, I cannot do it."
@@ -53,11 +59,12 @@ def log(message: str) -> None:
 class Stack:
     """`docker compose` on this checkout's compose file, under the check's own project name."""
 
-    def __init__(self, router_port: int, rest_port: int) -> None:
+    def __init__(self, router_port: int, keys: Path) -> None:
         self.router_port = router_port
+        self.keys = keys
         # The stack's defaults, whatever this shell has set (HRI_VOICE_SOURCE=mic, say).
         self.env = {k: v for k, v in os.environ.items() if not k.startswith(("HRI_", "ZENOH_"))}
-        self.env.update(HRI_ROUTER_PORT=str(router_port), HRI_REST_PORT=str(rest_port), HRI_IMAGE=IMAGE)
+        self.env.update(HRI_ROUTER_PORT=str(router_port), HRI_IMAGE=IMAGE, HRI_KEYS_DIR=str(keys))
 
     def run(self, *args: str, input: bytes | None = None, check: bool = True, capture: bool = False,
             output: IO[bytes] | None = None, timeout: float = 900) -> subprocess.CompletedProcess[bytes]:
@@ -134,17 +141,25 @@ def timed(what: str, times: dict[str, float], fn: Callable[[], object]) -> objec
 
 def run_scenario(stack: Stack, tmp: Path, problems: list[str]) -> list[StepResult]:
     """The paper's scenario from the host, then the refusal's WAV out of the speech container."""
-    endpoint = f"tcp/127.0.0.1:{stack.router_port}"
+    endpoint = f"tls/localhost:{stack.router_port}"  # the stack's router takes mutual TLS only
+    try:
+        zenoh.open(client_config([endpoint])).close()
+        problems.append("the stack's router accepted a session without credentials")
+    except zenoh.ZError:
+        log("a session without credentials is refused")
+    observer = {**os.environ, "HRI_CREDENTIALS": str(stack.keys / "observer")}
+    observer.pop("ZENOH_CONFIG", None)
     status = subprocess.run([sys.executable, "-m", "services.cli", "status", "--json", "--connect", endpoint],
-                            capture_output=True, text=True, timeout=60, cwd=ROOT, check=False)
+                            capture_output=True, text=True, timeout=60, cwd=ROOT, check=False, env=observer)
     rows = json.loads(status.stdout or "{}")
     not_ok = [n for n in SERVICES if not (rows.get(n, {}).get("alive")
                                           and (rows[n].get("health") or {}).get("status") == "ok")]
     if status.returncode != 0 or not_ok:
         problems.append(f"`hri status` from the host: not alive and ok: {', '.join(not_ok) or '?'}")
-    log(f"hri status --connect {endpoint}: " + ", ".join(
+    log(f"hri status --connect {endpoint} (as the observer): " + ", ".join(
         f"{n} {(rows.get(n, {}).get('health') or {}).get('status', 'absent')}" for n in SERVICES))
-    ctx = ServiceContext("compose-check", zenoh.open(client_config([endpoint])), Keys("op2"))
+    operator = Credentials.load(stack.keys / "operator")  # the scenario runner sends as the operator
+    ctx = ServiceContext("compose-check", zenoh.open(client_config([endpoint], operator)), Keys("op2"))
     try:
         rec = Recorder(ctx)
         runner = ComposeRunner(ctx, rec, stack, tmp / "spool")
@@ -197,7 +212,8 @@ def main() -> int:
                              "reachable; the stack's default engine, pocketsphinx, ships its own)")
     parser.add_argument("--healthy-timeout", type=float, default=300.0)
     args = parser.parse_args()
-    stack = Stack(free_port(), free_port())
+    keys_root = Path(tempfile.mkdtemp(prefix="hri-compose-keys-"))
+    stack = Stack(free_port(), keys_root / "keys")
     times: dict[str, float] = {}
     problems: list[str] = []
     results: list[StepResult] = []
@@ -206,6 +222,10 @@ def main() -> int:
     log(f"building {IMAGE} once for the five services{'' if args.cached else ' (no layer cache)'}, "
         f"log in {BUILD_LOG}; vosk model: {args.vosk_model_url or 'skipped (no --vosk-model-url)'}")
     try:
+        # The deployment's identities, as `sudo hri keys init --keys-dir ... --container-uid 10001` makes them.
+        deployment_keys.init(stack.keys)
+        deployment_keys.hand_to_containers(stack.keys, CONTAINER_UID)
+        log(f"identities made in {stack.keys} (router and services owned by uid {CONTAINER_UID})")
         stack.run("down", "--volumes", "--remove-orphans", capture=True)  # a fresh volume, as a new user
         with BUILD_LOG.open("wb") as build_log:
             no_cache = [] if args.cached else ["--no-cache"]
@@ -221,7 +241,7 @@ def main() -> int:
                 t0 = time.monotonic()
                 results = run_scenario(stack, Path(tmp), problems)
                 times["scenario"] = time.monotonic() - t0
-    except (RuntimeError, subprocess.TimeoutExpired) as exc:
+    except (RuntimeError, subprocess.TimeoutExpired, ConfigError) as exc:
         problems.append(str(exc))
     finally:
         if problems:
@@ -231,6 +251,7 @@ def main() -> int:
             timed("down", times, lambda: stack.run("down", "--volumes", "--timeout", "15", check=False,
                                                     capture=True))
             subprocess.run(["docker", "image", "rm", IMAGE], capture_output=True, check=False)  # the tag only
+            shutil.rmtree(keys_root, ignore_errors=True)
     passed = sum(r.ok for r in results)
     log("times: " + ", ".join(f"{k} {v:.1f} s" for k, v in times.items())
         + f"; image {size:.0f} MB; paper scenario {passed}/{len(results)} steps as expected")

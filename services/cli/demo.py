@@ -31,7 +31,7 @@ from services.runtime import ServiceContext, configure_logging
 
 MARKER = ".hri-demo"
 """The file that marks a folder as made by `hri demo`: only such a folder is ever cleared."""
-RUN_OUTPUTS = ("state", "spool", "speech", "timeline.txt", "services.log")
+RUN_OUTPUTS = ("state", "spool", "speech", "timeline.txt", "services.log", "keys")
 """What one run leaves in its output folder; the next run replaces these and nothing else."""
 
 
@@ -136,8 +136,8 @@ def run_demo(scenario: Scenario, out: Path, *, port: int = 0, voice: str = DEFAU
     console.rule(f"[bold]hri demo: {scenario.name}")
     if scenario.description:
         console.print(scenario.description.strip(), highlight=False)
-    console.print(f"router tcp/127.0.0.1:{port}   output {out}   (watch live: hri spy --connect "
-                  f"tcp/127.0.0.1:{port})", highlight=False)
+    console.print(f"router tcp/127.0.0.1:{port}   output {out}   (watch live: HRI_KEYS_DIR={out / 'keys'} "
+                  f"hri spy --connect tcp/127.0.0.1:{port})", highlight=False)
     results: list[StepResult] = []
     try:
         with simulated_robot(out, port=port, voice=voice, on_event=timeline.event) as robot, \

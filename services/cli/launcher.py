@@ -4,6 +4,10 @@ Children are started with `subprocess` (fork immediately followed by exec, the e
 multiprocessing's spawn start method): nothing of this process's Zenoh session is inherited, which
 would hang the child (REFERENCE.md). Each child learns the launcher's pid (`HRI_LAUNCHER_PID`) and
 stops by itself if the launcher disappears, even after a SIGKILL, so no orphan outlives it.
+
+With `keys_dir` (what `hri up` passes unless told `--open`), the embedded router requires
+authentication and applies the generated access rules, and each child runs as its own identity
+(`HRI_CREDENTIALS=<keys_dir>/<service>`).
 """
 
 from __future__ import annotations
@@ -16,11 +20,13 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import IO
 
 from schemas.keys import SERVICES
-from services.cli.router import Router, loopback_endpoint
-from services.runtime import PARENT_ENV, get_logger
+from services.cli.router import OPEN_WARNING, Router, loopback_endpoint
+from services.runtime import PARENT_ENV, RouterSecurity, get_logger
+from services.runtime.config import CREDENTIALS_ENV
 
 LineSink = Callable[[str, str], None]
 """Receives (service name, one line of its output)."""
@@ -58,6 +64,9 @@ class Launcher:
         service_env: Mapping[str, Mapping[str, str]] | None = None,
         sink: LineSink | None = None,
         restart: bool = True,
+        keys_dir: Path | None = None,
+        operator_writes: bool = True,
+        listen: Sequence[str] = (),
     ) -> None:
         unknown = set(services) - set(SERVICES)
         if unknown:
@@ -71,23 +80,34 @@ class Launcher:
         self._stopping = threading.Event()
         self._lock = threading.Lock()
         self._supervisor: threading.Thread | None = None
+        self.keys_dir = keys_dir
+        self.listen = [self.endpoint, *listen]  # the children use the first (loopback)
+        self.security = (RouterSecurity(keys_dir, robot=robot or os.environ.get("HRI_ROBOT") or "op2",
+                                        operator_writes=operator_writes) if keys_dir is not None else None)
         base = dict(os.environ)
         base.pop("ZENOH_CONFIG", None)  # the launcher decides where children connect
+        base.pop(CREDENTIALS_ENV, None)  # and who each child is
         base.update(env or {})
         base.update(HRI_ZENOH_CONNECT=self.endpoint, PYTHONUNBUFFERED="1", **{PARENT_ENV: str(os.getpid())})
         if robot:
             base["HRI_ROBOT"] = robot
         self.children: dict[str, Child] = {
             name: Child(name, [sys.executable, "-m", f"services.{name}"],
-                        {**base, **dict((service_env or {}).get(name, {}))})
+                        {**base, **self._identity_env(name), **dict((service_env or {}).get(name, {}))})
             for name in services
         }
+
+    def _identity_env(self, name: str) -> dict[str, str]:
+        return {CREDENTIALS_ENV: str(self.keys_dir / name)} if self.keys_dir is not None else {}
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
         if self._embedded:
-            self._router = Router([self.endpoint])
-            self.log.info("router listening", endpoint=self.endpoint)
+            self._router = Router(self.listen, self.security)
+            self.log.info("router listening", endpoints=",".join(self.listen), secured=self.security is not None,
+                          keys_dir=str(self.keys_dir) if self.keys_dir else None)
+            if self.security is None:
+                self.log.warning(OPEN_WARNING)
         else:
             self.log.info("joining existing router", endpoint=self.endpoint)
         for child in self.children.values():

@@ -15,6 +15,7 @@ import typer
 import zenoh
 from rich.console import Console
 
+from schemas.access import OBSERVER, OPERATOR
 from schemas.keys import SERVICES, Keys
 from schemas.messages import (
     Command,
@@ -27,11 +28,12 @@ from schemas.messages import (
     Shape,
     VoiceCommand,
 )
+from services.cli import keys as deployment_keys
 from services.cli import probe
 from services.cli.launcher import Launcher, run_until_signalled
 from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
-from services.runtime import ConfigError, ServiceContext, configure_logging
+from services.runtime import ConfigError, ServiceContext, SessionRefused, configure_logging, default_keys_dir
 from services.runtime.cli import ConnectOption, RobotOption
 
 # rich_markup_mode=None: help text is printed as written ("[default: op2]" is not read as Rich markup)
@@ -39,6 +41,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__, rich
 send_app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                        help="Publish one valid message as a service would, for testing by hand.")
 app.add_typer(send_app, name="send")
+app.add_typer(deployment_keys.app, name="keys")
 console = Console()
 if not console.is_terminal and "COLUMNS" not in os.environ:
     console = Console(width=120)  # piped or logged (CI): rich would wrap the tables at 80 columns
@@ -54,16 +57,20 @@ def fail(message: str, code: int = 1) -> NoReturn:
 
 
 @contextmanager
-def bus(robot: str | None, connect: str | None) -> Iterator[tuple[zenoh.Session, Keys]]:
-    """A session for status/spy/send; no router or bad settings end the command with one line."""
+def bus(robot: str | None, connect: str | None,
+        identity: str = OBSERVER) -> Iterator[tuple[zenoh.Session, Keys]]:
+    """A session for status/spy/send as `identity`; no router, a refusal or bad settings end the
+    command with one line."""
     configure_logging(os.environ.get("HRI_LOG_LEVEL") or "error")  # not the session's retry warnings
     with ExitStack() as stack:
         try:
-            pair = stack.enter_context(probe.client_session(robot, connect))
+            pair = stack.enter_context(probe.client_session(robot, connect, identity))
         except ConfigError as exc:
             fail(f"invalid configuration: {exc}", 2)
         except probe.BusUnreachable as exc:
             fail(f"{exc}: {NO_ROUTER_HINT}")
+        except SessionRefused as exc:  # a router is there and refused these credentials (or none)
+            fail(str(exc), 2)
         yield pair
 
 
@@ -76,14 +83,37 @@ def up(
     only: Annotated[list[str] | None, typer.Option(
         "--only", help=f"Start only these services (repeatable): {', '.join(SERVICES)}")] = None,
     no_restart: Annotated[bool, typer.Option("--no-restart", help="Do not restart crashed services")] = False,
+    keys_dir: Annotated[Path | None, typer.Option("--keys-dir", envvar="HRI_KEYS_DIR", help=(
+        "The deployment's identities (made here by `hri keys init` on first use) "
+        "[default: ~/.local/state/hri/keys]"))] = None,
+    listen: Annotated[list[str] | None, typer.Option("--listen", help=(
+        "Also listen here (repeatable); other machines must use TLS, e.g. tls/0.0.0.0:7448"))] = None,
+    no_operator_writes: Annotated[bool, typer.Option("--no-operator-writes", help=(
+        "Withhold the operator's puts (hri send, the demo)"))] = False,
+    open_bus: Annotated[bool, typer.Option("--open", help=(
+        "No authentication, no access rules: anyone who reaches the router can move the robot "
+        "(a classroom on a closed network)"))] = False,
 ) -> None:
-    """Start the embedded Zenoh router and the five services; Ctrl-C stops them all."""
+    """Start the embedded Zenoh router and the five services; Ctrl-C stops them all.
+
+    Secure by default: every service runs as its own identity, the router listens on loopback,
+    requires credentials and applies the access rules generated from schemas/access.py.
+    """
+    folder = None if open_bus else (keys_dir or default_keys_dir())
+    if folder is not None and not deployment_keys.exists(folder) and connect is not None:
+        folder = None  # joining a router: anonymous unless this deployment's keys were copied here
     try:
-        launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart)
+        launcher = Launcher(only or SERVICES, port=port, connect=connect, robot=robot, restart=not no_restart,
+                            keys_dir=folder, operator_writes=not no_operator_writes, listen=listen or [])
     except ValueError as exc:
         raise typer.BadParameter(str(exc)) from None
     try:
+        if folder is not None and not deployment_keys.exists(folder):  # made where the router runs
+            deployment_keys.init(folder)
+            typer.echo(f"created this deployment's identities in {folder}", err=True)
         code = run_until_signalled(launcher)
+    except ConfigError as exc:  # a listen endpoint a secure router refuses, unreadable keys
+        fail(str(exc), 2)
     except zenoh.ZError as exc:  # only the embedded router's listener can fail here
         why = "the port is in use" if "in use" in str(exc) else str(exc).splitlines()[0][:160]
         fail(f"cannot start the router on {launcher.endpoint}: {why}; choose another port with --port, "
@@ -192,7 +222,7 @@ def send_command(
     cmd = None if command.lower() == "none" else _choice(Command, command.lower(), "command")
     msg = VoiceCommand(command=cmd, text=text if text is not None else command, confidence=confidence,
                        engine="hri-send")
-    with bus(robot, connect) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.voice_command, msg)
     typer.echo(sent.model_dump_json())
 
@@ -207,7 +237,7 @@ def send_mark(
     """Publish a MarkObservation as the vision service would."""
     marks = [] if shape.lower() == "none" else [
         Mark(shape=_choice(Shape, shape.upper(), "shape"), confidence=confidence, box=(200, 120, 240, 240))]
-    with bus(robot, connect) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_marks, MarkObservation(marks=marks, frame=0))
     typer.echo(sent.model_dump_json())
 
@@ -220,7 +250,7 @@ def send_scene(
 ) -> None:
     """Tell a vision service on a synthetic source what card to hold up (frames go through the detector)."""
     value = None if shape.lower() == "none" else _choice(Shape, shape.upper(), "shape")
-    with bus(robot, connect) as (session, keys):
+    with bus(robot, connect, OPERATOR) as (session, keys):
         sent = probe.publish_once(session, keys.vision_scene, SceneCommand(shape=value))
     typer.echo(sent.model_dump_json())
 
@@ -280,7 +310,7 @@ def record(
         raise typer.Exit(2)
     done = []
     code = run_service("record", lambda ctx: done.append(record_to(ctx, file, duration, images=images)),
-                       robot=robot, connect=connect)
+                       robot=robot, connect=connect, identity=OBSERVER)
     if done:
         console.print(done[0].table())
     raise typer.Exit(code)
@@ -327,7 +357,7 @@ def replay(
         if watch is not None and not result.interrupted:
             made.append(watch.settle(len(expected), settle, timeout=settle + 30.0))
 
-    code = run_service("replay", body, robot=robot, connect=connect)
+    code = run_service("replay", body, robot=robot, connect=connect, identity=OPERATOR)
     if check and code == 0:
         if not made:
             console.print("[yellow]interrupted: no check")
@@ -388,7 +418,7 @@ def view(
             v.LiveFeed(ctx, logger)
             ctx.wait()
 
-        code = run_service("view", live, robot=robot, connect=connect)
+        code = run_service("view", live, robot=robot, connect=connect, identity=OBSERVER)
     rec.flush()
     rec.disconnect()
     raise typer.Exit(code)

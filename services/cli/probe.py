@@ -14,9 +14,18 @@ from pydantic import BaseModel
 from rich.console import Console
 from rich.table import Table
 
+from schemas.access import OBSERVER
 from schemas.keys import SERVICES, Keys
 from schemas.messages import Header, Health, HealthStatus
-from services.runtime import BusSettings, DecodeError, decode, encode, encoding_for, open_session
+from services.runtime import (
+    BusSettings,
+    DecodeError,
+    SessionRefused,
+    decode,
+    encode,
+    encoding_for,
+    open_session,
+)
 from services.runtime.logs import get_logger
 
 
@@ -25,11 +34,18 @@ class BusUnreachable(RuntimeError):
 
 
 @contextmanager
-def client_session(robot: str | None, connect: str | None) -> Iterator[tuple[zenoh.Session, Keys]]:
-    """A client session on the robot's bus (raises `ConfigError` for bad settings, `BusUnreachable`)."""
-    settings = BusSettings.from_env(robot=robot, connect=connect)
+def client_session(robot: str | None, connect: str | None,
+                   identity: str = OBSERVER) -> Iterator[tuple[zenoh.Session, Keys]]:
+    """A client session on the robot's bus as `identity` (`HRI_CREDENTIALS`, else
+    `<keys dir>/<identity>` when it exists). Raises `ConfigError` for bad settings, `BusUnreachable`
+    when no router answers, `SessionRefused` when a router refuses this identity."""
+    settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity)
     try:
         session = open_session(settings, get_logger("hri"), attempts=3)
+    except SessionRefused as exc:
+        if exc.refused:
+            raise
+        raise BusUnreachable(f"no Zenoh router answers at {','.join(settings.connect)}") from None
     except zenoh.ZError:
         where = f"ZENOH_CONFIG={settings.config_file}" if settings.config_file else ",".join(settings.connect)
         raise BusUnreachable(f"no Zenoh router answers at {where}") from None

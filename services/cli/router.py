@@ -1,6 +1,10 @@
 """An embedded Zenoh router: zenoh-python in router mode, listening only where told.
 
-`python -m services.cli.router --port 7447` runs one on loopback until SIGTERM or Ctrl-C.
+`python -m services.cli.router --port 7447 --keys-dir <keys>` runs a secured one on loopback
+(authentication and the access rules generated from `schemas/access.py`) until SIGTERM or Ctrl-C.
+Without `--keys-dir` it runs open (anyone who reaches it may do anything), which tests and
+benchmarks use; it says so in its log. `--config FILE` runs a full Zenoh configuration instead
+(`hri keys router-config` writes one).
 """
 
 from __future__ import annotations
@@ -9,12 +13,13 @@ import signal
 import socket
 import threading
 import time
+from pathlib import Path
 from types import FrameType
 
 import typer
 import zenoh
 
-from services.runtime import get_logger, router_config
+from services.runtime import ConfigError, RouterSecurity, get_logger, router_config
 
 DEFAULT_PORT = 7447
 
@@ -41,12 +46,19 @@ def wait_listening(port: int, timeout: float = 15.0) -> None:
     raise RuntimeError(f"nothing listens on 127.0.0.1:{port} after {timeout:g} s")
 
 
-class Router:
-    """A router session; `close()` (or the context manager) ends it."""
+OPEN_WARNING = ("OPEN BUS: this router asks no credentials and applies no access rules; anyone who "
+                "can reach it can make the robot move")
 
-    def __init__(self, listen: list[str]) -> None:
+
+class Router:
+    """A router session; `close()` (or the context manager) ends it. With `security`, clients must
+    authenticate and the generated access rules apply; without, the bus is open."""
+
+    def __init__(self, listen: list[str], security: RouterSecurity | None = None,
+                 config: zenoh.Config | None = None) -> None:
         self.listen = listen
-        self.session = zenoh.open(router_config(listen))
+        self.security = security
+        self.session = zenoh.open(config if config is not None else router_config(listen, security))
 
     def close(self) -> None:
         if not self.session.is_closed():
@@ -62,8 +74,12 @@ class Router:
 def main(
     port: int = typer.Option(DEFAULT_PORT, help="TCP port on 127.0.0.1"),
     listen: list[str] = typer.Option(
-        [], help="Explicit listen endpoints instead of loopback (repeatable), e.g. tcp/0.0.0.0:7447"
+        [], help="Explicit listen endpoints instead of loopback (repeatable), e.g. tls/0.0.0.0:7447"
     ),
+    keys_dir: Path | None = typer.Option(None, "--keys-dir", help="Secure: the deployment's keys (`hri keys init`)"),
+    robot: str = typer.Option("op2", envvar="HRI_ROBOT", help="Robot id the access rules cover"),
+    no_operator_writes: bool = typer.Option(False, "--no-operator-writes", help="Withhold the operator's puts"),
+    config: Path | None = typer.Option(None, "--config", help="A full Zenoh JSON5 router configuration"),
 ) -> None:
     """Run a Zenoh router until SIGTERM or Ctrl-C."""
     log = get_logger("router")
@@ -75,8 +91,19 @@ def main(
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
-    with Router(endpoints):
-        log.info("router listening", endpoints=",".join(endpoints))
+    security = RouterSecurity(keys_dir, robot=robot, operator_writes=not no_operator_writes) if keys_dir else None
+    try:
+        router = Router(endpoints, security, zenoh.Config.from_file(str(config)) if config else None)
+    except (ConfigError, zenoh.ZError) as exc:
+        log.error("cannot start the router", error=str(exc).splitlines()[0])
+        raise typer.Exit(2) from None
+    with router:
+        if config:
+            log.info("router running", config=str(config))
+        else:
+            log.info("router listening", endpoints=",".join(endpoints), secured=security is not None)
+            if security is None:
+                log.warning(OPEN_WARNING)
         while not stop.wait(0.5):
             pass
     log.info("router stopped")

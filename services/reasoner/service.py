@@ -8,6 +8,7 @@ ready, and only then subscribe to marks, commands and motion state.
 from __future__ import annotations
 
 import os
+import sys
 import time
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
@@ -53,6 +54,20 @@ def _log_restored(ctx: ServiceContext, store: StateStore, restored: Memory, conf
     log(line, state_file=str(store.path), situation=restored.situation, resume_go=restored.resume_go,
         saved_at=store.saved_at, episodes=episodes, debugger_port=config.debugger_port)
 
+# Flood limits. Marks and commands wait in bounded queues (the runtime drops the oldest beyond
+# INPUT_QUEUE), are handed to the agent only while fewer than *_BACKLOG inputs wait for it, and
+# commands at most COMMAND_RATE a second; the rest are dropped and counted in health `dropped`.
+# A publisher flooding commands can neither grow the reasoner's memory, nor queue work in front of
+# an X, nor keep the agent (and the process's Python threads) too busy to read the next mark.
+# Marks get more room than commands, so a command flood never crowds out a danger sign.
+INPUT_QUEUE = 32
+COMMAND_BACKLOG = 16
+MARKS_BACKLOG = 64
+SWITCH_INTERVAL_S = 0.0005
+COMMAND_RATE = 50.0
+"""Commands a second the agent is given at most (HRI_REASONER_COMMAND_RATE; 0: no limit). People
+give a few a second; a flood beyond this would keep the agent, and with it the process, busy."""
+
 
 @dataclass(frozen=True)
 class ReasonerOptions:
@@ -62,6 +77,7 @@ class ReasonerOptions:
     keepalive_s: float = 0.5
     explain_timeout_s: float = 4.0
     episodes_max_mb: float = 64.0
+    command_rate: float = COMMAND_RATE
 
     @classmethod
     def from_env(
@@ -88,12 +104,24 @@ class ReasonerOptions:
                 raise ValueError(f"HRI_REASONER_EPISODES_MAX_MB={raw!r} is not a number") from None
         if episodes_max_mb is not None and not episodes_max_mb > 0:
             raise ValueError(f"the episodic-memory bound must be positive, not {episodes_max_mb:g} MB")
+        raw_rate = os.environ.get("HRI_REASONER_COMMAND_RATE", str(COMMAND_RATE))
+        try:
+            command_rate = float(raw_rate)
+        except ValueError:
+            command_rate = -1.0
+        if command_rate < 0:
+            raise ValueError(f"HRI_REASONER_COMMAND_RATE={raw_rate!r} is not a rate "
+                             "(commands a second, 0: no limit)")
         return cls(state_dir=state_dir, knowledge_file=knowledge_file, debugger_port=debugger_port,
+                   command_rate=command_rate,
                    **({"episodes_max_mb": episodes_max_mb} if episodes_max_mb is not None else {}))
 
 
 def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     options = options or ReasonerOptions.from_env()
+    # Under a flood the subscription workers are busy in Python; a shorter GIL switch interval (5 ms
+    # by default) lets Zenoh's reading thread in sooner, so the link keeps moving and an X gets through.
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     ctx.update_detail(ready=False)  # until the agent is restored and every subscription declared
     keys = ctx.keys
     store = StateStore(options.state_dir or default_state_dir(ctx.robot), ctx.log)
@@ -118,12 +146,18 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
     _log_restored(ctx, store, restored, config, driver.episodes())
 
     def on_command(msg: VoiceCommand) -> None:
+        if driver.backlog() >= COMMAND_BACKLOG:
+            ctx.count_drop(keys.voice_command)
+            return
         driver.submit(CommandInput(word=msg.command.value if msg.command else None,
                                    confidence=msg.confidence, stamp=msg.stamp))
 
     def on_marks(msg: MarkObservation) -> None:
         # No mark carries no news (DESIGN.md); only observations with marks reach the agent.
         if msg.marks:
+            if driver.backlog() >= MARKS_BACKLOG:
+                ctx.count_drop(keys.vision_marks)
+                return
             driver.submit(MarksInput(shapes=frozenset(m.shape.value for m in msg.marks), stamp=msg.stamp))
 
     def on_motion(msg: MotionState) -> None:
@@ -149,8 +183,10 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         return out
 
     ctx.subscribe(keys.motion_state, MotionState, on_motion)
-    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks)
-    ctx.subscribe(keys.voice_command, VoiceCommand, on_command)
+    ctx.subscribe(keys.vision_marks, MarkObservation, on_marks, queue=INPUT_QUEUE,
+                  when=lambda: driver.backlog() < MARKS_BACKLOG)
+    ctx.subscribe(keys.voice_command, VoiceCommand, on_command, queue=INPUT_QUEUE,
+                  when=lambda: driver.backlog() < COMMAND_BACKLOG, rate=options.command_rate or None)
     ctx.queryable(keys.reasoner_soar, on_soar)
     ctx.queryable(keys.reasoner_explain, on_explain)
     ctx.thread(lambda: bridge.run_keepalive(driver.responsive), "walk-keepalive")

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import FrameType
 from typing import Any, Generic, TypeVar
 
@@ -47,6 +49,25 @@ class Counters:
     def bump(self, name: str, n: int = 1) -> None:
         with self._lock:
             setattr(self, name, getattr(self, name) + n)
+
+
+class TokenBucket:
+    """At most `rate` events a second on average, in bursts of up to `burst` (one thread only)."""
+
+    def __init__(self, rate: float, burst: int) -> None:
+        self.rate = rate
+        self.burst = float(burst)
+        self.tokens = float(burst)
+        self.last = time.monotonic()
+
+    def take(self) -> bool:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.last) * self.rate)
+        self.last = now
+        if self.tokens < 1.0:
+            return False
+        self.tokens -= 1.0
+        return True
 
 
 class TypedPublisher(Generic[H]):
@@ -91,6 +112,7 @@ class ServiceContext:
         self._status = HealthStatus.OK
         self._detail: dict[str, Any] = {}
         self._detail_lock = threading.Lock()
+        self._drops: dict[str, int] = {}
         self._cleanups: list[Callable[[], None]] = []
         self._keep: list[Any] = []  # declared zenoh entities: alive while referenced
         self._token = session.liveliness().declare_token(keys.alive(name))
@@ -127,12 +149,22 @@ class ServiceContext:
         callback: Callable[[M], None],
         *,
         latest_only: bool = False,
+        queue: int | None = None,
+        when: Callable[[], bool] | None = None,
+        rate: float | None = None,
     ) -> None:
         """Deliver each valid `model` on `key` to `callback`; log, count and drop anything else.
 
         Callbacks run on Zenoh's threads one at a time and must be short. With
         `latest_only=True` a worker thread calls `callback` with the newest message only
         (a `RingChannel(1)`), for consumers that may fall behind (camera-rate marks).
+        With `queue=n` Zenoh's thread only queues the sample (at most `n`; when full the oldest
+        is dropped and counted in `Health.detail["dropped"]`) and a worker thread validates and
+        delivers: a publisher flooding this key cannot hold up the session's other keys, nor
+        grow this process's memory. `when` (with `queue`) holds delivery while it is false, so
+        that nothing is validated that the consumer would only throw away (the queue keeps the
+        newest meanwhile). `rate` (with `queue`) delivers at most that many messages a second
+        (bursts up to `queue`); the rest are dropped unread and counted.
         """
         handle = self._guard(callback, f"subscriber {key}")
 
@@ -141,6 +173,9 @@ class ServiceContext:
             if msg is not None:
                 handle(msg)
 
+        if queue is not None:
+            self._subscribe_bounded(key, on_sample, queue, when, rate)
+            return
         if not latest_only:
             self._keep.append(self.session.declare_subscriber(key, self._guard(on_sample, key)))
             return
@@ -156,6 +191,52 @@ class ServiceContext:
                 on_sample(sample)
 
         self.thread(drain, f"latest:{key}")
+
+    def _subscribe_bounded(self, key: str, deliver: Callable[[zenoh.Sample], None], size: int,
+                           when: Callable[[], bool] | None, rate: float | None) -> None:
+        if size < 1:
+            raise ValueError(f"queue size for {key} must be at least 1, not {size}")
+        bucket = TokenBucket(rate, size) if rate else None
+        pending: deque[zenoh.Sample] = deque(maxlen=size)
+        wake = threading.Event()
+
+        def on_sample(sample: zenoh.Sample) -> None:  # Zenoh's thread: queue and return
+            if len(pending) == size:
+                self.count_drop(key)
+            pending.append(sample)
+            wake.set()
+
+        guarded = self._guard(deliver, key)
+
+        def drain() -> None:
+            while not self.stopping.is_set():
+                if when is not None and pending and not when():
+                    self.stopping.wait(0.001)  # the consumer is busy: let the queue shed the oldest
+                    continue
+                try:
+                    sample = pending.popleft()
+                except IndexError:
+                    wake.wait(0.2)
+                    wake.clear()
+                    continue
+                if bucket is not None and not bucket.take():
+                    self.count_drop(key)
+                    continue
+                guarded(sample)
+
+        self._keep.append(self.session.declare_subscriber(key, on_sample))
+        self.thread(drain, f"queue:{key}")
+
+    def count_drop(self, key: str, n: int = 1) -> None:
+        """Count messages dropped on `key` because the service could not keep up (a flood)."""
+        short = key[len(self.keys.prefix) + 1:] if key.startswith(self.keys.prefix + "/") else key
+        with self._detail_lock:
+            self._drops[short] = self._drops.get(short, 0) + n
+
+    @property
+    def drops(self) -> dict[str, int]:
+        with self._detail_lock:
+            return dict(self._drops)
 
     def _decode(self, sample: zenoh.Sample, model: type[M]) -> M | None:
         self.counters.bump("received")
@@ -222,6 +303,8 @@ class ServiceContext:
     def health(self) -> Health:
         with self._detail_lock:
             detail = dict(self._detail)
+            if self._drops:
+                detail["dropped"] = dict(self._drops)
         detail["callback_errors"] = self.counters.callback_errors
         detail.setdefault("pid", os.getpid())
         return Health(
@@ -303,22 +386,80 @@ class ServiceContext:
 
 
 def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh.Session:
-    """Open a session. zenoh clients fail at once when no router answers; retry, logging each time.
+    """Open a session. zenoh clients fail at once when no router answers, or when the router
+    refuses their credentials; retry, logging why each time (a robot waits for its router to come up).
 
-    `attempts=0` retries until stopped by a signal (a robot waits for its router to come up).
+    `attempts=0` retries until stopped by a signal.
     """
     delay, n = 0.2, 0
     while True:
         n += 1
+        settings = settings.refreshed()
         try:
             return zenoh.open(settings.zenoh_config())
+        except ConfigError:
+            raise
         except Exception as exc:
-            if attempts and n >= attempts:
-                raise
-            log.warning("no zenoh router yet, retrying", endpoints=",".join(settings.connect),
-                        error=str(exc).splitlines()[0][:200], retry_in_s=delay)
+            why, refused = why_not_open(settings)
+            open_bus = _open_anonymously(settings, log) if refused else None
+            if open_bus is not None:
+                return open_bus
+            if attempts and n >= attempts:  # a person waits: say why in one line
+                raise SessionRefused(why, refused=refused) from exc
+            if not attempts:
+                event = ("the router refused this session, retrying" if refused
+                         else "no zenoh router yet, retrying")
+                log.warning(event, why=why, retry_in_s=delay)
             time.sleep(delay)
             delay = min(delay * 2, 3.0)
+
+
+def _open_anonymously(settings: BusSettings, log: Any) -> zenoh.Session | None:
+    """A router without authentication refuses clients that offer credentials. Such a router is
+    open to anyone anyway, so join it without them (saying so) rather than not at all."""
+    if settings.credentials is None or settings.config_file is not None:
+        return None
+    try:
+        session = zenoh.open(replace(settings, credentials=None, identity=None).zenoh_config())
+    except Exception:
+        return None
+    log.warning("the router asks no credentials: joined an OPEN bus", endpoints=",".join(settings.connect),
+                identity=settings.who)
+    return session
+
+
+class SessionRefused(RuntimeError):
+    """No session could be opened; the message is one line saying why and what to do.
+    `refused`: a router is there and refused (else nobody answered)."""
+
+    def __init__(self, why: str, *, refused: bool) -> None:
+        super().__init__(why)
+        self.refused = refused
+
+
+def why_not_open(settings: BusSettings) -> tuple[str, bool]:
+    """One line: nobody listens at the endpoints, or a router is there and refused us (True)."""
+    where = ",".join(settings.connect)
+    listening = [e for e in settings.connect if _accepts(e)]
+    if not listening:
+        return f"no zenoh router at {where}; start one (`hri up`) or point HRI_ZENOH_CONNECT at it", False
+    if settings.credentials is None:
+        return (f"the router at {listening[0]} refused an anonymous session; it requires credentials: "
+                "set HRI_CREDENTIALS=<keys dir>/<identity> (see `hri keys init`)"), True
+    return (f"the router at {listening[0]} refused identity {settings.credentials.user!r} "
+            f"({settings.credentials.folder}): wrong password or certificate for this deployment?"), True
+
+
+def _accepts(endpoint: str) -> bool:
+    proto, _, address = endpoint.partition("/")
+    if proto not in ("tcp", "tls") or ":" not in address:
+        return False
+    host, _, port = address.rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port.split("#")[0])), timeout=0.5):
+            return True
+    except (OSError, ValueError):
+        return False
 
 
 def run_service(
@@ -327,11 +468,16 @@ def run_service(
     *,
     robot: str | None = None,
     connect: str | None = None,
+    identity: str | None = None,
 ) -> int:
-    """Run one service process: open the session, serve `body(ctx)`, close cleanly. Returns an exit code."""
+    """Run one service process: open the session, serve `body(ctx)`, close cleanly. Returns an exit code.
+
+    The session's credentials are those of `identity` (default: the service's own name); the tools
+    (`hri record`, `replay`, `view`) run as the observer or the operator.
+    """
     log = get_logger(name)
     try:
-        settings = BusSettings.from_env(robot=robot, connect=connect)
+        settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity or name)
     except ConfigError as exc:
         log.error("configuration error", error=str(exc))
         return 2
@@ -355,6 +501,9 @@ def run_service(
         session = open_session(settings, log)
     except KeyboardInterrupt:
         return 0
+    except ConfigError as exc:
+        log.error("configuration error", error=str(exc))
+        return 2
     ctx: ServiceContext | None = None
     try:
         ctx = ServiceContext(name, session, Keys(settings.robot))
@@ -362,7 +511,7 @@ def run_service(
         if stop_requested.is_set():
             ctx.stop()
         _watch_parent(ctx)
-        ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect),
+        ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect), identity=settings.who,
                      config_file=str(settings.config_file) if settings.config_file else None)
         body(ctx)
         return 0

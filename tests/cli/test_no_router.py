@@ -6,6 +6,7 @@ import os
 import socket
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -35,12 +36,13 @@ def test_invalid_settings_exit_2_in_one_line() -> None:
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "invalid robot id" in out.stderr
 
 
-def test_up_on_a_port_in_use_says_so_in_one_line() -> None:
+def test_up_on_a_port_in_use_says_so_in_one_line(tmp_path: Path) -> None:
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         port = taken.getsockname()[1]
-        out = hri("up", "--port", str(port), "--no-restart")
+        # the deployment's identities are made in the test's folder, not the user's
+        out = hri("up", "--port", str(port), "--no-restart", "--keys-dir", str(tmp_path / "keys"))
     assert out.returncode == 1
     assert "Traceback" not in out.stderr + out.stdout
     errors = [line for line in out.stderr.splitlines() if line.startswith("error:")]

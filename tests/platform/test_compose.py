@@ -15,19 +15,21 @@ ROOT = Path(__file__).resolve().parents[2]
 COMPOSE = yaml.safe_load((ROOT / "docker-compose.yml").read_text())
 
 
-def test_router_is_zenohd_1_10_with_rest() -> None:
+def test_router_is_the_projects_own_with_the_generated_rules_on_tls_only() -> None:
     zenoh = COMPOSE["services"]["zenoh"]
-    assert re.fullmatch(r"eclipse/zenoh:1\.10(\.\d+)?", zenoh["image"])
-    cmd = " ".join(zenoh["command"])
-    assert "--rest-http-port 8000" in cmd and "tcp/0.0.0.0:7447" in cmd
-    # published on loopback unless asked otherwise
-    assert zenoh["ports"] == ["${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_ROUTER_PORT:-7447}:7447",
-                              "${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_REST_PORT:-8000}:8000"]
+    assert zenoh["image"] == "${HRI_IMAGE:-hri-op2:latest}" and zenoh["pull_policy"] == "never"
+    cmd = zenoh["command"]
+    assert cmd[:3] == ["python", "-m", "services.cli.router"]
+    assert cmd[cmd.index("--keys-dir") + 1] == "/run/secrets/hri"
+    assert cmd[cmd.index("--listen") + 1] == "tls/0.0.0.0:7447"  # never plain TCP off loopback
+    assert cmd[cmd.index("--robot") + 1] == "${HRI_ROBOT:-op2}"
+    assert zenoh["volumes"] == ["${HRI_KEYS_DIR:-./keys}/router:/run/secrets/hri/router:ro"]
+    # published on loopback unless asked otherwise, and no REST plugin (it would bypass the rules)
+    assert zenoh["ports"] == ["${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_ROUTER_PORT:-7447}:7447"]
 
 
-def test_every_service_runs_an_importable_module_against_the_router() -> None:
+def test_every_service_runs_an_importable_module_as_itself_against_the_router() -> None:
     assert set(COMPOSE["services"]) == {"zenoh", *SERVICES}
-    router_port = re.search(r":(\d+)$", COMPOSE["services"]["zenoh"]["command"][1]).group(1)
     for name in SERVICES:
         svc = COMPOSE["services"][name]
         cmd = svc["command"]
@@ -35,8 +37,22 @@ def test_every_service_runs_an_importable_module_against_the_router() -> None:
         assert cmd[2] == f"services.{name}"
         assert importlib.util.find_spec(cmd[2]) is not None, cmd[2]
         assert importlib.util.find_spec(f"{cmd[2]}.__main__") is not None
-        assert svc["environment"]["HRI_ZENOH_CONNECT"] == f"tcp/zenoh:{router_port}"
+        assert svc["environment"]["HRI_ZENOH_CONNECT"] == "tls/zenoh:7447"
+        assert svc["environment"]["HRI_CREDENTIALS"] == "/run/secrets/hri"
+        # only its own secrets, read-only
+        assert f"${{HRI_KEYS_DIR:-./keys}}/{name}:/run/secrets/hri:ro" in svc["volumes"]
+        assert [v for v in svc["volumes"] if "/run/secrets" in v] == [
+            f"${{HRI_KEYS_DIR:-./keys}}/{name}:/run/secrets/hri:ro"]
         assert "zenoh" in svc["depends_on"] and svc["image"] == "${HRI_IMAGE:-hri-op2:latest}"
+
+
+def test_the_compose_routers_configuration_builds_from_fresh_secrets(tmp_path: Path) -> None:
+    """What the router container runs, here: identities from `hri keys init`, the generated rules."""
+    from services.cli import keys as deployment_keys
+    from services.runtime import RouterSecurity, router_config
+
+    deployment_keys.init(tmp_path / "keys")
+    router_config(["tls/0.0.0.0:7447"], RouterSecurity(tmp_path / "keys", robot="op2"))
 
 
 def test_one_image_is_built_once_for_the_five_services() -> None:
@@ -104,3 +120,15 @@ def test_the_build_context_is_only_what_the_image_needs() -> None:
     allowed = {line[1:] for line in ignore if line.startswith("!")}
     copied = set(re.findall(r"^COPY (.+) \S+$", (ROOT / "Dockerfile").read_text(), re.M))
     assert {p for c in copied for p in c.split()} <= allowed
+
+
+def test_the_open_classroom_override_is_explicit() -> None:
+    """docker-compose.open.yml: the router without --keys-dir (it warns OPEN BUS), plain TCP, and the
+    services without credentials; nothing else changes."""
+    override = yaml.safe_load((ROOT / "docker-compose.open.yml").read_text())
+    cmd = override["services"]["zenoh"]["command"]
+    assert cmd[:3] == ["python", "-m", "services.cli.router"] and "--keys-dir" not in cmd
+    for name in SERVICES:
+        assert override["services"][name]["environment"] == {"HRI_ZENOH_CONNECT": "tcp/zenoh:7447",
+                                                              "HRI_CREDENTIALS": ""}
+    assert "OPEN BUS" in (ROOT / "docker-compose.open.yml").read_text()

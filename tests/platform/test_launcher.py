@@ -49,7 +49,8 @@ def launched(robot_id: str, tmp_path: Path) -> Iterator[tuple[subprocess.Popen[b
     endpoint = f"tcp/127.0.0.1:{port}"
     env = service_env(endpoint, robot_id, HRI_STATE_DIR=str(tmp_path / "state"),
                       HRI_SPEECH_OUT=str(tmp_path / "speech"), HRI_VISION_SOURCE="synthetic:none",
-                      HRI_VOICE_SOURCE=f"watch:{tmp_path / 'spool'}", HRI_MOTION_SIM="1")
+                      HRI_VOICE_SOURCE=f"watch:{tmp_path / 'spool'}", HRI_MOTION_SIM="1",
+                      HRI_KEYS_DIR=str(tmp_path / "keys"))  # `hri up` makes the identities there
     (tmp_path / "spool").mkdir()
     log = open(tmp_path / "up.log", "wb")  # noqa: SIM115
     proc = subprocess.Popen([sys.executable, "-m", "services.cli", "up", "--port", str(port)], cwd=ROOT,
@@ -71,19 +72,21 @@ def test_up_probe_and_ctrl_c(launched, robot_id: str) -> None:
     pids = child_pids(endpoint, env)
     assert len(pids) == 5 and all(pid_alive(p) for p in pids.values())
 
-    # A third-party client sees the liveliness tokens ...
-    out = subprocess.run([ZENOH_CLI, "--mode", "client", "--connect", endpoint, "liveliness", "get",
+    # A third-party client, as the observer, sees the liveliness tokens ...
+    observer = hri("keys", "client-config", "observer", "--connect", endpoint, env=env).stdout.strip()
+    operator = hri("keys", "client-config", "operator", "--connect", endpoint, env=env).stdout.strip()
+    out = subprocess.run([ZENOH_CLI, "--config", observer, "liveliness", "get",
                           "-k", f"hri/{robot_id}/alive/**"], capture_output=True, text=True, timeout=30)
     assert {json.loads(line)["key"].rsplit("/", 1)[1] for line in out.stdout.splitlines()} == set(SERVICES)
 
     # ... and the JSON traffic.
-    sub = subprocess.Popen([ZENOH_CLI, "--mode", "client", "--connect", endpoint, "subscribe", "-k",
+    sub = subprocess.Popen([ZENOH_CLI, "--config", observer, "subscribe", "-k",
                             f"hri/{robot_id}/voice/**", "--decoder", "json"], stdout=subprocess.PIPE, text=True)
     try:
         time.sleep(1.5)
         hri("send", "command", "yes", "--connect", endpoint, env=env)
         # Garbage on a key the reasoner reads is logged, counted and dropped; nothing exits.
-        subprocess.run([ZENOH_CLI, "--mode", "client", "--connect", endpoint, "put", "-k",
+        subprocess.run([ZENOH_CLI, "--config", operator, "put", "-k",
                         f"hri/{robot_id}/voice/command", "-v", "not json"], check=True, timeout=30)
         time.sleep(1.0)
     finally:

@@ -8,11 +8,13 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+import zenoh
 
 from schemas import Health, MotionState, Posture
 from schemas.keys import SERVICES
 from services.cli.scenario import Scenario
 from services.cli.simrobot import SimulatedRobot, simulated_robot
+from services.runtime import Credentials, client_config
 
 pytestmark = pytest.mark.system
 
@@ -32,6 +34,10 @@ class Robot(SimulatedRobot):
 
     def pids(self) -> dict[str, int | None]:
         return {name: self.launcher.pid(name) for name in SERVICES}
+
+    def session_as(self, identity: str) -> zenoh.Session:
+        """A session on the robot's bus as one of its deployment's identities (`out/keys`); close it."""
+        return zenoh.open(client_config([self.launcher.endpoint], Credentials.load(self.out / "keys" / identity)))
 
     def walking_states_since(self, t: float) -> list[MotionState]:
         return [s for s in self.rec.since(t, "motion") if s.posture == Posture.WALKING]

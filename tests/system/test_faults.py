@@ -7,6 +7,7 @@ import signal
 import time
 
 from schemas import Action, Posture
+from schemas.access import owners
 from schemas.keys import SERVICES
 from tests.system.conftest import Robot
 
@@ -85,16 +86,23 @@ def test_garbage_on_every_key_leaves_every_service_running(robot: Robot) -> None
     def all_rejected() -> bool:
         return all((h := robot.health(name)) is not None and h.rejected >= 1 for name in counted)
 
+    # The access rules let only a key's owner put it: send each key's garbage as its owner.
+    owner = {key: owners(key[len(k.prefix) + 1:])[0] for key in keys}
+    sessions = {name: robot.session_as(name) for name in set(owner.values())}
     # Zenoh makes no promise for a put made before a subscription has propagated, so keep sending
     # until every service has counted a rejection (or give up and show each one's health).
     deadline = time.monotonic() + 15
-    while True:
-        for key in keys:
-            for payload in GARBAGE:
-                robot.ctx.session.put(key, payload)
-        time.sleep(1.0)
-        if all_rejected() or time.monotonic() > deadline:
-            break
+    try:
+        while True:
+            for key in keys:
+                for payload in GARBAGE:
+                    sessions[owner[key]].put(key, payload)
+            time.sleep(1.0)
+            if all_rejected() or time.monotonic() > deadline:
+                break
+    finally:
+        for session in sessions.values():
+            session.close()
     assert robot.pids() == before
     for name in counted:
         h = robot.health(name)
