@@ -170,3 +170,17 @@ def test_a_why_during_the_recall_of_a_cause_is_not_confused_by_it(agent: SoarAge
         found = [o for o in agent.pump() if isinstance(o, ExplanationOutput)]
         assert found and all(o.template == "refused-danger" for o in found), (gap, found)
         assert [e.what for e in found[-1].evidence] == ["go", "X"], gap
+
+
+def test_why_while_getting_up_for_a_walk_sends_no_second_stand_up(agent: SoarAgent) -> None:
+    """Found by the property test: answering "why" took the top state's operator slot from the
+    walk while the robot was still getting up, the stand-up substate vanished with it, and the walk's
+    next impasse sent a second stand-up for the same "go"."""
+    agent.step(posture="sitting")
+    assert motions(agent.step(say("go", 0.9, stamp=NOW - 1))) == ["stand_up"]
+    why(agent)  # asserts that answering moves nothing
+    assert motions(agent.step(posture="sitting")) == []  # still the same walk: no second stand-up
+    assert motions(agent.step(posture="standing")) == ["walk_forward"]
+    agent.step(say("stop", stamp=NOW))
+    agent.step(posture="sitting")
+    assert motions(agent.step(say("go", 0.9, stamp=NOW + 1))) == ["stand_up"]  # a new walk stands up again
