@@ -5,6 +5,7 @@ and with `hri why` over the bus."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -60,8 +61,11 @@ def test_unsure_go_is_confirmed_or_times_out_and_why_explains(robot: Robot) -> N
                                            "said": "you said yes"}}])
     # `hri why` asks the same over the queryable and prints the structured answer.
     env_connect = robot.launcher.endpoint
+    as_observer = {**os.environ, "HRI_KEYS_DIR": str(robot.out / "keys")}  # the deployment's identities
+    as_observer.pop("HRI_CREDENTIALS", None)
     done = subprocess.run([sys.executable, "-m", "services.cli.main", "why", "--json", "--robot", robot.ctx.keys.robot,
-                           "--connect", env_connect], cwd=ROOT, capture_output=True, text=True, timeout=60)
+                           "--connect", env_connect], cwd=ROOT, capture_output=True, text=True, timeout=60,
+                          env=as_observer)
     assert done.returncode == 0, done.stderr
     answer = json.loads(done.stdout)
     assert answer["text"].startswith("I asked whether to walk, and you said yes")
