@@ -34,6 +34,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
+from services.vision.verifier import MODEL_PATH, Verifier, patch_features
 
 Box = tuple[int, int, int, int]
 
@@ -63,6 +64,18 @@ class DetectorConfig:
     frame_max_ink: float = 0.4  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
+    verify: bool = True  # last check: the learned patch classifier (verifier.py) must agree
+
+
+@dataclass
+class Candidate:
+    """A component that passed the shape tests (for training the verifier): its claimed shape, box in
+    input pixels, patch features, and whether the whole detector (before the verifier) kept it."""
+
+    shape: Shape
+    box: Box
+    features: np.ndarray
+    kept: bool = False
 
 
 @dataclass(frozen=True)
@@ -88,11 +101,30 @@ class _Blob:
 class MarkDetector:
     """Stateless per frame; safe to reuse for every frame of a stream (not across threads)."""
 
-    def __init__(self, config: DetectorConfig | None = None) -> None:
+    def __init__(self, config: DetectorConfig | None = None, verifier: Verifier | None = None) -> None:
         self.config = config or DetectorConfig()
+        if verifier is None and self.config.verify:
+            verifier = Verifier.load(MODEL_PATH)
+        self.verifier = verifier if self.config.verify else None
+        self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
+        self._f = 1
         for f, block in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
+
+    def candidates(self, image: np.ndarray) -> list[Candidate]:
+        """Every component that passes the shape tests, with its features and the detector's verdict
+        (before the verifier): the verifier's training data. `image` must be at most `max_side`."""
+        gray = to_gray(image)
+        if max(gray.shape) > self.config.max_side:
+            raise ValueError(f"candidates() wants frames of at most {self.config.max_side} px")
+        self._seen = []
+        verifier, self.verifier = self.verifier, None
+        try:
+            self._detect_gray(gray)
+            return self._seen
+        finally:
+            self._seen, self.verifier = None, verifier
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         gray = to_gray(image)
@@ -121,6 +153,7 @@ class MarkDetector:
                 if min(w, h) < 2 * self.config.min_size:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
+            self._f = f
             for det in self._detect_scale(g, block, text_check=f <= 2):
                 x, y, w, h = det.box
                 found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
@@ -163,6 +196,10 @@ class MarkDetector:
                 continue
             if text_check and _in_text_line(stats, int(i), g, labels):
                 continue
+            if self._seen:
+                self._seen[-1].kept = True
+            if self.verifier is not None and not self.verifier.accepts(g, det.box, det.shape):
+                continue
             out.append(det)
         return out
 
@@ -181,6 +218,11 @@ class MarkDetector:
         if judged is None:
             return None
         shape, conf = judged
+        if self._seen is not None:
+            f = self._f
+            self._seen.append(
+                Candidate(shape, (x * f, y * f, w * f, h * f), patch_features(g, (x, y, w, h), shape))
+            )
         # then the card, with room for whatever lies on it within `surround` of the mark
         pad = math.ceil(3 * cfg.surround * size) + 2
         x0, y0 = max(0, x - pad), max(0, y - pad)
