@@ -76,7 +76,9 @@ def main(
     seed: Annotated[int, typer.Option(help="base seed (generator chunks and the MLP)")] = 20261123,
     jobs: Annotated[int, typer.Option(help="harvesting processes")] = 2,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
-    threshold: Annotated[float, typer.Option(help="probability the claimed shape needs")] = 0.5,
+    threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
+    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.5,
+    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.5,
 ) -> None:
     from sklearn.neural_network import MLPClassifier
 
@@ -99,7 +101,7 @@ def main(
         random_state=seed,
     )
     mlp.fit((x - mean) / scale, y)
-    missing = sorted(set(range(len(CLASSES))) - set(int(c) for c in mlp.classes_))
+    missing = sorted(set(range(len(CLASSES))) - {int(c) for c in mlp.classes_})
     if missing:
         raise SystemExit(f"no training candidates of class {missing}: harvest more frames")
     verifier = Verifier(
@@ -107,21 +109,21 @@ def main(
         scale=scale,
         weights=tuple(np.asarray(w) for w in mlp.coefs_),
         biases=tuple(np.asarray(b) for b in mlp.intercepts_),
-        threshold=threshold,
+        thresholds=(threshold_x, threshold_o, threshold_triangle),
     )
     verifier.save(out)
     verifier = Verifier.load(out)  # report with the stored (float16) weights
-    report = {"train_candidates": int(len(y)), "train_by_class": np.bincount(y, minlength=4).tolist()}
+    report = {"train_candidates": len(y), "train_by_class": np.bincount(y, minlength=4).tolist()}
     xv = np.concatenate([p[0] for p in val])
     yv = np.concatenate([p[1] for p in val])
     kv = np.concatenate([p[2] for p in val])
     prob = verifier.probabilities(xv)
     claimed = np.argmax(xv[:, -3:], axis=1)  # the one-hot of the claimed shape
-    accept = prob[np.arange(len(yv)), claimed] >= verifier.threshold
+    accept = prob[np.arange(len(yv)), claimed] >= np.array(verifier.thresholds)[claimed]
     true_pos = kv & (yv == claimed)
     false_pos = kv & (yv != claimed)
     report.update(
-        held_back_candidates=int(len(yv)),
+        held_back_candidates=len(yv),
         argmax_accuracy=round(float(np.mean(np.argmax(prob, axis=1) == yv)), 4),
         detector_true_kept=int(true_pos.sum()),
         detector_true_kept_after_verifier=int((true_pos & accept).sum()),

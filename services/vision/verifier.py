@@ -12,7 +12,7 @@ Model (`Verifier`): a one-hidden-layer perceptron (ReLU) over the standardised f
 {X, O, TRIANGLE, none}, evaluated with numpy from `verifier.npz` (weights stored as float16). It was
 trained by `python -m services.vision.training` (scikit-learn, fixed seed) on candidates harvested
 from the tuning generator only (`synthetic.py`); see the vision README. A candidate is kept when the
-model gives its claimed shape at least `threshold` probability.
+model gives its claimed shape at least that shape's threshold (`thresholds`) of probability.
 """
 
 from __future__ import annotations
@@ -86,10 +86,12 @@ class Verifier:
     scale: np.ndarray
     weights: tuple[np.ndarray, ...]
     biases: tuple[np.ndarray, ...]
-    threshold: float = 0.5
+    thresholds: tuple[float, float, float] = (0.25, 0.5, 0.5)
+    """the probability X, O and TRIANGLE each need: a false X only stops the robot, a missed X is the
+    worst miss, so X needs less; a false O lifts a danger, so O needs a majority"""
 
     @classmethod
-    def load(cls, path: Path = MODEL_PATH, threshold: float | None = None) -> Verifier:
+    def load(cls, path: Path = MODEL_PATH, thresholds: tuple[float, float, float] | None = None) -> Verifier:
         with np.load(path) as z:
             n = int(z["layers"])
             v = cls(
@@ -97,7 +99,9 @@ class Verifier:
                 scale=z["scale"].astype(np.float32),
                 weights=tuple(z[f"w{k}"].astype(np.float32) for k in range(n)),
                 biases=tuple(z[f"b{k}"].astype(np.float32) for k in range(n)),
-                threshold=float(z["threshold"]) if threshold is None else threshold,
+                thresholds=tuple(float(t) for t in np.broadcast_to(z["threshold"], (3,)))  # type: ignore[arg-type]
+                if thresholds is None
+                else thresholds,
             )
         if v.mean.shape != (N_FEATURES,) or v.weights[0].shape[0] != N_FEATURES:
             raise ValueError(f"{path}: made for {v.mean.shape[0]} features, this code makes {N_FEATURES}")
@@ -108,7 +112,7 @@ class Verifier:
             "layers": np.array(len(self.weights)),
             "mean": self.mean.astype(np.float32),
             "scale": self.scale.astype(np.float32),
-            "threshold": np.array(self.threshold),
+            "threshold": np.array(self.thresholds, np.float32),
         }
         for k, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             arrays[f"w{k}"] = w.astype(np.float16)
@@ -128,4 +132,4 @@ class Verifier:
 
     def accepts(self, g: np.ndarray, box: tuple[int, int, int, int], shape: Shape) -> bool:
         p = self.probabilities(patch_features(g, box, shape))[0]
-        return bool(p[CLASSES.index(shape)] >= self.threshold)
+        return bool(p[CLASSES.index(shape)] >= self.thresholds[SHAPES.index(shape)])

@@ -74,7 +74,7 @@ def test_the_detector_uses_the_verifier_and_can_do_without() -> None:
     assert [d.shape for d in MarkDetector().detect(img)] == [Shape.X]
     assert MarkDetector().verifier is not None
     assert MarkDetector(DetectorConfig(verify=False)).verifier is None
-    strict = Verifier.load(threshold=1.01)  # nothing is that sure: every candidate is refused
+    strict = Verifier.load(thresholds=(1.01, 1.01, 1.01))  # nothing is that sure: every candidate is refused
     assert MarkDetector(verifier=strict).detect(img) == []
 
 
@@ -91,9 +91,9 @@ def test_hog_is_normalised_and_orientation_sensitive() -> None:
 def test_save_and_load_round_trip(tmp_path: Path) -> None:
     v = Verifier.load()
     out = tmp_path / "v.npz"
-    Verifier(v.mean, v.scale, v.weights, v.biases, threshold=0.7).save(out)
+    Verifier(v.mean, v.scale, v.weights, v.biases, thresholds=(0.2, 0.7, 0.6)).save(out)
     w = Verifier.load(out)
-    assert w.threshold == pytest.approx(0.7)
+    assert w.thresholds == pytest.approx((0.2, 0.7, 0.6))
     x = np.random.default_rng(0).standard_normal((5, N_FEATURES)).astype(np.float32)
     assert np.allclose(v.probabilities(x), w.probabilities(x), atol=1e-5)
 
