@@ -1,4 +1,4 @@
-"""Find X, O and triangle marks with contour shape features (no keypoints, no learned model).
+"""Find X, O and triangle marks with contour shape features, checked last by a small learned verifier.
 
 A mark is dark ink on a light card: a ring (O), a triangle outline (TRIANGLE) or two crossed bars (X).
 Per frame, on a two-level pyramid (full resolution for small marks, a quarter for large ones):
@@ -19,7 +19,8 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
    ring's or triangle's hole empty and as bright as the margin (a large filled disc, hollowed by
    the local threshold, is not a ring); not a letter inside a word (two same-height neighbours on
    its baseline or cap line);
-5. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
+5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape;
+6. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
 A filled disc, a square (outline or filled) or a filled triangle is not a mark. By construction an
 isolated letter O / digit 0 or X with a clear margin is indistinguishable from a mark.
