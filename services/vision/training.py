@@ -1,0 +1,138 @@
+"""Train the mark verifier (`verifier.npz`) on candidates from the TUNING generator only.
+
+    pip install -e '.[train]'
+    python -m services.vision.training [--frames 6000] [--seed 20261123] [--jobs 2]
+
+Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
+mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
+words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
+shape tests is a candidate (`MarkDetector.candidates`, verifier off); its label is the true mark's
+class when its box overlaps the true box with IoU >= 0.4, else 'none'. The model is scikit-learn's
+`MLPClassifier` (one hidden layer of 48 ReLU units, fixed `random_state`), exported to numpy arrays
+(float16 weights); inference needs only numpy and OpenCV. The last tenth of the frames is kept out
+of training to report the verifier's effect on the candidates the detector keeps.
+"""
+
+from __future__ import annotations
+
+import json
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from schemas.messages import Shape
+from services.vision.detector import DetectorConfig, MarkDetector
+from services.vision.synthetic import SceneGenerator, Variation
+from services.vision.verifier import CLASSES, MODEL_PATH, Verifier
+
+ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
+CLUTTERED = Variation(distractors=(8, 14))
+IOU = 0.4
+HIDDEN = 48
+
+
+def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
+    ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    inter = ix * iy
+    union = a[2] * a[3] + b[2] * b[3] - inter
+    return inter / union if union > 0 else 0.0
+
+
+def harvest(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(features, class index into CLASSES, kept by the detector) for every candidate in `frames`
+    tuning frames drawn with `seed` (even seeds: default variation; odd: cluttered)."""
+    import cv2
+
+    cv2.setNumThreads(1)
+    gen = SceneGenerator(seed=seed, variation=CLUTTERED if seed % 2 else Variation())
+    det = MarkDetector(DetectorConfig(verify=False))
+    feats: list[np.ndarray] = []
+    labels: list[int] = []
+    kept: list[bool] = []
+    for i in range(frames):
+        img, truth = gen.frame(ORDER[i % len(ORDER)])
+        for c in det.candidates(img):
+            label: Shape | None = None
+            for t in truth:
+                if _iou(c.box, t.box) >= IOU:
+                    label = t.shape
+            feats.append(c.features)
+            labels.append(CLASSES.index(label))
+            kept.append(c.kept)
+    n = len(feats)
+    return (
+        np.array(feats, np.float32).reshape(n, -1),
+        np.array(labels, np.int64),
+        np.array(kept, bool),
+    )
+
+
+def main(
+    frames: Annotated[int, typer.Option(help="tuning frames to harvest")] = 6000,
+    seed: Annotated[int, typer.Option(help="base seed (generator chunks and the MLP)")] = 20261123,
+    jobs: Annotated[int, typer.Option(help="harvesting processes")] = 2,
+    out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
+    threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
+    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.5,
+    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.5,
+) -> None:
+    from sklearn.neural_network import MLPClassifier
+
+    chunk = 250
+    seeds = [seed + k for k in range((frames + chunk - 1) // chunk)]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        parts = list(pool.map(harvest, seeds, [chunk] * len(seeds)))
+    n_val = max(1, len(parts) // 10)
+    train, val = parts[:-n_val], parts[-n_val:]
+    x = np.concatenate([p[0] for p in train])
+    y = np.concatenate([p[1] for p in train])
+    mean = x.mean(axis=0)
+    scale = x.std(axis=0) + 1e-3
+    mlp = MLPClassifier(
+        hidden_layer_sizes=(HIDDEN,),
+        alpha=1e-3,
+        batch_size=256,
+        max_iter=60,
+        early_stopping=True,
+        random_state=seed,
+    )
+    mlp.fit((x - mean) / scale, y)
+    missing = sorted(set(range(len(CLASSES))) - {int(c) for c in mlp.classes_})
+    if missing:
+        raise SystemExit(f"no training candidates of class {missing}: harvest more frames")
+    verifier = Verifier(
+        mean=mean,
+        scale=scale,
+        weights=tuple(np.asarray(w) for w in mlp.coefs_),
+        biases=tuple(np.asarray(b) for b in mlp.intercepts_),
+        thresholds=(threshold_x, threshold_o, threshold_triangle),
+    )
+    verifier.save(out)
+    verifier = Verifier.load(out)  # report with the stored (float16) weights
+    report = {"train_candidates": len(y), "train_by_class": np.bincount(y, minlength=4).tolist()}
+    xv = np.concatenate([p[0] for p in val])
+    yv = np.concatenate([p[1] for p in val])
+    kv = np.concatenate([p[2] for p in val])
+    prob = verifier.probabilities(xv)
+    claimed = np.argmax(xv[:, -3:], axis=1)  # the one-hot of the claimed shape
+    accept = prob[np.arange(len(yv)), claimed] >= np.array(verifier.thresholds)[claimed]
+    true_pos = kv & (yv == claimed)
+    false_pos = kv & (yv != claimed)
+    report.update(
+        held_back_candidates=len(yv),
+        argmax_accuracy=round(float(np.mean(np.argmax(prob, axis=1) == yv)), 4),
+        detector_true_kept=int(true_pos.sum()),
+        detector_true_kept_after_verifier=int((true_pos & accept).sum()),
+        detector_false_kept=int(false_pos.sum()),
+        detector_false_kept_after_verifier=int((false_pos & accept).sum()),
+        model_bytes=out.stat().st_size,
+    )
+    typer.echo(json.dumps(report, indent=2))
+
+
+if __name__ == "__main__":
+    typer.run(main)
