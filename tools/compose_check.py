@@ -32,12 +32,12 @@ import zenoh
 
 from schemas.keys import SERVICES, Keys
 from schemas.messages import SpeechRequest, Verdict
+from services.cli import keys as deployment_keys
 from services.cli.recorder import Recorder
 from services.cli.router import free_port
 from services.cli.runner import ScenarioRunner, StepResult
 from services.cli.scenario import load
 from services.cli.utterance import speak_into
-from services.cli import keys as deployment_keys
 from services.runtime import ConfigError, Credentials, ServiceContext, client_config
 from services.speech.player import file_stem
 

@@ -13,7 +13,7 @@ import zenoh
 from schemas.messages import Command, Decision, MarkObservation, VoiceCommand
 from services.cli.mcapfile import read_recording
 from services.cli.record import McapRecorder
-from services.runtime import ServiceContext, encode, encoding_for
+from services.runtime import ServiceContext, encoding_for
 from tests.conftest import ROOT, wait_for
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from schemas import Command, Shape
+from schemas import Shape
 from services.cli import scenario as scenario_module
 from services.cli.demo import MARKER, run_demo
 from services.cli.scenario import ScenarioError, builtin_names, load

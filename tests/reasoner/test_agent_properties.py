@@ -9,7 +9,14 @@ from dataclasses import dataclass
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from services.reasoner.agent_host import POSTURES, CommandInput, ExplanationOutput, MarksInput, Memory, SoarAgent
+from services.reasoner.agent_host import (
+    POSTURES,
+    CommandInput,
+    ExplanationOutput,
+    MarksInput,
+    Memory,
+    SoarAgent,
+)
 from tests.reasoner.conftest import decisions, motions
 
 DANGER = {"X", "TRIANGLE"}

@@ -10,7 +10,7 @@ import subprocess
 import sys
 import time
 
-from schemas import Action, Posture
+from schemas import Action
 from schemas.messages import Command, Decision, Verdict, VoiceCommand
 from tests.conftest import ROOT
 from tests.system.conftest import Robot
