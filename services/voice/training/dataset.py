@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from services.runtime import get_logger
 from services.voice.audio import SAMPLE_RATE, to_pcm
 from services.voice.sources import trim_to_speech
 from services.voice.spotter.features import MAX_SPEECH_S, Embedder, speech_seconds
@@ -209,7 +210,7 @@ def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tu
                 xs.append(f)
                 ys.append(r.label)
             if progress and (i + 1) % 500 == 0:
-                print(f"  {i + 1}/{len(items)} clips", flush=True)
+                get_logger("voice.train").info("features", done=i + 1, clips=len(items))
     x, y = np.stack(xs), np.asarray(ys, dtype=np.int16)
     tmp = path.with_suffix(".tmp.npz")
     np.savez_compressed(tmp, x=x, y=y)
