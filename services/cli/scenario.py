@@ -13,7 +13,8 @@
         expect: {heard: go, verdict: refuse, reason: danger_sign, no_action: true,
                  said: "Sorry, I cannot do it."}
 
-("go" is sent, not said: the voice service does not accept a synthesised "go", see paper.yaml.)
+(`send` is for tests and for what the recogniser should not be asked to hear; the built-in scenarios
+speak every command, "go" and "why" included, through the voice service.)
 
 Every field of `expect` is optional; a step without `expect` only has to happen.
 """
