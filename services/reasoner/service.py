@@ -31,8 +31,8 @@ from schemas.messages import (
 from services.reasoner.agent_host import KNOWLEDGE_FILE, AgentConfig, CommandInput, MarksInput, Memory
 from services.reasoner.driver import AgentDriver
 from services.reasoner.outputs import OutputBridge
-from services.reasoner.state import StateStore, default_state_dir
-from services.runtime import ServiceContext
+from services.reasoner.state import StateStore
+from services.runtime import ServiceContext, default_state_dir
 
 NAME = "reasoner"
 EPISODES_FILE = "episodes.db"

@@ -10,7 +10,6 @@ import json
 import os
 import tempfile
 import time
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -28,14 +27,6 @@ class PersistedState(BaseModel):
     situation: Situation
     resume_go: bool = False
     saved_at: float = 0.0
-
-
-def default_state_dir(robot: str, env: Mapping[str, str] = os.environ) -> Path:
-    if env.get("HRI_STATE_DIR"):
-        return Path(env["HRI_STATE_DIR"]).expanduser()
-    xdg = env.get("XDG_STATE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".local/state"
-    return base / "hri" / robot
 
 
 class StateStore:

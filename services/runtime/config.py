@@ -13,6 +13,7 @@ import ipaddress
 import json
 import os
 import stat
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -31,11 +32,24 @@ class ConfigError(ValueError):
     """A configuration value is unusable; the message says which and how to fix it."""
 
 
-def default_keys_dir(env: dict[str, str] | os._Environ[str] = os.environ) -> Path:
+def state_home(env: Mapping[str, str] = os.environ) -> Path:
+    """`$XDG_STATE_HOME/hri`, XDG_STATE_HOME defaulting to `~/.local/state`."""
+    xdg = env.get("XDG_STATE_HOME")
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".local/state") / "hri"
+
+
+def default_state_dir(robot: str, env: Mapping[str, str] = os.environ) -> Path:
+    """Where a service keeps what must survive a restart: `HRI_STATE_DIR`, else `<state home>/<robot>`
+    (the reasoner's latched danger and episodes, the voice service's enrolled head)."""
+    if env.get("HRI_STATE_DIR"):
+        return Path(env["HRI_STATE_DIR"]).expanduser()
+    return state_home(env) / robot
+
+
+def default_keys_dir(env: Mapping[str, str] = os.environ) -> Path:
     if env.get(KEYS_ENV):
         return Path(env[KEYS_ENV]).expanduser()
-    xdg = env.get("XDG_STATE_HOME")
-    return (Path(xdg).expanduser() if xdg else Path.home() / ".local/state") / "hri" / "keys"
+    return state_home(env) / "keys"
 
 
 def check_private(path: Path) -> None:

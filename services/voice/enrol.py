@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from services.runtime import default_state_dir
 from services.voice.audio import AudioError, read_wav, to_pcm
 from services.voice.sources import trim_to_speech
 from services.voice.spotter.features import Embedder
@@ -44,16 +45,8 @@ class EnrolError(ValueError):
     """Recordings that cannot be used for enrolment."""
 
 
-def state_dir(robot: str, env: Mapping[str, str] = os.environ) -> Path:
-    """The same state folder convention as the reasoner's."""
-    if env.get("HRI_STATE_DIR"):
-        return Path(env["HRI_STATE_DIR"]).expanduser()
-    xdg = env.get("XDG_STATE_HOME")
-    return (Path(xdg).expanduser() if xdg else Path.home() / ".local/state") / "hri" / robot
-
-
 def enrolled_head_path(robot: str, env: Mapping[str, str] = os.environ) -> Path:
-    return state_dir(robot, env) / HEAD_FILE
+    return default_state_dir(robot, env) / HEAD_FILE
 
 
 def label_of(path: Path, classes: Sequence[str]) -> str | None:

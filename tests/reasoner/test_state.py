@@ -6,8 +6,8 @@ import json
 from pathlib import Path
 
 from services.reasoner.agent_host import Memory
-from services.reasoner.state import StateStore, default_state_dir
-from services.runtime import get_logger
+from services.reasoner.state import StateStore
+from services.runtime import default_state_dir, get_logger
 
 LOG = get_logger("reasoner-test")
 
