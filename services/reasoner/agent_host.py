@@ -117,10 +117,17 @@ Event = CommandInput | MarksInput | TimerInput
 
 @dataclass(frozen=True)
 class Memory:
-    """What survives a restart: the latched situation and a refused "go" awaiting an O."""
+    """What survives a restart: the latched situation and a refused "go" awaiting an O
+    (`resume_asks`: it was heard unsurely, so the O makes the robot ask before it walks)."""
 
     situation: str = "safe"
     resume_go: bool = False
+    resume_asks: bool = False
+
+    @property
+    def resume_value(self) -> str:
+        """The agent's ^resume-go: yes (walk on an O), ask (ask on an O) or no."""
+        return ("ask" if self.resume_asks else "yes") if self.resume_go else "no"
 
     def __post_init__(self) -> None:
         if self.situation not in ("safe", "danger"):
@@ -360,7 +367,7 @@ class SoarAgent:
         il = self._agent.GetInputLink()
         self._memory_wme = self._agent.CreateIdWME(il, "memory")
         self._agent.CreateStringWME(self._memory_wme, "situation", memory.situation)
-        self._agent.CreateStringWME(self._memory_wme, "resume-go", "yes" if memory.resume_go else "no")
+        self._agent.CreateStringWME(self._memory_wme, "resume-go", memory.resume_value)
         self._motion_wme = self._agent.CreateIdWME(il, "motion")
         self._posture_wme = self._agent.CreateStringWME(self._motion_wme, "posture", self._posture)
         self._agent.Commit()
@@ -569,7 +576,9 @@ class SoarAgent:
         if name == "timer":
             return TimerOutput(key=int(need("key")), after_s=float(need("after")))
         if name in ("remember", "ready"):
-            memory = Memory(situation=need("situation"), resume_go=get("resume-go") == "yes")
+            resume = get("resume-go")
+            memory = Memory(situation=need("situation"), resume_go=resume in ("yes", "ask"),
+                            resume_asks=resume == "ask")
             return RememberOutput(memory) if name == "remember" else ReadyOutput(memory)
         raise ValueError(f"unknown output command ^{name}")
 

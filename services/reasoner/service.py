@@ -46,12 +46,12 @@ def _log_restored(ctx: ServiceContext, store: StateStore, restored: Memory, conf
     one: that case is a warning, so it shows at any log level."""
     saved = (time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(store.saved_at))
              if store.saved_at is not None else None)
-    resume = "yes" if restored.resume_go else "no"
+    resume = restored.resume_value
     what = (f"situation {restored.situation}, resume_go {resume}, saved {saved}"
             if saved is not None else f"nothing saved: starting {restored.situation}")
     line = f"state restored from {store.path}: {what}; {episodes} episodes in {config.episodes}"
     log = ctx.log.warning if restored.situation == "danger" else ctx.log.info
-    log(line, state_file=str(store.path), situation=restored.situation, resume_go=restored.resume_go,
+    log(line, state_file=str(store.path), situation=restored.situation, resume_go=resume,
         saved_at=store.saved_at, episodes=episodes, debugger_port=config.debugger_port)
 
 # Flood limits. Marks and commands wait in bounded queues (the runtime drops the oldest beyond

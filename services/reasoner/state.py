@@ -26,6 +26,7 @@ class PersistedState(BaseModel):
 
     situation: Situation
     resume_go: bool = False
+    resume_asks: bool = False
     saved_at: float = 0.0
 
 
@@ -57,13 +58,14 @@ class StateStore:
             return Memory(situation=Situation.DANGER.value)
         # logged once by the service, with the episodic memory, when the agent is ready
         self.saved_at = state.saved_at
-        return Memory(situation=state.situation.value, resume_go=state.resume_go)
+        return Memory(situation=state.situation.value, resume_go=state.resume_go,
+                      resume_asks=state.resume_go and state.resume_asks)
 
     def save(self, memory: Memory) -> None:
         """Write to a temporary file in the same directory, fsync, then os.replace (atomic)."""
         self.directory.mkdir(parents=True, exist_ok=True)
         state = PersistedState(situation=Situation(memory.situation), resume_go=memory.resume_go,
-                               saved_at=time.time())
+                               resume_asks=memory.resume_asks, saved_at=time.time())
         fd, tmp = tempfile.mkstemp(prefix=".reasoner-", suffix=".tmp", dir=self.directory)
         try:
             with os.fdopen(fd, "w", encoding="utf-8") as f:

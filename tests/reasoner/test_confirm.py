@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from services.reasoner.agent_host import SoarAgent
+from services.reasoner.agent_host import Memory, RememberOutput, SoarAgent
 from tests.reasoner.conftest import decisions, motions, only_decision, say, seen, spoken
 
 ASK = "Shall I walk forward?"
@@ -149,11 +149,63 @@ def test_danger_and_yes_together_refuse(agent: SoarAgent, clock: Clock) -> None:
     ]
 
 
-def test_unsure_go_with_danger_latched_refuses_without_asking(agent: SoarAgent, clock: Clock) -> None:
+def refuse_unsure_go_in_danger(agent: SoarAgent) -> None:
     agent.step(posture="standing")
     agent.step(seen("X"))
-    outs = agent.step(say("go", confidence=0.6))
+    outs = agent.step(say("go", confidence=0.6, stamp=1.0))
     d = only_decision(outs)
     assert (d.verdict, d.reason) == ("refuse", "danger_sign")
     assert spoken(outs) == [REFUSAL]
-    assert "walk_forward" not in motions(agent.step(seen("O")))  # never resumed: unconfirmed
+    assert RememberOutput(Memory("danger", resume_go=True, resume_asks=True)) in outs
+
+
+def test_unsure_go_refused_in_danger_is_asked_about_when_an_o_clears_it(agent: SoarAgent,
+                                                                         clock: Clock) -> None:
+    refuse_unsure_go_in_danger(agent)
+    outs = agent.step(seen("O", stamp=3.0))
+    assert motions(outs) == []  # never walked on an unsure word ...
+    d = only_decision(outs)
+    assert (d.command, d.verdict, d.reason, d.situation, d.say, d.cause_stamp) == (
+        "go", "ask", "confirm", "safe", ASK, 3.0)
+    assert spoken(outs) == [ASK]
+    assert RememberOutput(Memory("safe")) in outs
+    outs = agent.step(say("yes", confidence=0.7, stamp=4.0))  # ... only on a confident yes
+    assert motions(outs) == ["walk_forward"]
+    assert only_decision(outs).cause_stamp == 4.0
+
+
+@pytest.mark.parametrize("answer", ["no", "stop", None])
+def test_the_question_an_o_asks_is_cancelled_like_any_other(agent: SoarAgent, clock: Clock,
+                                                            answer: str | None) -> None:
+    refuse_unsure_go_in_danger(agent)
+    agent.step(seen("O"))
+    if answer is None:
+        clock.now += 6  # silence: the dialogue's timeout
+        outs = agent.step()
+        assert (only_decision(outs).verdict, only_decision(outs).reason) == ("ignore", "confirm")
+    else:
+        outs = agent.step(say(answer))
+    assert "walk_forward" not in motions(outs)
+    assert "walk_forward" not in motions(agent.step(say("yes")))  # the question is gone
+
+
+def test_a_danger_before_the_answer_refuses_the_question_an_o_asked(agent: SoarAgent, clock: Clock) -> None:
+    refuse_unsure_go_in_danger(agent)
+    agent.step(seen("O"))
+    agent.step(seen())
+    outs = agent.step(seen("TRIANGLE"))
+    assert [(d.command, d.verdict, d.reason) for d in decisions(outs)] == [
+        (None, "obey", "danger_sign"), ("go", "refuse", "danger_sign")]
+    assert "walk_forward" not in motions(agent.step(say("yes")))
+
+
+def test_restored_unsure_refused_go_asks_on_o(agent: SoarAgent, clock: Clock) -> None:
+    agent.reset(Memory("danger", resume_go=True, resume_asks=True))
+    outs = agent.step(seen("O"), posture="standing")
+    assert motions(outs) == [] and only_decision(outs).verdict == "ask"
+
+
+def test_a_sure_go_after_an_unsure_one_resumes_at_once(agent: SoarAgent, clock: Clock) -> None:
+    refuse_unsure_go_in_danger(agent)
+    agent.step(say("go", confidence=0.9))  # refused too, and remembered as sure: newest wins
+    assert motions(agent.step(seen("O"))) == ["walk_forward"]

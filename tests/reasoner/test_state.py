@@ -17,6 +17,8 @@ def test_round_trip_leaves_no_temporary_files(tmp_path: Path) -> None:
     assert store.load() == Memory()  # nothing saved yet: safe
     store.save(Memory("danger", True))
     assert StateStore(tmp_path / "deep" / "dir", LOG).load() == Memory("danger", True)
+    store.save(Memory("danger", True, resume_asks=True))
+    assert store.load() == Memory("danger", True, resume_asks=True)
     store.save(Memory("safe", False))
     assert store.load() == Memory("safe", False)
     assert [p.name for p in (tmp_path / "deep" / "dir").iterdir()] == ["reasoner.json"]
