@@ -34,6 +34,20 @@ def wait_for(predicate: Callable[[], object], timeout: float = 10.0, interval: f
         time.sleep(interval)
 
 
+@pytest.fixture(scope="session", autouse=True)
+def state_home(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """Every test and every process it starts keeps its state (the speech WAVs, a reasoner's latched
+    danger, keys made by default) in a folder of the session, never in the user's ~/.local/state."""
+    home = tmp_path_factory.mktemp("state-home")
+    saved = {name: os.environ.pop(name, None) for name in ("XDG_STATE_HOME", "HRI_STATE_DIR")}
+    os.environ["XDG_STATE_HOME"] = str(home)
+    try:
+        yield home
+    finally:
+        os.environ.pop("XDG_STATE_HOME", None)
+        os.environ.update({name: value for name, value in saved.items() if value is not None})
+
+
 @pytest.fixture(scope="session")
 def router_endpoint() -> Iterator[str]:
     """A zenoh-python router on a free loopback port, in its own process."""

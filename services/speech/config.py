@@ -6,11 +6,10 @@ the option wins. Values are checked here so a bad one is a clear error at start,
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from services.runtime import ConfigError
+from services.runtime import ConfigError, default_state_dir
 
 DEFAULT_VOICE = "en-us"
 """espeak-ng's American English voice: pocketsphinx's US model recognises it best (round-trip test)."""
@@ -83,9 +82,9 @@ def _check_range(name: str, value: int, bounds: tuple[int, int], unit: str) -> N
 
 
 def default_folder(robot: str) -> Path:
-    """`$XDG_STATE_HOME/hri/<robot>/speech`, XDG_STATE_HOME defaulting to ~/.local/state."""
-    state = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
-    return Path(state) / "hri" / robot / "speech"
+    """`<state dir>/speech`: `$HRI_STATE_DIR/speech`, else `$XDG_STATE_HOME/hri/<robot>/speech`
+    (XDG_STATE_HOME defaulting to ~/.local/state), like every service's state."""
+    return default_state_dir(robot) / "speech"
 
 
 def parse_output(raw: str | None) -> OutputTarget | None:

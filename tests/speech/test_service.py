@@ -136,14 +136,16 @@ def test_settings_come_from_the_environment(
     assert (h.detail["voice"], h.detail["rate"], h.detail["volume"]) == ("en-gb", 300, 150)
 
 
-def test_default_output_is_the_xdg_state_folder(
-    start_service: Start, say: Say, states: StateLog, robot_id: str, tmp_path: Path
+def test_default_output_is_the_state_folder(
+    start_service: Start, say: Say, states: StateLog, tmp_path: Path
 ) -> None:
+    # start_service gives every service HRI_STATE_DIR=tmp_path/state, as the demo does
     start_service("speech", env={"XDG_STATE_HOME": str(tmp_path / "state-home"), "HRI_SPEECH_OUT": ""})
     wait_for(states.ready, timeout=20)
     say("x1", "Yes.")
     wait_for(lambda: states.ended("x1"), timeout=10)
-    assert (tmp_path / "state-home" / "hri" / robot_id / "speech" / "x1.wav").is_file()
+    assert (tmp_path / "state" / "speech" / "x1.wav").is_file()
+    assert not (tmp_path / "state-home").exists()
 
 
 def test_missing_espeak_ng_fails_health_with_install_command_and_recovers(
@@ -167,17 +169,16 @@ def test_missing_espeak_ng_fails_health_with_install_command_and_recovers(
 
 
 def test_missing_sound_device_degrades_and_writes_wavs_instead(
-    start_service: Start, say: Say, states: StateLog, bus: ServiceContext, tmp_path: Path, robot_id: str
+    start_service: Start, say: Say, states: StateLog, bus: ServiceContext, tmp_path: Path
 ) -> None:
-    home = tmp_path / "state-home"
-    start_service("speech", "--out", "device:nosuchpcm", env={"XDG_STATE_HOME": str(home)})
+    start_service("speech", "--out", "device:nosuchpcm")  # HRI_STATE_DIR=tmp_path/state
     wait_for(states.ready, timeout=20)
     h = bus.query_health("speech")
     assert h is not None and h.status == HealthStatus.DEGRADED
     assert h.detail["device"] == "device:nosuchpcm" and "HRI_SPEECH_OUT=<folder>" in h.detail["alternatives"]
     say("d1", "Yes.")
     wait_for(lambda: states.ended("d1"), timeout=10)
-    assert (home / "hri" / robot_id / "speech" / "d1.wav").is_file()
+    assert (tmp_path / "state" / "speech" / "d1.wav").is_file()
 
 
 def test_sigterm_while_speaking_ends_the_utterance_and_exits_cleanly(

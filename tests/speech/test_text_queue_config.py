@@ -103,6 +103,8 @@ def test_default_folder_follows_xdg_state_home(tmp_path: Path, monkeypatch: pyte
     assert SpeechConfig().output_for("r1") == OutputTarget(folder=tmp_path / "hri" / "r1" / "speech")
     monkeypatch.delenv("XDG_STATE_HOME")
     assert default_folder("op2") == Path.home() / ".local" / "state" / "hri" / "op2" / "speech"
+    monkeypatch.setenv("HRI_STATE_DIR", str(tmp_path / "state"))  # the robot's state folder wins
+    assert default_folder("op2") == tmp_path / "state" / "speech"
 
 
 @pytest.mark.parametrize(

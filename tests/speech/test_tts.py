@@ -81,7 +81,8 @@ def test_missing_binary_says_how_to_install(tmp_path: Path, monkeypatch: pytest.
 
 
 def run_say(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "services.speech", "say", *args], cwd=ROOT, env=env,
+    return subprocess.run([sys.executable, "-m", "services.speech", "say", *args], check=False, cwd=ROOT,
+                          env=env,
                           capture_output=True, text=True, timeout=60)
 
 
