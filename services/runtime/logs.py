@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+from collections.abc import Mapping
 
 import structlog
 
@@ -32,6 +33,21 @@ class _SafeStderr:
             pass
 
 
+LEVELS = ("debug", "info", "warning", "error", "critical")
+FORMATS = ("console", "json")
+
+
+def settings_error(env: Mapping[str, str] = os.environ) -> str | None:
+    """One line naming a bad `HRI_LOG_LEVEL` or `HRI_LOG_FORMAT` (logging then falls back to the
+    defaults; a service refuses to start with it), or None."""
+    level, fmt = env.get("HRI_LOG_LEVEL"), env.get("HRI_LOG_FORMAT")
+    if level and level.lower() not in (*LEVELS, "warn"):
+        return f"HRI_LOG_LEVEL={level!r} is not a level: use one of {', '.join(LEVELS)}"
+    if fmt and fmt not in FORMATS:
+        return f"HRI_LOG_FORMAT={fmt!r} is not a format: use one of {', '.join(FORMATS)}"
+    return None
+
+
 def configure_logging(level: str | None = None, fmt: str | None = None) -> None:
     global _configured
     level_name = (level or os.environ.get("HRI_LOG_LEVEL") or "info").upper()
@@ -40,7 +56,7 @@ def configure_logging(level: str | None = None, fmt: str | None = None) -> None:
         numeric = logging.INFO
     fmt = fmt or os.environ.get("HRI_LOG_FORMAT") or "console"
     renderer: structlog.typing.Processor
-    if fmt == "json":
+    if fmt == "json":  # anything else: the console format (a service refuses bad values at start)
         renderer = structlog.processors.JSONRenderer()
     else:
         renderer = structlog.dev.ConsoleRenderer(colors=False, pad_event_to=32)

@@ -27,6 +27,7 @@ from schemas.keys import Keys
 from schemas.messages import Header, Health, HealthStatus
 from services.runtime.codec import DecodeError, decode, encode, encoding_for
 from services.runtime.config import BusSettings, ConfigError
+from services.runtime import logs
 from services.runtime.logs import get_logger
 
 M = TypeVar("M", bound=BaseModel)
@@ -396,7 +397,7 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
         n += 1
         settings = settings.refreshed()
         try:
-            return zenoh.open(settings.zenoh_config())
+            return _open(settings.zenoh_config())
         except ConfigError:
             raise
         except Exception as exc:
@@ -414,13 +415,34 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
             delay = min(delay * 2, 3.0)
 
 
+def _open(config: zenoh.Config) -> zenoh.Session:
+    """`zenoh.open` in a helper thread. It blocks in native code for as long as a router that
+    accepts the connection takes to answer (seconds, for a stuck handshake); meanwhile the main
+    thread keeps running Python, so a SIGTERM or Ctrl-C still stops the process at once."""
+    result: list[zenoh.Session | BaseException] = []
+
+    def target() -> None:
+        try:
+            result.append(zenoh.open(config))
+        except BaseException as exc:  # handed to the caller's thread
+            result.append(exc)
+
+    opener = threading.Thread(target=target, name="zenoh-open", daemon=True)
+    opener.start()
+    while opener.is_alive():
+        opener.join(0.05)
+    if isinstance(result[0], BaseException):
+        raise result[0]
+    return result[0]
+
+
 def _open_anonymously(settings: BusSettings, log: Any) -> zenoh.Session | None:
     """A router without authentication refuses clients that offer credentials. Such a router is
     open to anyone anyway, so join it without them (saying so) rather than not at all."""
     if settings.credentials is None or settings.config_file is not None:
         return None
     try:
-        session = zenoh.open(replace(settings, credentials=None, identity=None).zenoh_config())
+        session = _open(replace(settings, credentials=None, identity=None).zenoh_config())
     except Exception:
         return None
     log.warning("the router asks no credentials: joined an OPEN bus", endpoints=",".join(settings.connect),
@@ -476,6 +498,9 @@ def run_service(
     (`hri record`, `replay`, `view`) run as the observer or the operator.
     """
     log = get_logger(name)
+    if problem := logs.settings_error():
+        log.error("configuration error", error=problem)
+        return 2
     try:
         settings = BusSettings.from_env(robot=robot, connect=connect, identity=identity or name)
     except ConfigError as exc:
@@ -500,6 +525,7 @@ def run_service(
     try:
         session = open_session(settings, log)
     except KeyboardInterrupt:
+        log.info("stopped before the session opened")
         return 0
     except ConfigError as exc:
         log.error("configuration error", error=str(exc))

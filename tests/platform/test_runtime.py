@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -164,6 +165,33 @@ def test_service_without_a_router_retries_and_still_stops(robot_id: str) -> None
     out, _ = proc.communicate(timeout=10)
     assert proc.returncode == 0
     assert b"no zenoh router yet" in out and endpoint.encode() in out
+
+
+def test_a_service_stuck_opening_its_session_still_stops_on_sigterm(robot_id: str) -> None:
+    """A router that accepts the connection and never answers holds `zenoh.open` for about ten
+    seconds; SIGTERM must not wait for it (a container's stop would end in SIGKILL)."""
+    with socket.create_server(("127.0.0.1", 0)) as silent:
+        endpoint = f"tcp/127.0.0.1:{silent.getsockname()[1]}"
+        proc = subprocess.Popen([sys.executable, "-m", "services.speech"], cwd=ROOT,
+                                env=service_env(endpoint, robot_id), stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT)
+        time.sleep(2.5)
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=15)
+        took = time.monotonic() - t0
+    assert proc.returncode == 0
+    assert b"stopped before the session opened" in out
+    assert took < 6, f"took {took:.1f} s to stop"  # about 2 s; 10 s when SIGTERM waited for zenoh.open
+
+
+@pytest.mark.parametrize(("name", "value"), [("HRI_LOG_LEVEL", "loud"), ("HRI_LOG_FORMAT", "xml")])
+def test_a_bad_log_setting_is_refused_at_start(robot_id: str, name: str, value: str) -> None:
+    env = service_env(f"tcp/127.0.0.1:{free_port()}", robot_id, **{name: value})
+    out = subprocess.run([sys.executable, "-m", "services.speech"], check=False, cwd=ROOT, env=env,
+                         capture_output=True, text=True, timeout=30)
+    assert out.returncode == 2
+    assert f"{name}={value!r}" in out.stderr and "use one of" in out.stderr
 
 
 def test_bad_configuration_is_a_clear_error(router_endpoint: str, robot_id: str) -> None:
