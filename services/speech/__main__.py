@@ -25,7 +25,7 @@ from services.speech.config import (
 from services.speech.player import AplayOutput, PlaybackError
 from services.speech.service import NAME, serve
 from services.speech.text import TextRejected, clean_text
-from services.speech.tts import EngineMissing, EspeakNg, SynthesisError
+from services.speech.tts import EngineMissing, EspeakNg, SynthesisError, unknown_voice
 
 app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
@@ -79,6 +79,8 @@ def main(
     try:
         config = SpeechConfig(voice=voice, rate=rate, volume=volume, out=parse_output(out),
                               queue_size=queue_size, max_age_s=max_age, max_chars=max_chars)
+        if problem := unknown_voice(config.voice):
+            raise ConfigError(f"voice {config.voice!r}: {problem}")
     except ConfigError as exc:
         get_logger(NAME).error("configuration error", error=str(exc))
         raise typer.Exit(2) from None
@@ -107,6 +109,8 @@ def say(
         line = clean_text(sys.stdin.read() if text == "-" else text, max_chars)
     except TextRejected as exc:
         _fail(f"nothing said: {exc}", 2)
+    if problem := unknown_voice(voice):
+        _fail(f"nothing said: {problem}", 2)
     tts = EspeakNg(voice, rate, volume)
     device = out == "device" or out.startswith("device:")
     player = AplayOutput(out.partition(":")[2]) if device else None

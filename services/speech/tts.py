@@ -43,6 +43,34 @@ def missing_message(binary: str = ENGINE) -> str:
     return f"text-to-speech engine `{binary}` not found on PATH; {INSTALL_HINT}"
 
 
+def _listed(program: str, which: str) -> set[str]:
+    """The names `-v` accepts from `espeak-ng --voices[=variant]`: language codes, voice names and
+    voice files (with and without their folder), lower-cased."""
+    out = subprocess.run([program, f"--voices{which}"], capture_output=True, text=True, timeout=20,
+                         check=False).stdout
+    names: set[str] = set()
+    for line in out.splitlines()[1:]:
+        cols = line.split()
+        if len(cols) >= 5:
+            names |= {cols[1], cols[3], cols[4], cols[4].rpartition("/")[2]}
+    return {n.lower() for n in names}
+
+
+def unknown_voice(voice: str, binary: str = ENGINE) -> str | None:
+    """Why espeak-ng has no voice `voice` (`<voice>` or `<voice>+<variant>`), or None if it has
+    one or is not installed (that is reported on its own). espeak-ng itself falls back to its
+    default voice without a word when a name is wrong."""
+    program = shutil.which(binary)
+    if program is None:
+        return None
+    base, _, variant = voice.partition("+")
+    if base.lower() not in _listed(program, ""):
+        return f"{binary} has no voice {base!r} (list them with `{binary} --voices`)"
+    if variant and variant.lower() not in _listed(program, "=variant"):
+        return f"{binary} has no variant {variant!r} (list them with `{binary} --voices=variant`)"
+    return None
+
+
 class EspeakNg:
     """One voice setting of espeak-ng. Thread-safe: each call runs its own process."""
 

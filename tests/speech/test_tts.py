@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import wave
@@ -10,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from services.speech.audio import wav_info
-from services.speech.tts import EngineMissing, EspeakNg, SynthesisError
+from services.speech.tts import EngineMissing, EspeakNg, SynthesisError, unknown_voice
 from tests.conftest import ROOT
 
 REFUSAL = "Sorry, I cannot do it."
@@ -64,6 +65,25 @@ def test_unknown_voice_is_a_clear_error(tmp_path: Path) -> None:
     with pytest.raises(SynthesisError, match=r"voice.*espeak-ng --voices"):
         tts(voice="nosuchvoice").synthesize(REFUSAL, tmp_path / "x.wav")
     assert not any(tmp_path.iterdir())
+
+
+def test_voice_names_are_checked_against_espeak_ngs_own_list() -> None:
+    assert unknown_voice("en-us") is None and unknown_voice("en-US+f1") is None
+    assert unknown_voice("gmw/en-GB-x-rp+klatt2") is None
+    # espeak-ng falls back to its default voice without a word for an unknown variant
+    assert "no variant 'nosuch'" in (unknown_voice("en-us+nosuch") or "")
+    assert "no voice 'nosuchvoice'" in (unknown_voice("nosuchvoice") or "")
+    assert unknown_voice("en-us", binary="no-such-espeak") is None  # reported as a missing engine
+
+
+@pytest.mark.parametrize("command", [["say", "hello", "--out", "x.wav"], []])
+def test_an_unknown_variant_is_refused_at_start(tmp_path: Path, command: list[str]) -> None:
+    result = subprocess.run([sys.executable, "-m", "services.speech", *command], check=False, cwd=tmp_path,
+                            env={**os.environ, "HRI_SPEECH_VOICE": "en-us+nosuch", "PYTHONPATH": str(ROOT)},
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert "no variant 'nosuch'" in result.stderr and "--voices=variant" in result.stderr
+    assert not (tmp_path / "x.wav").exists()
 
 
 def test_text_that_looks_like_options_is_spoken_as_text(tmp_path: Path) -> None:
