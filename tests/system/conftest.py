@@ -16,7 +16,15 @@ from services.cli.scenario import Scenario
 from services.cli.simrobot import SimulatedRobot, simulated_robot
 from services.runtime import Credentials, client_config
 
-pytestmark = pytest.mark.system
+HERE = Path(__file__).parent
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Every test in this folder is a system test (`-m system`, `-m 'not system'`): a `pytestmark`
+    in a conftest marks nothing."""
+    for item in items:
+        if item.path.is_relative_to(HERE):
+            item.add_marker(pytest.mark.system)
 
 
 class Robot(SimulatedRobot):
