@@ -92,26 +92,26 @@ def rig() -> Iterator[Rig]:
 def test_stand_nod_sit_reach_their_poses_on_the_servos(rig: Rig) -> None:
     rig.posture_is(Posture.SITTING)
     # torque goes out as a SYNC_WRITE (no status reply): give the simulator its wire time
-    wait_for(lambda: rig.sim.powered and all(rig.sim.torque().values()), 1)
+    wait_for(lambda: rig.sim.powered and all(rig.sim.torque().values()), 3)
     rig.goal(Action.STAND_UP, "up")
-    wait_for(lambda: rig.probe.last.first_write is not None, 2)
+    wait_for(lambda: rig.probe.last.first_write is not None, 5)
     assert rig.probe.last.goal_id == "up"
     rig.posture_is(Posture.STANDING)
-    wait_for(lambda: pose_error(rig.sim.present_positions(), STAND) <= 3, 2)
+    wait_for(lambda: pose_error(rig.sim.present_positions(), STAND) <= 3, 5)
     rig.goal(Action.NOD, "yes")
     tilts = []
-    deadline = time.monotonic() + 3
+    deadline = time.monotonic() + 6  # waits are bounds, not targets: the machine is shared
     while time.monotonic() < deadline:
         tilts.append(rig.sim.present_positions()[HEAD_TILT])
         if rig.probe.last.action is None and rig.probe.last.goal_id == "yes" and len(tilts) > 50:
             break
         time.sleep(0.01)
     assert max(tilts) > NOD_TILT[0] - 40 and min(tilts) < NOD_TILT[1] + 40
-    wait_for(lambda: abs(rig.sim.present_positions()[HEAD_TILT] - 2048) <= 3, 2)
+    wait_for(lambda: abs(rig.sim.present_positions()[HEAD_TILT] - 2048) <= 3, 5)
     rig.goal(Action.SIT_DOWN, "down")
-    rig.posture_is(Posture.MOVING, 1)
+    rig.posture_is(Posture.MOVING, 3)
     rig.posture_is(Posture.SITTING)
-    wait_for(lambda: pose_error(rig.sim.present_positions(), SIT) <= 3, 2)
+    wait_for(lambda: pose_error(rig.sim.present_positions(), SIT) <= 3, 5)
     assert rig.loop.stats.overruns < rig.loop.stats.ticks / 4  # generous: the machine is shared
 
 
