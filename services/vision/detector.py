@@ -83,6 +83,32 @@ class Candidate:
     kept: bool = False
 
 
+STAGES: tuple[str, ...] = (
+    "no component",  # no binarised component overlaps the mark
+    "size/fill",  # the vectorised pre-filter: size, aspect, fill ratio, frame edge
+    "frame ink",  # too much ink in the thin frame around its box
+    "shape",  # the contour shape tests found no mark, or another shape
+    "card",  # the card tests (band, contrast, card texture, other ink, a letter beside it)
+    "O margin",  # the O's wide clear margin
+    "hole",  # a ring's or triangle's hole is not paper
+    "confidence",  # below `min_confidence`
+    "text line",  # a letter inside a line of text
+    "verifier",  # the learned verifier disagreed
+    "kept",
+)
+"""Where a component's journey through the detector ends, in order (`MarkDetector.trace`)."""
+
+
+@dataclass(frozen=True)
+class Traced:
+    """One component at one pyramid level: its box in input pixels, the shape the shape tests claimed
+    (None before them or when they found none) and the last stage it reached (`STAGES`)."""
+
+    box: Box
+    shape: Shape | None
+    stage: str
+
+
 @dataclass(frozen=True)
 class Detection:
     shape: Shape
@@ -112,6 +138,9 @@ class MarkDetector:
             verifier = Verifier.load(MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
+        self._trace: list[Traced] | None = None  # recording every component's last stage, or None
+        self._claimed: Shape | None = None  # the shape the last judged component was taken for
+        self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
         for f, block in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
@@ -130,6 +159,19 @@ class MarkDetector:
             return self._seen
         finally:
             self._seen, self.verifier = None, verifier
+
+    def trace(self, image: np.ndarray) -> tuple[list[Detection], list[Traced]]:
+        """`detect` plus the last stage every sizeable component reached (for `bench/vision_stages.py`:
+        where true marks are lost). `image` must be at most `max_side`; slower than `detect`."""
+        gray = to_gray(image)
+        if max(gray.shape) > self.config.max_side:
+            raise ValueError(f"trace() wants frames of at most {self.config.max_side} px")
+        self._trace = []
+        try:
+            found = self._detect_gray(gray)
+            return found, self._trace
+        finally:
+            self._trace = None
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         gray = to_gray(image)
@@ -194,19 +236,49 @@ class MarkDetector:
             candidates = candidates[
                 _clear_frames(binary, stats[candidates], cfg.frame_margin, cfg.frame_max_ink)
             ]
+        trace = self._trace
+        if trace is not None:
+            self._trace_prefilter(stats, keep, candidates, min(H, W))
         out: list[Detection] = []
         for i in candidates:
             det = self._judge(g, binary, labels, int(i), stats[i])
-            if det is None or det.confidence < cfg.min_confidence:
-                continue
-            if text_check and _in_text_line(stats, int(i), g, labels):
-                continue
-            if self._seen:
-                self._seen[-1].kept = True
-            if self.verifier is not None and not self.verifier.accepts(g, det.box, det.shape):
-                continue
-            out.append(det)
+            stage = self._why
+            if det is not None and det.confidence < cfg.min_confidence:
+                stage, det = "confidence", None
+            if det is not None and text_check and _in_text_line(stats, int(i), g, labels):
+                stage, det = "text line", None
+            if det is not None:
+                if self._seen:
+                    self._seen[-1].kept = True
+                stage = "kept"
+                if self.verifier is not None and not self.verifier.accepts(g, det.box, det.shape):
+                    stage, det = "verifier", None
+            if trace is not None:
+                f = self._f
+                x, y, w, h = (int(v) * f for v in stats[i][:4])
+                claimed = det.shape if det is not None else self._claimed
+                trace.append(Traced((x, y, w, h), claimed, stage))
+            if det is not None:
+                out.append(det)
         return out
+
+    def _trace_prefilter(self, stats: np.ndarray, keep: np.ndarray, passed: np.ndarray, side: int) -> None:
+        """Record the components the vectorised pre-filters dropped (only those big enough to be a
+        mark at all: the rest is speckle)."""
+        assert self._trace is not None
+        f = self._f
+        big = (np.maximum(stats[:, 2], stats[:, 3]) >= self.config.min_size) & (
+            np.maximum(stats[:, 2], stats[:, 3]) <= side
+        )
+        big[0] = False
+        frame_dropped = keep.copy()
+        frame_dropped[passed] = False
+        for i in np.flatnonzero(big & ~keep):
+            x, y, w, h = (int(v) * f for v in stats[i][:4])
+            self._trace.append(Traced((x, y, w, h), None, "size/fill"))
+        for i in np.flatnonzero(frame_dropped):
+            x, y, w, h = (int(v) * f for v in stats[i][:4])
+            self._trace.append(Traced((x, y, w, h), None, "frame ink"))
 
     def _judge(
         self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int, stat: np.ndarray
@@ -214,6 +286,7 @@ class MarkDetector:
         cfg = self.config
         x, y, w, h = (int(v) for v in stat[:4])
         size = float(max(w, h))
+        self._why, self._claimed = "shape", None
         # the shape first, on the component's own box (cheap: most candidates end here)
         own = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
         blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
@@ -223,6 +296,7 @@ class MarkDetector:
         if judged is None:
             return None
         shape, conf = judged
+        self._why, self._claimed = "card", shape
         if self._seen is not None:
             f = self._f
             self._seen.append(
@@ -250,7 +324,9 @@ class MarkDetector:
             and not _clear_margin(g_roi, bin_roi, filled, ink, blob.outer, cfg)
         ):
             # a false O would lift a danger: the safe mark must also have the wide clear margin
+            self._why = "O margin"
             return None
+        self._why = "hole"
         if blob.holes:
             # a hole is paper: empty of other ink and about as bright as the card (a big filled disc
             # or triangle, hollowed by the local threshold, has a dark 'hole')
