@@ -65,6 +65,13 @@ class DetectorConfig:
     frame_max_ink: float = 0.5  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
+    loose: bool = True
+    """components in which the shape tests find no mark (a small or blurred ring whose hole closed, a
+    triangle with a finger over a corner) still go to the verifier when they are dark on a light
+    surround (`loose_contrast`, `loose_texture`); it names their shape, with the stricter
+    `Verifier.loose_thresholds`, and the card tests judge them as any other mark. Needs `verify`."""
+    loose_contrast: float = 35.0  # the frame around the box at least this much lighter than the ink
+    loose_texture: float = 0.5  # and its grey-level spread at most this share of that contrast
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
@@ -77,7 +84,7 @@ class Candidate:
     """A component that passed the shape tests (for training the verifier): its claimed shape, box in
     input pixels, patch features, and whether the whole detector (before the verifier) kept it."""
 
-    shape: Shape
+    shape: Shape | None  # None: a loose candidate (the shape tests found none, the verifier names it)
     box: Box
     features: np.ndarray
     kept: bool = False
@@ -140,6 +147,7 @@ class MarkDetector:
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None
         self._claimed: Shape | None = None  # the shape the last judged component was taken for
+        self._loose_named = False  # the last judged component was a loose one the verifier named
         self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
         for f, block in self.config.levels:
@@ -251,7 +259,11 @@ class MarkDetector:
                 if self._seen:
                     self._seen[-1].kept = True
                 stage = "kept"
-                if self.verifier is not None and not self.verifier.accepts(g, det.box, det.shape):
+                if (
+                    self.verifier is not None
+                    and not self._loose_named
+                    and not self.verifier.accepts(g, det.box, det.shape)
+                ):
                     stage, det = "verifier", None
             if trace is not None:
                 f = self._f
@@ -286,7 +298,7 @@ class MarkDetector:
         cfg = self.config
         x, y, w, h = (int(v) for v in stat[:4])
         size = float(max(w, h))
-        self._why, self._claimed = "shape", None
+        self._why, self._claimed, self._loose_named = "shape", None, False
         # the shape first, on the component's own box (cheap: most candidates end here)
         own = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
         blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
@@ -294,10 +306,12 @@ class MarkDetector:
             return None
         judged = _classify(blob)
         if judged is None:
-            return None
+            judged = self._loose(g, own, blob, (x, y, w, h))
+            if judged is None:
+                return None
         shape, conf = judged
         self._why, self._claimed = "card", shape
-        if self._seen is not None:
+        if self._seen is not None and not self._loose_named:
             f = self._f
             self._seen.append(
                 Candidate(shape, (x * f, y * f, w * f, h * f), patch_features(g, (x, y, w, h), shape))
@@ -343,6 +357,49 @@ class MarkDetector:
             elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
         return Detection(shape, conf, (x, y, w, h))
+
+
+    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> tuple[Shape, float] | None:
+        """A component the shape tests found no mark in: if it is ink on a light, plain surround, the
+        verifier names its shape (stricter thresholds); else None. While harvesting training
+        candidates (no verifier) it is recorded with no claimed shape and goes no further."""
+        cfg = self.config
+        if not cfg.loose or len(blob.holes) > 1 or (self.verifier is None and self._seen is None):
+            return None
+        x, y, w, h = box
+        m = max(2, math.ceil(0.1 * max(w, h)))
+        x0, y0 = max(0, x - m), max(0, y - m)
+        x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
+        region = g[y0:y1, x0:x1].astype(np.float32)
+        inner = region[y - y0 : y - y0 + h, x - x0 : x - x0 + w]
+        n_ring = region.size - inner.size
+        if n_ring <= 0:
+            return None
+        ring_sum = float(region.sum() - inner.sum())
+        ring_sq = float((region * region).sum() - (inner * inner).sum())
+        ring = ring_sum / n_ring
+        spread = math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
+        ink = cv2.mean(g[y : y + h, x : x + w], mask=own)[0]
+        contrast = ring - ink
+        if (
+            contrast < cfg.loose_contrast
+            or ink > cfg.max_contrast_ratio * ring
+            or spread > cfg.loose_texture * contrast
+        ):
+            return None
+        features = patch_features(g, box, None)
+        if self._seen is not None:
+            f = self._f
+            self._seen.append(Candidate(None, (x * f, y * f, w * f, h * f), features))
+        if self.verifier is None:
+            return None
+        shape, p, ok = self.verifier.name(features)
+        self._claimed = shape
+        if not ok:
+            self._why = "verifier"
+            return None
+        self._loose_named = True
+        return shape, p
 
 
 def _on_card(

@@ -6,7 +6,8 @@
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
 words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
-shape tests is a candidate (`MarkDetector.candidates`, verifier off); its label is the true mark's
+shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
+shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; its label is the true mark's
 class when its box overlaps the true box with IoU >= 0.4, else 'none'. The model is scikit-learn's
 `MLPClassifier` (one hidden layer of 48 ReLU units, fixed `random_state`), exported to numpy arrays
 (float16 weights); inference needs only numpy and OpenCV. The last tenth of the frames is kept out
@@ -31,7 +32,7 @@ from services.vision.verifier import CLASSES, MODEL_PATH, Verifier
 ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 CLUTTERED = Variation(distractors=(8, 14))
 IOU = 0.4
-HIDDEN = 48
+HIDDEN = 64
 
 
 def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
@@ -79,6 +80,9 @@ def main(
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.5,
     threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.5,
+    loose_x: Annotated[float, typer.Option(help="probability a loose candidate needs to be named X")] = 0.6,
+    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.9,
+    loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.7,
 ) -> None:
     from sklearn.neural_network import MLPClassifier
 
@@ -110,6 +114,7 @@ def main(
         weights=tuple(np.asarray(w) for w in mlp.coefs_),
         biases=tuple(np.asarray(b) for b in mlp.intercepts_),
         thresholds=(threshold_x, threshold_o, threshold_triangle),
+        loose_thresholds=(loose_x, loose_o, loose_triangle),
     )
     verifier.save(out)
     verifier = Verifier.load(out)  # report with the stored (float16) weights
@@ -118,10 +123,20 @@ def main(
     yv = np.concatenate([p[1] for p in val])
     kv = np.concatenate([p[2] for p in val])
     prob = verifier.probabilities(xv)
-    claimed = np.argmax(xv[:, -3:], axis=1)  # the one-hot of the claimed shape
-    accept = prob[np.arange(len(yv)), claimed] >= np.array(verifier.thresholds)[claimed]
+    claimed = np.argmax(xv[:, -4:], axis=1)  # the one-hot of the claimed shape; 3: a loose candidate
+    loose = claimed == 3
+    claimed[loose] = np.argmax(prob[loose, :3], axis=1)  # the verifier names a loose one's shape
+    need = np.where(loose, np.array(verifier.loose_thresholds)[claimed], np.array(verifier.thresholds)[claimed])
+    accept = prob[np.arange(len(yv)), claimed] >= need
     true_pos = kv & (yv == claimed)
     false_pos = kv & (yv != claimed)
+    loose_true = loose & (yv < 3)
+    report.update(
+        loose_candidates=int(loose.sum()),
+        loose_true_marks=int(loose_true.sum()),
+        loose_true_named_right=int((loose_true & (yv == claimed) & accept).sum()),
+        loose_false_named=int((loose & (yv != claimed) & accept).sum()),
+    )
     report.update(
         held_back_candidates=len(yv),
         argmax_accuracy=round(float(np.mean(np.argmax(prob, axis=1) == yv)), 4),

@@ -219,3 +219,42 @@ def test_high_resolution_frames_are_scaled_and_boxes_mapped_back(detector: MarkD
     assert [d.shape for d in found] == [Shape.O]
     x, y, w, h = found[0].box
     assert abs(x + w / 2 - 960) < 20 and abs(y + h / 2 - 720) < 20 and 390 < w < 440
+
+
+def test_trace_names_where_each_component_ends(detector: MarkDetector) -> None:
+    """`trace` (bench/vision_stages.py): the ring is kept; a filled disc ends at the pre-filter at full
+    resolution (too full) and, hollowed by the quarter-scale threshold, at the hole test; a square
+    outline is not kept; and trace finds what detect finds."""
+    found, traced = detector.trace(_card("ring"))
+    assert found == detector.detect(_card("ring"))
+    kept = [t for t in traced if t.stage == "kept"]
+    assert kept and all(t.shape is Shape.O for t in kept)
+    assert any(box_overlap(t.box, found[0].box) > 0.8 for t in kept)
+    _, traced = detector.trace(_card("disc"))
+    central = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 10 and t.box[2] > 100]
+    assert central and {"size/fill", "hole"} <= {t.stage for t in central}
+    assert "kept" not in {t.stage for t in central}
+    _, traced = detector.trace(_card("square"))
+    central = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 10 and t.box[2] > 100]
+    assert central and "kept" not in {t.stage for t in central}
+
+
+def test_stage_accounting_charges_the_furthest_stage() -> None:
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from vision_stages import lost_at
+
+    from services.vision.detector import Traced
+
+    box = (100, 100, 50, 50)
+    traced = [
+        Traced((100, 100, 50, 50), None, "size/fill"),
+        Traced((101, 99, 50, 52), Shape.X, "card"),  # the right box, taken for an X
+        Traced((98, 100, 52, 50), Shape.O, "verifier"),
+        Traced((300, 300, 50, 50), Shape.O, "kept"),  # elsewhere
+    ]
+    assert lost_at(traced, Shape.O, box) == "verifier"
+    assert lost_at(traced, Shape.TRIANGLE, box) == "shape"  # a wrong shape is lost at the shape tests
+    assert lost_at([], Shape.O, box) == "no component"
