@@ -70,8 +70,11 @@ class DetectorConfig:
     triangle with a finger over a corner) still go to the verifier when they are dark on a light
     surround (`loose_contrast`, `loose_texture`); it names their shape, with the stricter
     `Verifier.loose_thresholds`, and the card tests judge them as any other mark. Needs `verify`."""
-    loose_contrast: float = 35.0  # the frame around the box at least this much lighter than the ink
+    loose_contrast: float = 45.0  # the frame around the box at least this much lighter than the ink
     loose_texture: float = 0.5  # and its grey-level spread at most this share of that contrast
+    loose_max_size: int = 96
+    """at full resolution only components up to this size are loose candidates: a bigger mark is
+    also a component of the quarter-scale level, where its patch costs a sixteenth"""
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
@@ -367,6 +370,8 @@ class MarkDetector:
         if not cfg.loose or len(blob.holes) > 1 or (self.verifier is None and self._seen is None):
             return None
         x, y, w, h = box
+        if self._f == 1 and max(w, h) > cfg.loose_max_size:
+            return None
         m = max(2, math.ceil(0.1 * max(w, h)))
         x0, y0 = max(0, x - m), max(0, y - m)
         x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
