@@ -19,6 +19,10 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
    ring's or triangle's hole empty and as bright as the margin (a large filled disc, hollowed by
    the local threshold, is not a ring); not a letter inside a word (two same-height neighbours on
    its baseline or cap line);
+   a component in which they find no mark but that is dark ink on a light plain surround is a
+   loose candidate: the learned verifier names its shape (or nothing), with stricter thresholds,
+   and it goes on to the context tests like any other (this finds small, blurred and partly
+   covered marks whose contours the tests above reject);
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape;
 6. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
@@ -282,7 +286,7 @@ class MarkDetector:
         mark at all: the rest is speckle)."""
         assert self._trace is not None
         f = self._f
-        big = (np.maximum(stats[:, 2], stats[:, 3]) >= self.config.min_size) & (
+        big = (np.maximum(stats[:, 2], stats[:, 3]) >= self.config.min_size // 2) & (
             np.maximum(stats[:, 2], stats[:, 3]) <= side
         )
         big[0] = False

@@ -29,7 +29,7 @@ SKIMAGE_BACKGROUNDS: tuple[str, ...] = (
     "astronaut",
     "brick",
     "camera",
-    "chelsea",
+    # not "chelsea": it is the held-out generator's "cat" under another name
     "coffee",
     "coins",
     "grass",
@@ -51,6 +51,7 @@ DISTRACTORS: tuple[str, ...] = (
     "texture",
     "card",
     "filled_triangle",
+    "sign",
 )
 
 
@@ -278,6 +279,8 @@ class SceneGenerator:
                 )
         elif kind == "disc":
             cv2.circle(img, (int(cx), int(cy)), int(size / 2), colour, -1, cv2.LINE_AA)
+        elif kind == "sign":
+            _draw_sign(img, rng, cx, cy, size)
         elif kind == "filled_triangle":
             # not a mark: a filled triangle that is not on a card, half the time painted on a plain
             # light wall or poster that runs on far beyond it (a card ends within about its width)
@@ -625,6 +628,38 @@ def _draw_text(img: np.ndarray, rng: Rng, org: tuple[int, int], colour: tuple[in
             int(rng.integers(1, 5)),
             cv2.LINE_AA,
         )
+
+
+def _draw_sign(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
+    """Not a mark: a round sign - a ring with a bar across it (prohibition) or with a letter or number
+    inside (parking, speed limit) - on a light plate, tilted."""
+    r = max(10.0, size / 2)
+    plate = np.full((int(2.6 * r), int(2.6 * r), 3), int(rng.integers(200, 256)), np.uint8)
+    c = (int(1.3 * r), int(1.3 * r))
+    ring = (int(rng.integers(0, 60)), int(rng.integers(0, 60)), int(rng.integers(150, 230)))
+    if rng.random() < 0.3:
+        ring = tuple(int(v) for v in rng.integers(0, 70, size=3))  # type: ignore[assignment]
+    t = max(2, int(r * rng.uniform(0.12, 0.25)))
+    cv2.circle(plate, c, int(r - t / 2), ring, t, cv2.LINE_AA)
+    if rng.random() < 0.5:
+        a = math.radians(float(rng.choice([45.0, 135.0])) + rng.uniform(-10, 10))
+        d = (r - t) * np.array([math.cos(a), math.sin(a)])
+        cv2.line(plate, _point(c - d), _point(c + d), ring, t, cv2.LINE_AA)
+    else:
+        text = str(rng.choice(["P", "30", "50", "X", "O", "!", "A"]))
+        scale = r / (18 * max(1, len(text)))
+        (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_DUPLEX, scale, max(1, int(2 * scale)))
+        org = (c[0] - tw // 2, c[1] + th // 2)
+        cv2.putText(plate, text, org, cv2.FONT_HERSHEY_DUPLEX, scale, (20, 20, 20), max(1, int(2 * scale)), cv2.LINE_AA)
+    h_mat = _card_homography(
+        plate.shape[1],
+        plate.shape[0],
+        (cx, cy),
+        1.0,
+        rng.uniform(-40, 40),
+        (rng.uniform(-35, 35), rng.uniform(-35, 35)),
+    )
+    _paste_warped(img, plate, h_mat)
 
 
 def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:

@@ -258,3 +258,34 @@ def test_stage_accounting_charges_the_furthest_stage() -> None:
     assert lost_at(traced, Shape.O, box) == "verifier"
     assert lost_at(traced, Shape.TRIANGLE, box) == "shape"  # a wrong shape is lost at the shape tests
     assert lost_at([], Shape.O, box) == "no component"
+
+
+def _smeared_triangle(size: int = 30, blur: int = 13) -> np.ndarray:
+    """A small triangle outline on a white card, smeared sideways by `blur` px of motion blur."""
+    img = np.full((480, 640), 110, np.uint8)
+    cv2.rectangle(img, (320 - size, 240 - size), (320 + size, 240 + size), 235, -1)
+    s, t = size // 2, max(2, size // 7)
+    angles = np.radians(90 + 120 * np.arange(3))
+    pts = np.stack([320 + s * np.cos(angles), 240 + s * np.sin(angles)], axis=1).astype(np.int32)
+    cv2.polylines(img, [pts], True, 30, t, cv2.LINE_AA)
+    kernel = np.zeros((blur, blur), np.float32)
+    kernel[blur // 2, :] = 1.0 / blur
+    return cv2.filter2D(img, -1, kernel)
+
+
+def test_a_loose_candidate_is_named_by_the_verifier(detector: MarkDetector) -> None:
+    """Smeared, the triangle's hole is no triangle any more and the shape tests give up; as a loose
+    candidate (dark on a light plain surround) the verifier names it, and the card tests still apply."""
+    img = _smeared_triangle()
+    _, traced = MarkDetector(DetectorConfig(loose=False)).trace(img)
+    mine = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 8 and t.box[2] < 60]
+    assert mine and "kept" not in {t.stage for t in mine} and "shape" in {t.stage for t in mine}
+    found = detector.detect(img)
+    assert [d.shape for d in found] == [Shape.TRIANGLE]
+    assert found[0].confidence >= detector.verifier.loose_thresholds[2]  # type: ignore[union-attr]
+    # nothing to name without the verifier, and a verifier that is never sure names nothing
+    assert MarkDetector(DetectorConfig(verify=False)).detect(img) == []
+    import dataclasses
+
+    unsure = dataclasses.replace(detector.verifier, loose_thresholds=(1.01, 1.01, 1.01))  # type: ignore[arg-type]
+    assert MarkDetector(verifier=unsure).detect(img) == []
