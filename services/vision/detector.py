@@ -51,6 +51,9 @@ class DetectorConfig:
     marks, a quarter for large ones (whose strokes are wider than the full-resolution window)."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
+    full_res_max: int = 160
+    """components bigger than this at full resolution are left to the coarser levels (0: no limit),
+    where they are judged on a sixteenth of the pixels"""
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
     surround: float = 0.3  # how far around a mark the card is inspected, as a fraction of its size
     border: float = 0.05  # the narrowest card border next to a mark that is judged, fraction of its size
@@ -121,6 +124,7 @@ class Traced:
     box: Box
     shape: Shape | None
     stage: str
+    scale: int = 1  # the pyramid level's downscale factor
 
 
 @dataclass(frozen=True)
@@ -157,6 +161,7 @@ class MarkDetector:
         self._loose_named = False  # the last judged component was a loose one the verifier named
         self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
+        self._max_size = 0  # the largest component judged at the current level (0: any)
         for f, block in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
@@ -216,6 +221,7 @@ class MarkDetector:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
             self._f = f
+            self._max_size = self.config.full_res_max if f == 1 and len(self.config.levels) > 1 else 0
             for det in self._detect_scale(g, block, text_check=f <= 2):
                 x, y, w, h = det.box
                 found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
@@ -245,6 +251,8 @@ class MarkDetector:
             & (x + w < W)
             & (y + h < H)  # cut by the frame edge: not judged
         )
+        if self._max_size:
+            keep &= long_side <= self._max_size
         keep[0] = False  # background label
         candidates = np.flatnonzero(keep)
         if len(candidates):
@@ -276,7 +284,7 @@ class MarkDetector:
                 f = self._f
                 x, y, w, h = (int(v) * f for v in stats[i][:4])
                 claimed = det.shape if det is not None else self._claimed
-                trace.append(Traced((x, y, w, h), claimed, stage))
+                trace.append(Traced((x, y, w, h), claimed, stage, f))
             if det is not None:
                 out.append(det)
         return out
@@ -294,10 +302,10 @@ class MarkDetector:
         frame_dropped[passed] = False
         for i in np.flatnonzero(big & ~keep):
             x, y, w, h = (int(v) * f for v in stats[i][:4])
-            self._trace.append(Traced((x, y, w, h), None, "size/fill"))
+            self._trace.append(Traced((x, y, w, h), None, "size/fill", f))
         for i in np.flatnonzero(frame_dropped):
             x, y, w, h = (int(v) * f for v in stats[i][:4])
-            self._trace.append(Traced((x, y, w, h), None, "frame ink"))
+            self._trace.append(Traced((x, y, w, h), None, "frame ink", f))
 
     def _judge(
         self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int, stat: np.ndarray

@@ -289,3 +289,19 @@ def test_a_loose_candidate_is_named_by_the_verifier(detector: MarkDetector) -> N
 
     unsure = dataclasses.replace(detector.verifier, loose_thresholds=(1.01, 1.01, 1.01))  # type: ignore[arg-type]
     assert MarkDetector(verifier=unsure).detect(img) == []
+
+
+def test_big_components_are_judged_at_the_quarter_scale_only() -> None:
+    """`full_res_max`: a ring 240 px wide is not judged at full resolution (its card tests would
+    cost 16 times as much there) but is still found, at the quarter-scale level."""
+    img = np.full((480, 640, 3), 110, np.uint8)
+    cv2.rectangle(img, (140, 60), (500, 420), (235, 235, 235), -1)
+    cv2.circle(img, (320, 240), 110, (30, 30, 30), 30, cv2.LINE_AA)
+    for limit, judged_full in ((160, False), (0, True)):
+        det = MarkDetector(DetectorConfig(full_res_max=limit))
+        found, traced = det.trace(img)
+        assert [d.shape for d in found] == [Shape.O]
+        full = {t.stage for t in traced if t.scale == 1 and t.box[2] > 200}
+        quarter = {t.stage for t in traced if t.scale == 4 and t.box[2] > 200}
+        assert "kept" in quarter
+        assert (full == {"size/fill"}) != judged_full
