@@ -32,17 +32,9 @@ import typer
 from schemas.messages import Shape
 from services.vision.detector import STAGES, DetectorConfig, MarkDetector, Traced
 from services.vision.synthetic import SceneGenerator
+from services.vision.training import IOU, iou
 
 ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
-IOU = 0.4
-
-
-def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
-    ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
-    iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = a[2] * a[3] + b[2] * b[3] - inter
-    return inter / union if union > 0 else 0.0
 
 
 def lost_at(traced: list[Traced], shape: Shape, box: tuple[int, int, int, int]) -> str:

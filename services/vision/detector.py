@@ -91,8 +91,9 @@ class DetectorConfig:
 
 @dataclass
 class Candidate:
-    """A component that passed the shape tests (for training the verifier): its claimed shape, box in
-    input pixels, patch features, and whether the whole detector (before the verifier) kept it."""
+    """A component that passed the shape tests, or a loose one (for training the verifier): its claimed
+    shape, box in input pixels, patch features, and whether the whole detector (before the verifier)
+    kept it (never, for a loose one: without the verifier nothing names it)."""
 
     shape: Shape | None  # None: a loose candidate (the shape tests found none, the verifier names it)
     box: Box
@@ -372,7 +373,6 @@ class MarkDetector:
             elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
         return Detection(shape, conf, (x, y, w, h))
-
 
     def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> tuple[Shape, float] | None:
         """A component the shape tests found no mark in: if it is ink on a light, plain surround, the

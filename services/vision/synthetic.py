@@ -292,8 +292,10 @@ class SceneGenerator:
             r = size / 2
             a0 = rng.uniform(0, 2 * math.pi)
             verts = np.array(
-                [[cx + r * math.cos(a0 + k * 2 * math.pi / 3), cy + r * math.sin(a0 + k * 2 * math.pi / 3)]
-                 for k in range(3)]
+                [
+                    [cx + r * math.cos(a0 + k * 2 * math.pi / 3), cy + r * math.sin(a0 + k * 2 * math.pi / 3)]
+                    for k in range(3)
+                ]
             )
             verts[:, 1] = cy + (verts[:, 1] - cy) * rng.uniform(0.7, 1.0)  # a tilted sign
             cv2.fillPoly(img, [_fixed(verts)], _dark_or_any(rng), cv2.LINE_AA, shift=4)
@@ -650,7 +652,16 @@ def _draw_sign(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> 
         scale = r / (18 * max(1, len(text)))
         (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_DUPLEX, scale, max(1, int(2 * scale)))
         org = (c[0] - tw // 2, c[1] + th // 2)
-        cv2.putText(plate, text, org, cv2.FONT_HERSHEY_DUPLEX, scale, (20, 20, 20), max(1, int(2 * scale)), cv2.LINE_AA)
+        cv2.putText(
+            plate,
+            text,
+            org,
+            cv2.FONT_HERSHEY_DUPLEX,
+            scale,
+            (20, 20, 20),
+            max(1, int(2 * scale)),
+            cv2.LINE_AA,
+        )
     h_mat = _card_homography(
         plate.shape[1],
         plate.shape[0],

@@ -39,7 +39,7 @@ IOU = 0.4
 HIDDEN = 64
 
 
-def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
+def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
     ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
     iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
     inter = ix * iy
@@ -63,7 +63,7 @@ def harvest(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         for c in det.candidates(img):
             label: Shape | None = None
             for t in truth:
-                if _iou(c.box, t.box) >= IOU:
+                if iou(c.box, t.box) >= IOU:
                     label = t.shape
             feats.append(c.features)
             labels.append(CLASSES.index(label))
@@ -130,7 +130,9 @@ def main(
     claimed = np.argmax(xv[:, -4:], axis=1)  # the one-hot of the claimed shape; 3: a loose candidate
     loose = claimed == 3
     claimed[loose] = np.argmax(prob[loose, :3], axis=1)  # the verifier names a loose one's shape
-    need = np.where(loose, np.array(verifier.loose_thresholds)[claimed], np.array(verifier.thresholds)[claimed])
+    need = np.where(
+        loose, np.array(verifier.loose_thresholds)[claimed], np.array(verifier.thresholds)[claimed]
+    )
     accept = prob[np.arange(len(yv)), claimed] >= need
     true_pos = kv & (yv == claimed)
     false_pos = kv & (yv != claimed)

@@ -52,9 +52,9 @@ def hog(*patches: np.ndarray) -> np.ndarray:
     gy = cv2.Sobel(f, cv2.CV_32F, 0, 1, ksize=1)  # vertical: no patch borders crossed
     mag, ang = cv2.cartToPolar(gx, gy)
     b = (np.mod(ang, np.pi) * (BINS / np.pi)).astype(np.int64) % BINS
-    cell = (_CELL_OF.reshape(PATCH, PATCH)[:, None, :] + (np.arange(k) * _CELLS * _CELLS)[None, :, None]).reshape(
-        PATCH, k * PATCH
-    )
+    cell = (
+        _CELL_OF.reshape(PATCH, PATCH)[:, None, :] + (np.arange(k) * _CELLS * _CELLS)[None, :, None]
+    ).reshape(PATCH, k * PATCH)
     cells = np.bincount((cell * BINS + b).ravel(), weights=mag.ravel(), minlength=k * _CELLS * _CELLS * BINS)
     cells = cells.reshape(k, _CELLS, _CELLS, BINS)
     blocks = np.concatenate(
@@ -108,7 +108,9 @@ class Verifier:
     def load(cls, path: Path = MODEL_PATH, thresholds: tuple[float, float, float] | None = None) -> Verifier:
         with np.load(path) as z:
             if z["mean"].shape != (N_FEATURES,) or "loose_threshold" not in z.files:
-                raise ValueError(f"{path}: made for {z['mean'].shape[0]} features, this code makes {N_FEATURES}")
+                raise ValueError(
+                    f"{path}: made for {z['mean'].shape[0]} features, this code makes {N_FEATURES}"
+                )
             n = int(z["layers"])
             v = cls(
                 mean=z["mean"].astype(np.float32),
