@@ -7,9 +7,9 @@ Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
 words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
 shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
-shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; its label is the true mark's
-class when its box overlaps the true box with IoU >= 0.4, else 'none'. The model is scikit-learn's
-`MLPClassifier` (one hidden layer of 48 ReLU units, fixed `random_state`), exported to numpy arrays
+shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; its
+label is the true mark's class when its box overlaps the true box with IoU >= 0.4, else 'none'. The model is scikit-learn's
+`MLPClassifier` (one hidden layer of 64 ReLU units, fixed `random_state`), exported to numpy arrays
 (float16 weights); inference needs only numpy and OpenCV. The last tenth of the frames is kept out
 of training to report the verifier's effect on the candidates the detector keeps.
 """
