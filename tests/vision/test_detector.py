@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import zlib
 
 import cv2
@@ -285,8 +286,6 @@ def test_a_loose_candidate_is_named_by_the_verifier(detector: MarkDetector) -> N
     assert found[0].confidence >= detector.verifier.loose_thresholds[2]  # type: ignore[union-attr]
     # nothing to name without the verifier, and a verifier that is never sure names nothing
     assert MarkDetector(DetectorConfig(verify=False)).detect(img) == []
-    import dataclasses
-
     unsure = dataclasses.replace(detector.verifier, loose_thresholds=(1.01, 1.01, 1.01))  # type: ignore[arg-type]
     assert MarkDetector(verifier=unsure).detect(img) == []
 
