@@ -19,6 +19,10 @@ Per frame, on a two-level pyramid (full resolution for small marks, a quarter fo
    ring's or triangle's hole empty and as bright as the margin (a large filled disc, hollowed by
    the local threshold, is not a ring); not a letter inside a word (two same-height neighbours on
    its baseline or cap line);
+   a component in which they find no mark but that is dark ink on a light plain surround is a
+   loose candidate: the learned verifier names its shape (or nothing), with stricter thresholds,
+   and it goes on to the context tests like any other (this finds small, blurred and partly
+   covered marks whose contours the tests above reject);
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape;
 6. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
@@ -47,6 +51,10 @@ class DetectorConfig:
     marks, a quarter for large ones (whose strokes are wider than the full-resolution window)."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
+    full_res_max: int = 0
+    """components bigger than this at full resolution are left to the coarser levels (0: no limit),
+    where they are judged on a sixteenth of the pixels: a speed knob. 160 makes detection about 20 %
+    faster and costs 0.5-1 % of O and triangle recall on the tuning generator (2-3 % held-out)."""
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
     surround: float = 0.3  # how far around a mark the card is inspected, as a fraction of its size
     border: float = 0.05  # the narrowest card border next to a mark that is judged, fraction of its size
@@ -65,6 +73,16 @@ class DetectorConfig:
     frame_max_ink: float = 0.5  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
     overlap: float = 0.5  # intersection / smaller box above which two detections are one mark
+    loose: bool = True
+    """components in which the shape tests find no mark (a small or blurred ring whose hole closed, a
+    triangle with a finger over a corner) still go to the verifier when they are dark on a light
+    surround (`loose_contrast`, `loose_texture`); it names their shape, with the stricter
+    `Verifier.loose_thresholds`, and the card tests judge them as any other mark. Needs `verify`."""
+    loose_contrast: float = 45.0  # the frame around the box at least this much lighter than the ink
+    loose_texture: float = 0.5  # and its grey-level spread at most this share of that contrast
+    loose_max_size: int = 96
+    """at full resolution only components up to this size are loose candidates: a bigger mark is
+    also a component of the quarter-scale level, where its patch costs a sixteenth"""
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
@@ -74,13 +92,41 @@ class DetectorConfig:
 
 @dataclass
 class Candidate:
-    """A component that passed the shape tests (for training the verifier): its claimed shape, box in
-    input pixels, patch features, and whether the whole detector (before the verifier) kept it."""
+    """A component that passed the shape tests, or a loose one (for training the verifier): its claimed
+    shape, box in input pixels, patch features, and whether the whole detector (before the verifier)
+    kept it (never, for a loose one: without the verifier nothing names it)."""
 
-    shape: Shape
+    shape: Shape | None  # None: a loose candidate (the shape tests found none, the verifier names it)
     box: Box
     features: np.ndarray
     kept: bool = False
+
+
+STAGES: tuple[str, ...] = (
+    "no component",  # no binarised component overlaps the mark
+    "size/fill",  # the vectorised pre-filter: size, aspect, fill ratio, frame edge
+    "frame ink",  # too much ink in the thin frame around its box
+    "shape",  # the contour shape tests found no mark, or another shape
+    "card",  # the card tests (band, contrast, card texture, other ink, a letter beside it)
+    "O margin",  # the O's wide clear margin
+    "hole",  # a ring's or triangle's hole is not paper
+    "confidence",  # below `min_confidence`
+    "text line",  # a letter inside a line of text
+    "verifier",  # the learned verifier disagreed
+    "kept",
+)
+"""Where a component's journey through the detector ends, in order (`MarkDetector.trace`)."""
+
+
+@dataclass(frozen=True)
+class Traced:
+    """One component at one pyramid level: its box in input pixels, the shape the shape tests claimed
+    (None before them or when they found none) and the last stage it reached (`STAGES`)."""
+
+    box: Box
+    shape: Shape | None
+    stage: str
+    scale: int = 1  # the pyramid level's downscale factor
 
 
 @dataclass(frozen=True)
@@ -112,7 +158,12 @@ class MarkDetector:
             verifier = Verifier.load(MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
+        self._trace: list[Traced] | None = None  # recording every component's last stage, or None
+        self._claimed: Shape | None = None  # the shape the last judged component was taken for
+        self._loose_named = False  # the last judged component was a loose one the verifier named
+        self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
+        self._max_size = 0  # the largest component judged at the current level (0: any)
         for f, block in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
@@ -130,6 +181,19 @@ class MarkDetector:
             return self._seen
         finally:
             self._seen, self.verifier = None, verifier
+
+    def trace(self, image: np.ndarray) -> tuple[list[Detection], list[Traced]]:
+        """`detect` plus the last stage every sizeable component reached (for `bench/vision_stages.py`:
+        where true marks are lost). `image` must be at most `max_side`; slower than `detect`."""
+        gray = to_gray(image)
+        if max(gray.shape) > self.config.max_side:
+            raise ValueError(f"trace() wants frames of at most {self.config.max_side} px")
+        self._trace = []
+        try:
+            found = self._detect_gray(gray)
+            return found, self._trace
+        finally:
+            self._trace = None
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         gray = to_gray(image)
@@ -159,6 +223,7 @@ class MarkDetector:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
             self._f = f
+            self._max_size = self.config.full_res_max if f == 1 and len(self.config.levels) > 1 else 0
             for det in self._detect_scale(g, block, text_check=f <= 2):
                 x, y, w, h = det.box
                 found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
@@ -188,25 +253,61 @@ class MarkDetector:
             & (x + w < W)
             & (y + h < H)  # cut by the frame edge: not judged
         )
+        if self._max_size:
+            keep &= long_side <= self._max_size
         keep[0] = False  # background label
         candidates = np.flatnonzero(keep)
         if len(candidates):
             candidates = candidates[
                 _clear_frames(binary, stats[candidates], cfg.frame_margin, cfg.frame_max_ink)
             ]
+        trace = self._trace
+        if trace is not None:
+            self._trace_prefilter(stats, keep, candidates, min(H, W))
         out: list[Detection] = []
         for i in candidates:
             det = self._judge(g, binary, labels, int(i), stats[i])
-            if det is None or det.confidence < cfg.min_confidence:
-                continue
-            if text_check and _in_text_line(stats, int(i), g, labels):
-                continue
-            if self._seen:
-                self._seen[-1].kept = True
-            if self.verifier is not None and not self.verifier.accepts(g, det.box, det.shape):
-                continue
-            out.append(det)
+            stage = self._why
+            if det is not None and det.confidence < cfg.min_confidence:
+                stage, det = "confidence", None
+            if det is not None and text_check and _in_text_line(stats, int(i), g, labels):
+                stage, det = "text line", None
+            if det is not None:
+                if self._seen:
+                    self._seen[-1].kept = True
+                stage = "kept"
+                if (
+                    self.verifier is not None
+                    and not self._loose_named
+                    and not self.verifier.accepts(g, det.box, det.shape)
+                ):
+                    stage, det = "verifier", None
+            if trace is not None:
+                f = self._f
+                x, y, w, h = (int(v) * f for v in stats[i][:4])
+                claimed = det.shape if det is not None else self._claimed
+                trace.append(Traced((x, y, w, h), claimed, stage, f))
+            if det is not None:
+                out.append(det)
         return out
+
+    def _trace_prefilter(self, stats: np.ndarray, keep: np.ndarray, passed: np.ndarray, side: int) -> None:
+        """Record the components the vectorised pre-filters dropped (only those big enough to be a
+        mark at all: the rest is speckle)."""
+        assert self._trace is not None
+        f = self._f
+        big = (np.maximum(stats[:, 2], stats[:, 3]) >= self.config.min_size // 2) & (
+            np.maximum(stats[:, 2], stats[:, 3]) <= side
+        )
+        big[0] = False
+        frame_dropped = keep.copy()
+        frame_dropped[passed] = False
+        for i in np.flatnonzero(big & ~keep):
+            x, y, w, h = (int(v) * f for v in stats[i][:4])
+            self._trace.append(Traced((x, y, w, h), None, "size/fill", f))
+        for i in np.flatnonzero(frame_dropped):
+            x, y, w, h = (int(v) * f for v in stats[i][:4])
+            self._trace.append(Traced((x, y, w, h), None, "frame ink", f))
 
     def _judge(
         self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int, stat: np.ndarray
@@ -214,6 +315,7 @@ class MarkDetector:
         cfg = self.config
         x, y, w, h = (int(v) for v in stat[:4])
         size = float(max(w, h))
+        self._why, self._claimed, self._loose_named = "shape", None, False
         # the shape first, on the component's own box (cheap: most candidates end here)
         own = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
         blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
@@ -221,9 +323,12 @@ class MarkDetector:
             return None
         judged = _classify(blob)
         if judged is None:
-            return None
+            judged = self._loose(g, own, blob, (x, y, w, h))
+            if judged is None:
+                return None
         shape, conf = judged
-        if self._seen is not None:
+        self._why, self._claimed = "card", shape
+        if self._seen is not None and not self._loose_named:
             f = self._f
             self._seen.append(
                 Candidate(shape, (x * f, y * f, w * f, h * f), patch_features(g, (x, y, w, h), shape))
@@ -250,7 +355,9 @@ class MarkDetector:
             and not _clear_margin(g_roi, bin_roi, filled, ink, blob.outer, cfg)
         ):
             # a false O would lift a danger: the safe mark must also have the wide clear margin
+            self._why = "O margin"
             return None
+        self._why = "hole"
         if blob.holes:
             # a hole is paper: empty of other ink and about as bright as the card (a big filled disc
             # or triangle, hollowed by the local threshold, has a dark 'hole')
@@ -267,6 +374,50 @@ class MarkDetector:
             elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
         return Detection(shape, conf, (x, y, w, h))
+
+    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> tuple[Shape, float] | None:
+        """A component the shape tests found no mark in: if it is ink on a light, plain surround, the
+        verifier names its shape (stricter thresholds); else None. While harvesting training
+        candidates (no verifier) it is recorded with no claimed shape and goes no further."""
+        cfg = self.config
+        if not cfg.loose or len(blob.holes) > 1 or (self.verifier is None and self._seen is None):
+            return None
+        x, y, w, h = box
+        if self._f == 1 and max(w, h) > cfg.loose_max_size:
+            return None
+        m = max(2, math.ceil(0.1 * max(w, h)))
+        x0, y0 = max(0, x - m), max(0, y - m)
+        x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
+        region = g[y0:y1, x0:x1].astype(np.float32)
+        inner = region[y - y0 : y - y0 + h, x - x0 : x - x0 + w]
+        n_ring = region.size - inner.size
+        if n_ring <= 0:
+            return None
+        ring_sum = float(region.sum() - inner.sum())
+        ring_sq = float((region * region).sum() - (inner * inner).sum())
+        ring = ring_sum / n_ring
+        spread = math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
+        ink = cv2.mean(g[y : y + h, x : x + w], mask=own)[0]
+        contrast = ring - ink
+        if (
+            contrast < cfg.loose_contrast
+            or ink > cfg.max_contrast_ratio * ring
+            or spread > cfg.loose_texture * contrast
+        ):
+            return None
+        features = patch_features(g, box, None)
+        if self._seen is not None:
+            f = self._f
+            self._seen.append(Candidate(None, (x * f, y * f, w * f, h * f), features))
+        if self.verifier is None:
+            return None
+        shape, p, ok = self.verifier.name(features)
+        self._claimed = shape
+        if not ok:
+            self._why = "verifier"
+            return None
+        self._loose_named = True
+        return shape, p
 
 
 def _on_card(

@@ -282,7 +282,10 @@ DEMO_VARIATION: dict[str, object] = {
     "noise": 5.0,
     "jpeg": (70, 95),
     "distractors": (2, 5),
+    "kinds": ("square", "disc", "text", "face", "cable", "texture", "card"),  # no look-alikes of marks
     "border": (0.2, 0.6),
+    "finger_over": 0.0,
+    "pale_ink": 0.0,
 }
 """A steadier scene than the benchmark's: a person holding a card up to the robot (the fields of
 `synthetic.Variation`, kept as plain values so that this module does not import the generator)."""

@@ -29,7 +29,7 @@ SKIMAGE_BACKGROUNDS: tuple[str, ...] = (
     "astronaut",
     "brick",
     "camera",
-    "chelsea",
+    # not "chelsea": it is the held-out generator's "cat" under another name
     "coffee",
     "coins",
     "grass",
@@ -42,7 +42,17 @@ SKIMAGE_BACKGROUNDS: tuple[str, ...] = (
     "hubble_deep_field",
     "immunohistochemistry",
 )
-DISTRACTORS: tuple[str, ...] = ("square", "disc", "text", "face", "cable", "texture", "card")
+DISTRACTORS: tuple[str, ...] = (
+    "square",
+    "disc",
+    "text",
+    "face",
+    "cable",
+    "texture",
+    "card",
+    "filled_triangle",
+    "sign",
+)
 
 
 @dataclass(frozen=True)
@@ -61,16 +71,18 @@ class Variation:
     rotation_deg: float = 180.0  # in-plane rotation, uniform in +-this
     tilt_deg: float = 50.0  # out-of-plane tilt, uniform in 0..this
     light: float = 0.6  # uneven lighting strength, 0 (flat) .. 1 (strong gradient and shadow)
-    dim: tuple[float, float] = (0.45, 1.1)  # overall exposure gain
-    blur: float = 14.0  # longest motion blur, pixels
+    dim: tuple[float, float] = (0.35, 1.4)  # overall exposure gain (above 1 the paper clips)
+    blur: float = 20.0  # longest motion blur, pixels
     noise: float = 10.0  # largest Gaussian sensor-noise sigma, grey levels
-    jpeg: tuple[int, int] = (45, 95)  # JPEG quality range (0 disables)
+    jpeg: tuple[int, int] = (40, 95)  # JPEG quality range (0 disables)
     distractors: tuple[int, int] = (2, 7)  # how many clutter objects
     kinds: tuple[str, ...] = DISTRACTORS
-    border: tuple[float, float] = (0.06, 0.6)  # card border beside the mark, fraction of its width
+    border: tuple[float, float] = (0.03, 0.6)  # card border beside the mark, fraction of its width
     colour_ink: float = 0.35  # share of marks in red, blue or green ink instead of dark grey
     filled_triangle: float = 0.25  # share of triangle marks drawn filled
     fingers: float = 0.4  # share of cards with fingers reaching towards the mark
+    finger_over: float = 0.3  # share of those whose fingertips lie over the mark's edge
+    pale_ink: float = 0.2  # share of marks in pale ink (mixed 15-45 % towards the paper)
 
     def only(self, **changes: object) -> Variation:
         return replace(self, **changes)  # type: ignore[arg-type]
@@ -90,6 +102,8 @@ MILD = Variation(
     colour_ink=0.0,
     filled_triangle=0.0,
     fingers=0.0,
+    finger_over=0.0,
+    pale_ink=0.0,
 )
 """A clean scene: one variation at a time is added to this in the tests."""
 
@@ -116,7 +130,7 @@ class Scene:
     hand: bool = True
     filled: bool = False  # a filled triangle
     fingers: int = 0  # fingers reaching from a card edge towards the mark
-    finger_gap: float = 0.2  # how far short of the mark they stop, fraction of its width
+    finger_gap: float = 0.2  # how far short of the mark they stop, fraction of its width (< 0: over it)
 
 
 class SceneGenerator:
@@ -155,7 +169,7 @@ class SceneGenerator:
         (cx, cy), size = self._place(size, rotation, tilt)
         paper_level = int(rng.integers(205, 256))
         tint = rng.integers(-12, 6, size=3)
-        return Scene(
+        scene = Scene(
             background=self._background(),
             shape=shape,
             size=size,
@@ -176,6 +190,15 @@ class SceneGenerator:
             fingers=int(rng.integers(1, 4)) if rng.random() < v.fingers else 0,
             finger_gap=float(rng.uniform(0.03, 0.3)),
         )
+        # drawn last, so that the draws above (and the scenes of older seeds) stay as they were
+        if rng.random() < v.finger_over:
+            scene.finger_gap = -float(rng.uniform(0.0, 0.3))  # the tips cover the mark's edge
+        if rng.random() < v.pale_ink:
+            mix = float(rng.uniform(0.15, 0.45))
+            scene.ink = tuple(  # type: ignore[assignment]
+                int(i + mix * (p - i)) for i, p in zip(scene.ink, scene.paper, strict=True)
+            )
+        return scene
 
     def _place(
         self, size: float, rotation: float, tilt: tuple[float, float]
@@ -256,6 +279,26 @@ class SceneGenerator:
                 )
         elif kind == "disc":
             cv2.circle(img, (int(cx), int(cy)), int(size / 2), colour, -1, cv2.LINE_AA)
+        elif kind == "sign":
+            _draw_sign(img, rng, cx, cy, size)
+        elif kind == "filled_triangle":
+            # not a mark: a filled triangle that is not on a card, half the time painted on a plain
+            # light wall or poster that runs on far beyond it (a card ends within about its width)
+            if rng.random() < 0.5:
+                wall = np.array([[cx - 3 * size, cy - 3 * size], [cx + 3 * size, cy + 3 * size]])
+                wall += rng.uniform(-1.5, 1.5, size=(2, 2)) * size
+                level = int(rng.integers(185, 250))
+                cv2.rectangle(img, _point(wall[0]), _point(wall[1]), (level, level, level - 8), -1)
+            r = size / 2
+            a0 = rng.uniform(0, 2 * math.pi)
+            verts = np.array(
+                [
+                    [cx + r * math.cos(a0 + k * 2 * math.pi / 3), cy + r * math.sin(a0 + k * 2 * math.pi / 3)]
+                    for k in range(3)
+                ]
+            )
+            verts[:, 1] = cy + (verts[:, 1] - cy) * rng.uniform(0.7, 1.0)  # a tilted sign
+            cv2.fillPoly(img, [_fixed(verts)], _dark_or_any(rng), cv2.LINE_AA, shift=4)
         elif kind == "text":
             _draw_text(img, rng, (int(cx) - 100, int(cy)), colour)
         elif kind == "face":
@@ -486,6 +529,10 @@ def _draw_mark(
     return np.array([[cx, cy]])
 
 
+def _point(p: np.ndarray) -> tuple[int, int]:
+    return int(p[0]), int(p[1])
+
+
 def _fixed(pts: np.ndarray) -> np.ndarray:
     return np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2)
 
@@ -583,6 +630,47 @@ def _draw_text(img: np.ndarray, rng: Rng, org: tuple[int, int], colour: tuple[in
             int(rng.integers(1, 5)),
             cv2.LINE_AA,
         )
+
+
+def _draw_sign(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
+    """Not a mark: a round sign - a ring with a bar across it (prohibition) or with a letter or number
+    inside (parking, speed limit) - on a light plate, tilted."""
+    r = max(10.0, size / 2)
+    plate = np.full((int(2.6 * r), int(2.6 * r), 3), int(rng.integers(200, 256)), np.uint8)
+    c = (int(1.3 * r), int(1.3 * r))
+    ring = (int(rng.integers(0, 60)), int(rng.integers(0, 60)), int(rng.integers(150, 230)))
+    if rng.random() < 0.3:
+        ring = tuple(int(v) for v in rng.integers(0, 70, size=3))  # type: ignore[assignment]
+    t = max(2, int(r * rng.uniform(0.12, 0.25)))
+    cv2.circle(plate, c, int(r - t / 2), ring, t, cv2.LINE_AA)
+    if rng.random() < 0.5:
+        a = math.radians(float(rng.choice([45.0, 135.0])) + rng.uniform(-10, 10))
+        d = (r - t) * np.array([math.cos(a), math.sin(a)])
+        cv2.line(plate, _point(c - d), _point(c + d), ring, t, cv2.LINE_AA)
+    else:
+        text = str(rng.choice(["P", "30", "50", "X", "O", "!", "A"]))
+        scale = r / (18 * max(1, len(text)))
+        (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_DUPLEX, scale, max(1, int(2 * scale)))
+        org = (c[0] - tw // 2, c[1] + th // 2)
+        cv2.putText(
+            plate,
+            text,
+            org,
+            cv2.FONT_HERSHEY_DUPLEX,
+            scale,
+            (20, 20, 20),
+            max(1, int(2 * scale)),
+            cv2.LINE_AA,
+        )
+    h_mat = _card_homography(
+        plate.shape[1],
+        plate.shape[0],
+        (cx, cy),
+        1.0,
+        rng.uniform(-40, 40),
+        (rng.uniform(-35, 35), rng.uniform(-35, 35)),
+    )
+    _paste_warped(img, plate, h_mat)
 
 
 def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import zlib
 
 import cv2
@@ -219,3 +220,87 @@ def test_high_resolution_frames_are_scaled_and_boxes_mapped_back(detector: MarkD
     assert [d.shape for d in found] == [Shape.O]
     x, y, w, h = found[0].box
     assert abs(x + w / 2 - 960) < 20 and abs(y + h / 2 - 720) < 20 and 390 < w < 440
+
+
+def test_trace_names_where_each_component_ends(detector: MarkDetector) -> None:
+    """`trace` (bench/vision_stages.py): the ring is kept; a filled disc ends at the pre-filter at full
+    resolution (too full) and, hollowed by the quarter-scale threshold, at the hole test; a square
+    outline is not kept; and trace finds what detect finds."""
+    found, traced = detector.trace(_card("ring"))
+    assert found == detector.detect(_card("ring"))
+    kept = [t for t in traced if t.stage == "kept"]
+    assert kept and all(t.shape is Shape.O for t in kept)
+    assert any(box_overlap(t.box, found[0].box) > 0.8 for t in kept)
+    _, traced = detector.trace(_card("disc"))
+    central = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 10 and t.box[2] > 100]
+    assert central and {"size/fill", "hole"} <= {t.stage for t in central}
+    assert "kept" not in {t.stage for t in central}
+    _, traced = detector.trace(_card("square"))
+    central = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 10 and t.box[2] > 100]
+    assert central and "kept" not in {t.stage for t in central}
+
+
+def test_stage_accounting_charges_the_furthest_stage() -> None:
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from vision_stages import lost_at
+
+    from services.vision.detector import Traced
+
+    box = (100, 100, 50, 50)
+    traced = [
+        Traced((100, 100, 50, 50), None, "size/fill"),
+        Traced((101, 99, 50, 52), Shape.X, "card"),  # the right box, taken for an X
+        Traced((98, 100, 52, 50), Shape.O, "verifier"),
+        Traced((300, 300, 50, 50), Shape.O, "kept"),  # elsewhere
+    ]
+    assert lost_at(traced, Shape.O, box) == "verifier"
+    assert lost_at(traced, Shape.TRIANGLE, box) == "shape"  # a wrong shape is lost at the shape tests
+    assert lost_at([], Shape.O, box) == "no component"
+
+
+def _smeared_triangle(size: int = 30, blur: int = 13) -> np.ndarray:
+    """A small triangle outline on a white card, smeared sideways by `blur` px of motion blur."""
+    img = np.full((480, 640), 110, np.uint8)
+    cv2.rectangle(img, (320 - size, 240 - size), (320 + size, 240 + size), 235, -1)
+    s, t = size // 2, max(2, size // 7)
+    angles = np.radians(90 + 120 * np.arange(3))
+    pts = np.stack([320 + s * np.cos(angles), 240 + s * np.sin(angles)], axis=1).astype(np.int32)
+    cv2.polylines(img, [pts], True, 30, t, cv2.LINE_AA)
+    kernel = np.zeros((blur, blur), np.float32)
+    kernel[blur // 2, :] = 1.0 / blur
+    return cv2.filter2D(img, -1, kernel)
+
+
+def test_a_loose_candidate_is_named_by_the_verifier(detector: MarkDetector) -> None:
+    """Smeared, the triangle's hole is no triangle any more and the shape tests give up; as a loose
+    candidate (dark on a light plain surround) the verifier names it, and the card tests still apply."""
+    img = _smeared_triangle()
+    _, traced = MarkDetector(DetectorConfig(loose=False)).trace(img)
+    mine = [t for t in traced if abs(t.box[0] + t.box[2] / 2 - 320) < 8 and t.box[2] < 60]
+    assert mine and "kept" not in {t.stage for t in mine} and "shape" in {t.stage for t in mine}
+    found = detector.detect(img)
+    assert [d.shape for d in found] == [Shape.TRIANGLE]
+    assert found[0].confidence >= detector.verifier.loose_thresholds[2]  # type: ignore[union-attr]
+    # nothing to name without the verifier, and a verifier that is never sure names nothing
+    assert MarkDetector(DetectorConfig(verify=False)).detect(img) == []
+    unsure = dataclasses.replace(detector.verifier, loose_thresholds=(1.01, 1.01, 1.01))  # type: ignore[arg-type]
+    assert MarkDetector(verifier=unsure).detect(img) == []
+
+
+def test_big_components_are_judged_at_the_quarter_scale_only() -> None:
+    """`full_res_max`: a ring 240 px wide is not judged at full resolution (its card tests would
+    cost 16 times as much there) but is still found, at the quarter-scale level."""
+    img = np.full((480, 640, 3), 110, np.uint8)
+    cv2.rectangle(img, (140, 60), (500, 420), (235, 235, 235), -1)
+    cv2.circle(img, (320, 240), 110, (30, 30, 30), 30, cv2.LINE_AA)
+    for limit, judged_full in ((160, False), (0, True)):
+        det = MarkDetector(DetectorConfig(full_res_max=limit))
+        found, traced = det.trace(img)
+        assert [d.shape for d in found] == [Shape.O]
+        full = {t.stage for t in traced if t.scale == 1 and t.box[2] > 200}
+        quarter = {t.stage for t in traced if t.scale == 4 and t.box[2] > 200}
+        assert "kept" in quarter
+        assert (full == {"size/fill"}) != judged_full
