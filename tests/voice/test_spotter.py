@@ -20,7 +20,7 @@ from services.voice import synth
 from services.voice.audio import to_pcm, write_wav
 from services.voice.engine_spotter import SpotterEngine
 from services.voice.sources import stream_utterances, trim_to_speech
-from services.voice.spotter.head import Head
+from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
 from services.voice.training import corpus, tts
 from tests.conftest import ROOT
 
@@ -140,6 +140,16 @@ def test_bad_head_file_exits_2(tmp_path: Path) -> None:
     bad.write_text("nope")
     out = _cli("--head", str(bad), "--source", "stdin")
     assert out.returncode == 2 and "not a spotter head" in out.stderr
+
+
+@pytest.mark.parametrize("content", [b"PK\x03\x04 half-written", b"", None])
+def test_corrupt_head_is_a_head_error(tmp_path: Path, content: bytes | None) -> None:
+    path = tmp_path / "head.npz"
+    if content is None:  # a real head cut short (a copy interrupted)
+        content = DEFAULT_HEAD.read_bytes()[:5000]
+    path.write_bytes(content)
+    with pytest.raises(HeadError, match="not a spotter head"):
+        Head.load(path)
 
 
 def test_say_then_transcribe(tmp_path: Path) -> None:

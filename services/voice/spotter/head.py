@@ -10,6 +10,7 @@ reasoner's defaults mean: below `accept` not understood, `accept`..`sure` ask fi
 
 from __future__ import annotations
 
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -94,7 +95,7 @@ class Head:
                 accept=data["accept"].astype(np.float64), sure=data["sure"].astype(np.float64),
                 meta={"source": str(path)}, base_last=base,
             )
-        except (OSError, KeyError, ValueError) as exc:
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # truncated, not a zip, ...
             raise HeadError(f"{path}: not a spotter head ({exc})") from None
         if n == 0 or head.weights[-1].shape[1] != len(head.classes):
             raise HeadError(f"{path}: output size does not match its vocabulary of {len(head.vocabulary)} words")
