@@ -97,6 +97,23 @@ def test_stream_of_commands(spotter: SpotterEngine) -> None:
     assert heard[1] is None
 
 
+def test_paper_demo_words_are_published_and_its_go_walks(spotter: SpotterEngine, tmp_path: Path) -> None:
+    """`./run demo` speaks every command with espeak-ng en-us+f1 into the spool (`services.cli.utterance`);
+    its scenario expects "go" to walk at once, so the committed head must publish it at >= 0.85."""
+    from services.cli.utterance import synthesise, write_wav
+    from services.voice.audio import read_wav
+
+    for word in corpus.VOCABULARY:
+        path = tmp_path / f"{word}.wav"
+        write_wav(path, synthesise(word))
+        rec = spotter.recognise(trim_to_speech(read_wav(path)))
+        assert rec.command is not None and rec.command.value == word, (word, rec.text, rec.confidence)
+        if word == "go":
+            assert rec.confidence >= 0.85, rec.confidence
+        if word == "yes":
+            assert rec.confidence >= 0.7, rec.confidence  # it confirms an asked go
+
+
 def test_enrolment_improves_an_unseen_voice(spotter: SpotterEngine) -> None:
     from services.voice.enrol import EnrolConfig, adapt
 

@@ -128,9 +128,12 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             strength = 0.0 if rng.random() < strength_clean else 1.0
             out.append(Recipe(text, label, v, round(s, 3), round(p, 3), rng.randrange(2**31), strength))
 
-    if split == "train":
+    def add_commands(n: int) -> None:
         for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.positives)
+            add(word, i, n)
+
+    if split == "train":
+        add_commands(sizes.positives)
         negatives = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
         for word in negatives:
             add(word, OTHER, sizes.neighbour_repeats)
@@ -140,16 +143,14 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(phrase, OTHER, sizes.phrase_repeats)
         n_noise = sizes.noise
     elif split == "engines":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.engines_positives)
+        add_commands(sizes.engines_positives)
         for word in [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws] + list(corpus.PHRASES_TRAIN):
             add(word, OTHER, sizes.engines_repeats)
         for word in pool[: sizes.common_words]:
             add(word, OTHER, sizes.engines_repeats)
         n_noise = 0
     elif split == "positives":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.more_positives)
+        add_commands(sizes.more_positives)
         n_noise = 0
     elif split in ("neighbours", "neighbours-tune"):
         words = neighbours(sizes, seed)["train" if split == "neighbours" else "tune"]
@@ -161,8 +162,7 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
                 add(word, OTHER, sizes.neighbour_repeats_engines)
         n_noise = 0
     elif kind == "speakers":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.speaker_positives)
+        add_commands(sizes.speaker_positives)
         hand_picked = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
         for word in hand_picked + list(neighbours(sizes, seed)["train"]):
             add(word, OTHER, sizes.speaker_neighbour_repeats)
@@ -170,14 +170,12 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(word, OTHER, sizes.speaker_common_repeats)
         n_noise = 0
     elif split == "speakers-tune":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.tune_speaker_positives)
+        add_commands(sizes.tune_speaker_positives)
         for word in neighbours(sizes, seed)["tune"]:
             add(word, OTHER, sizes.tune_speaker_neighbour_repeats)
         n_noise = 0
     elif split == "tune":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.tune_positives)
+        add_commands(sizes.tune_positives)
         forbidden = corpus.forbidden_negatives()
         for word in OOV_TUNE:
             if word not in forbidden:

@@ -5,7 +5,8 @@
    `neighbours-tune` + `speakers-tune` splits (`dataset`), cached features reused.
 2. Fit a one-hidden-layer MLP (scikit-learn) on the training splits, fixed seed, classes weighted
    towards balance (`balance`), every crop of `crop_width` embedding frames at `crop_starts` as its
-   own sample (the head averages the crops' logits: `Head.hidden`).
+   own sample (the head averages the crops' logits: `Head.hidden`); `ensemble` such MLPs with
+   consecutive seeds, stored as one wider MLP whose logits are the members' mean.
 3. Temperature scaling: divide the last layer by the temperature that minimises the tune split's
    log-loss (the MLP's probabilities saturate near 0 and 1; the decision does not change, but the
    probabilities the thresholds are placed on are no longer over-confident).
@@ -37,6 +38,8 @@ class TrainConfig:
     seed: int = 12
     hidden: int = 160
     alpha: float = 0.1
+    """L2 penalty; on tune 0.01 / 0.1 / 0.3 / 1.0 gave command accuracy 0.86 / 0.88 / 0.90 / 0.85 for
+    non-commands accepted 8.8 / 8.9 / 10.6 / 11.1 % (0.1: the most accuracy at no more false accepts)."""
     balance: float = 0.5
     """Sample weight (largest class count / class count) ** balance: with the one-edit neighbours,
     "other" clips outnumber each command's about ten to one; 0.5 (square root) gave the best tune
