@@ -282,7 +282,7 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40) -> dict[str, 
             "max_ms": round(float(a.max()), 1)}
 
 
-def enrol_figure(items: list[Item], voice: str = "flite:slt") -> dict[str, object]:
+def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:
     """Five samples per command of one held-out voice (speed 1.0, clean and noisy renderings made for
     this), then the held-out clips of that voice before and after."""
     from services.voice.engine_spotter import SpotterEngine
@@ -296,7 +296,7 @@ def enrol_figure(items: list[Item], voice: str = "flite:slt") -> dict[str, objec
             r = dataset.Recipe(word, i, voice, rng.uniform(0.9, 1.1), rng.uniform(0.9, 1.1), 10_000 + 7 * i + k,
                                0.0 if k < 3 else 1.0)
             samples.append((word, dataset.render_utterance(r)))
-    base = Head.load()
+    base = Head.load(head_path) if head_path else Head.load()
     t0 = time.perf_counter()
     enrolled = adapt(base, samples)
     adapt_s = time.perf_counter() - t0
@@ -338,7 +338,7 @@ def main() -> int:
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:
-        enrol = enrol_figure(items)
+        enrol = enrol_figure(items, args.head)
         rows.append({"enrolment": enrol})
         print(json.dumps({"enrolment": enrol}), flush=True)
     print()

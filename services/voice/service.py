@@ -159,7 +159,7 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
     while not ctx.stopping.is_set():
         try:
             engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon,
-                                 head_path=settings.head or _enrolled_head(ctx.keys.robot))
+                                 head_path=settings.head or _enrolled_head(ctx))
             ctx.log.info("engine ready", engine=engine.name)
             return engine
         except EngineError as exc:
@@ -169,8 +169,21 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
     return None
 
 
-def _enrolled_head(robot: str) -> str | None:
+def _enrolled_head(ctx: ServiceContext) -> str | None:
+    """The enrolled head in the state folder if there is a usable one. An unreadable or corrupt one
+    (a half-written file, another version's format) is not the user's fault to debug from a degraded
+    service: the committed head is used instead, with a warning and `head_warning` in health."""
     from services.voice.enrol import enrolled_head_path
+    from services.voice.spotter.head import Head, HeadError
 
-    path = enrolled_head_path(robot)
-    return str(path) if path.is_file() else None
+    path = enrolled_head_path(ctx.keys.robot)
+    if not path.is_file():
+        return None
+    try:
+        Head.load(path)
+    except HeadError as exc:
+        warning = f"enrolled head unusable, using the committed head instead (re-run enroll): {exc}"
+        ctx.log.warning("enrolled head unusable", path=str(path), error=str(exc), fallback="committed head")
+        ctx.update_detail(head_warning=warning)
+        return None
+    return str(path)

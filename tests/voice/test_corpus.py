@@ -1,15 +1,17 @@
 """The spotter's training corpus: one-edit neighbours of the commands, their train/tune/held-out split,
-and temperature scaling. No speech is synthesised here (recipes only)."""
+virtual speakers, the crop head and its ensemble, temperature scaling. Little speech is synthesised
+here (recipes only, and one word for the vocal-tract warp)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from services.voice.spotter.head import Head
+from services.voice.spotter.features import EMBED_DIM, FRAMES
+from services.voice.spotter.head import Head, HeadError
 from services.voice.synth import OOV_HELDOUT
-from services.voice.training import corpus, dataset
-from services.voice.training.train import fit_temperature
+from services.voice.training import corpus, dataset, tts
+from services.voice.training.train import TrainConfig, fit, fit_temperature, speaker_splits
 
 pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
 
@@ -38,8 +40,9 @@ def test_heldout_neighbours_are_disjoint_from_training_and_tuning() -> None:
     assert not held & (set(split["train"]) | set(split["tune"]))
     # No spelling of a held-out neighbour's pronunciation group is trained or tuned on.
     held_groups = [set(g) for g in corpus.one_edit_neighbours() if held & set(g)]
-    spoken = {r.text for name in ("train", "engines", "neighbours", "tune", "neighbours-tune")
-              for r in dataset.recipes(name, sizes, 12)}
+    names = ("train", "engines", "neighbours", "positives", "tune", "neighbours-tune", "speakers-tune",
+             *speaker_splits(sizes))
+    spoken = {r.text for name in names for r in dataset.recipes(name, sizes, 12)}
     assert not spoken & set().union(*held_groups)
     assert not spoken & set(OOV_HELDOUT)
     assert "glow" not in spoken
@@ -60,3 +63,90 @@ def test_temperature_scaling_softens_an_over_confident_head() -> None:
     assert t > 1.5
     assert after < before
     assert (head.probabilities(x).argmax(axis=1) == (x[:, 0] > 0)).all()  # no decision changes
+
+
+def _base_voice(voice: str) -> str:
+    return voice.partition(tts.VTL_MARK)[0]
+
+
+def test_virtual_speakers_come_from_their_own_split_only() -> None:
+    sizes = dataset.Sizes()
+    heldout = set(corpus.voices("heldout"))
+    for split, allowed in (("speakers", corpus.voices("train")), ("speakers:1", corpus.voices("train")),
+                           ("speakers-tune", corpus.voices("tune"))):
+        recipes = dataset.recipes(split, sizes, 12)
+        bases = {_base_voice(r.voice) for r in recipes}
+        assert bases <= set(allowed) and not bases & heldout, split
+        factors = [float(r.voice.partition(tts.VTL_MARK)[2] or 1.0) for r in recipes]
+        assert min(factors) >= dataset.VTL_RANGE[0] - 0.01 and max(factors) <= dataset.VTL_RANGE[1] + 0.01
+        assert np.std(factors) > 0.05  # many speakers, not one
+        # about half of them made from the recorded (flite) training speakers
+        recorded = sum(not r.voice.startswith("espeak:") for r in recipes) / len(recipes)
+        assert 0.4 < recorded < 0.65, split
+    # rounds are different draws, reproducibly
+    assert dataset.recipes("speakers", sizes, 12) == dataset.recipes("speakers", sizes, 12)
+    assert dataset.recipes("speakers", sizes, 12)[:50] != dataset.recipes("speakers:1", sizes, 12)[:50]
+
+
+def test_vocal_tract_warp_scales_frequencies_and_keeps_duration(monkeypatch: pytest.MonkeyPatch) -> None:
+    sr = 16000
+    t = np.arange(sr) / sr
+    warped = tts.vocal_tract(np.sin(2 * np.pi * 1000 * t), 1.2)
+    peak = np.fft.rfftfreq(warped.size, 1 / sr)[np.argmax(np.abs(np.fft.rfft(warped)))]
+    assert abs(peak - 1200) < 5 and abs(warped.size - sr / 1.2) < 2
+    # A virtual speaker: the engine speaks slower and lower by the factor, then every frequency is
+    # raised by it, so the speaker's pitch and duration come out as asked and only the formants move.
+    calls = []
+
+    def engine(text: str, name: str, speed: float, pitch: float) -> np.ndarray:
+        calls.append((name, speed, pitch))
+        n = int(0.5 * speed * sr)
+        return np.sin(2 * np.pi * 120 * pitch * np.arange(n) / sr)
+
+    monkeypatch.setitem(tts.ENGINES, "espeak", engine)
+    x = tts.synthesise("no", "espeak:en-us+f1@vtl1.20", speed=1.1, pitch=0.9)
+    assert calls == [("en-us+f1", pytest.approx(1.1 * 1.2), pytest.approx(0.9 / 1.2))]
+    assert abs(x.size - 0.5 * 1.1 * sr) < 0.01 * sr
+    f0 = np.fft.rfftfreq(x.size, 1 / sr)[np.argmax(np.abs(np.fft.rfft(x)))]
+    assert abs(f0 - 120 * 0.9) < 3
+    assert tts.virtual_speaker("flite:awb", 1.0) == "flite:awb"
+    with pytest.raises(tts.TtsError, match="outside"):
+        tts.synthesise("stop", "espeak:en-us@vtl3.0")
+    with pytest.raises(tts.TtsError, match="bad vocal-tract"):
+        tts.synthesise("stop", "espeak:en-us@vtlx")
+
+
+def _toy_data(n: int = 240) -> tuple[np.ndarray, np.ndarray]:
+    """Eight classes told apart by which embedding dimension is raised in the middle frames."""
+    rng = np.random.default_rng(1)
+    y = np.arange(n) % (len(corpus.VOCABULARY) + 1)
+    x = rng.normal(0, 0.3, (n, FRAMES, EMBED_DIM)).astype(np.float32)
+    x[np.arange(n), 6:10, y] += 2.0
+    return x, y
+
+
+def test_crop_ensemble_head_round_trips_and_classifies(tmp_path) -> None:
+    x, y = _toy_data()
+    cfg = TrainConfig(hidden=8, ensemble=2, crop_width=8, crop_starts=(2, 4, 6))
+    head = fit(x, y, cfg)
+    assert head.weights[0].shape == (8 * EMBED_DIM, 16)  # two members of 8 hidden units side by side
+    assert (head.probabilities(x).argmax(axis=1) == y).mean() > 0.95
+    # shifting the word by one frame changes little: the crops see it anyway
+    assert (head.probabilities(np.roll(x, 1, axis=1)).argmax(axis=1) == y).mean() > 0.9
+    path = tmp_path / "head.npz"
+    head.save(path)
+    back = Head.load(path)
+    assert (back.crop_width, back.crop_starts) == (8, (2, 4, 6))
+    np.testing.assert_allclose(back.probabilities(x), head.probabilities(x), atol=2e-3)  # float16 weights
+    # the flattened input (as enrolment passes it) gives the same answer
+    np.testing.assert_allclose(back.hidden(x.reshape(len(x), -1)), back.hidden(x), atol=1e-5)
+
+
+def test_crops_that_do_not_fit_are_refused(tmp_path) -> None:
+    x, y = _toy_data()
+    head = fit(x, y, TrainConfig(hidden=4, ensemble=1, crop_width=8, crop_starts=(2, 6)))
+    head.crop_starts = (2, 12)  # 12 + 8 > 16 frames
+    path = tmp_path / "head.npz"
+    head.save(path)
+    with pytest.raises(HeadError, match="crops"):
+        Head.load(path)

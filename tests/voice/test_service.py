@@ -35,7 +35,11 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     (spool / "0-bad.wav").write_text("not audio at all")
     stop = synth.speech_clip("stop", "en-us", 150)
     (spool / "1-stop.wav").write_bytes(stop.path.read_bytes())
-    proc = start_service("voice", env={"HRI_VOICE_SOURCE": f"watch:{spool}"})
+    # a corrupt enrolled head in the state folder: the committed head is used, with a warning
+    state = tmp_path / "state"
+    state.mkdir(exist_ok=True)
+    (state / "voice-head.npz").write_bytes(b"PK\x03\x04 half-written")
+    proc = start_service("voice", env={"HRI_VOICE_SOURCE": f"watch:{spool}"})  # HRI_STATE_DIR: tmp_path/state
     wait_for(lambda: heard, timeout=30)
     with lock:
         first = heard[0]
@@ -61,6 +65,8 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert isinstance(h, Health)
     assert "not a PCM WAV" in h.detail["last_error"]
     assert h.detail["utterances"] == 2
+    assert h.status == HealthStatus.OK
+    assert "enrolled head unusable" in h.detail["head_warning"]
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(15) == 0
 

@@ -20,7 +20,7 @@ from services.voice import synth
 from services.voice.audio import to_pcm, write_wav
 from services.voice.engine_spotter import SpotterEngine
 from services.voice.sources import stream_utterances, trim_to_speech
-from services.voice.spotter.head import Head
+from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
 from services.voice.training import corpus, tts
 from tests.conftest import ROOT
 
@@ -97,6 +97,23 @@ def test_stream_of_commands(spotter: SpotterEngine) -> None:
     assert heard[1] is None
 
 
+def test_paper_demo_words_are_published_and_its_go_walks(spotter: SpotterEngine, tmp_path: Path) -> None:
+    """`./run demo` speaks every command with espeak-ng en-us+f1 into the spool (`services.cli.utterance`);
+    its scenario expects "go" to walk at once, so the committed head must publish it at >= 0.85."""
+    from services.cli.utterance import synthesise, write_wav
+    from services.voice.audio import read_wav
+
+    for word in corpus.VOCABULARY:
+        path = tmp_path / f"{word}.wav"
+        write_wav(path, synthesise(word))
+        rec = spotter.recognise(trim_to_speech(read_wav(path)))
+        assert rec.command is not None and rec.command.value == word, (word, rec.text, rec.confidence)
+        if word == "go":
+            assert rec.confidence >= 0.85, rec.confidence
+        if word == "yes":
+            assert rec.confidence >= 0.7, rec.confidence  # it confirms an asked go
+
+
 def test_enrolment_improves_an_unseen_voice(spotter: SpotterEngine) -> None:
     from services.voice.enrol import EnrolConfig, adapt
 
@@ -140,6 +157,16 @@ def test_bad_head_file_exits_2(tmp_path: Path) -> None:
     bad.write_text("nope")
     out = _cli("--head", str(bad), "--source", "stdin")
     assert out.returncode == 2 and "not a spotter head" in out.stderr
+
+
+@pytest.mark.parametrize("content", [b"PK\x03\x04 half-written", b"", None])
+def test_corrupt_head_is_a_head_error(tmp_path: Path, content: bytes | None) -> None:
+    path = tmp_path / "head.npz"
+    if content is None:  # a real head cut short (a copy interrupted)
+        content = DEFAULT_HEAD.read_bytes()[:5000]
+    path.write_bytes(content)
+    with pytest.raises(HeadError, match="not a spotter head"):
+        Head.load(path)
 
 
 def test_say_then_transcribe(tmp_path: Path) -> None:

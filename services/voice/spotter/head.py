@@ -1,6 +1,11 @@
 """The spotter's classifier head: a one-hidden-layer MLP over the utterance's embeddings, in numpy,
 with per-command thresholds and the calibration of its published confidence.
 
+A head may look at *crops*: the same MLP applied to several windows of `crop_width` consecutive
+embedding frames (starting at `crop_starts`), its hidden activations averaged over the crops. The
+last layer is linear, so this is the average of the crops' logits: a small temporal model that does
+not care exactly where in the window the word sits (it was trained on every crop as its own sample).
+
 Stored as a small `.npz` (`head.npz` beside this file is the committed default): the vocabulary (class
 order; "other" is the extra last class), input standardisation, weights, and for each command two
 knots on its raw probability: `accept` (published confidence 0.5: the lowest at which the command is
@@ -10,11 +15,14 @@ reasoner's defaults mean: below `accept` not understood, `accept`..`sure` ask fi
 
 from __future__ import annotations
 
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from services.voice.spotter.features import EMBED_DIM, FRAMES
 
 DEFAULT_HEAD = Path(__file__).with_name("head.npz")
 ACCEPT_CONFIDENCE = 0.5
@@ -40,14 +48,24 @@ class Head:
     base_last: tuple[np.ndarray, np.ndarray] | None = None
     """An enrolled head keeps the calibrated head's last layer: enrolment may make the robot *ask*
     about a "go" more readily, but it walks without asking only if the calibrated head is sure too."""
+    crop_width: int = 0
+    """Embedding frames per crop; 0: the whole window is one input."""
+    crop_starts: tuple[int, ...] = ()
 
     @property
     def classes(self) -> tuple[str, ...]:
         return (*self.vocabulary, "other")
 
     def hidden(self, feats: np.ndarray) -> np.ndarray:
-        """(n, frames, 96) or (frames, 96) embeddings -> the last layer's input."""
-        h = (feats.reshape(-1, self.mean.size).astype(np.float32) - self.mean) / self.scale
+        """(n, frames, 96) or (frames, 96) embeddings -> the last layer's input (averaged over crops)."""
+        if not self.crop_width:
+            return self._hidden(feats.reshape(-1, self.mean.size))
+        x = feats.reshape(-1, FRAMES, EMBED_DIM)  # (n, frames, 96), (frames, 96) or flattened (n, frames * 96)
+        return np.mean([self._hidden(x[:, s : s + self.crop_width].reshape(len(x), -1)) for s in self.crop_starts],
+                       axis=0)
+
+    def _hidden(self, flat: np.ndarray) -> np.ndarray:
+        h = (flat.astype(np.float32) - self.mean) / self.scale
         for w, b in zip(self.weights[:-1], self.biases[:-1], strict=True):
             h = np.maximum(h @ w + b, 0.0)
         return h
@@ -73,6 +91,8 @@ class Head:
             "scale": self.scale.astype(np.float32), "accept": self.accept, "sure": self.sure,
             "meta": np.array(repr(self.meta)),
         }
+        if self.crop_width:
+            arrays["crop"] = np.array([self.crop_width, *self.crop_starts], dtype=np.int32)
         for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             arrays[f"w{i}"] = w.astype(np.float16)
             arrays[f"b{i}"] = b.astype(np.float32)
@@ -87,15 +107,20 @@ class Head:
             data = np.load(path, allow_pickle=False)
             n = sum(1 for k in data.files if k.startswith("w"))
             base = (data["base_w"].astype(np.float32), data["base_b"]) if "base_w" in data.files else None
+            crop = [int(v) for v in data["crop"]] if "crop" in data.files else [0]
             head = cls(
                 vocabulary=tuple(str(v) for v in data["vocabulary"]), mean=data["mean"], scale=data["scale"],
                 weights=[data[f"w{i}"].astype(np.float32) for i in range(n)],
                 biases=[data[f"b{i}"] for i in range(n)],
                 accept=data["accept"].astype(np.float64), sure=data["sure"].astype(np.float64),
-                meta={"source": str(path)}, base_last=base,
+                meta={"source": str(path)}, base_last=base, crop_width=crop[0], crop_starts=tuple(crop[1:]),
             )
-        except (OSError, KeyError, ValueError) as exc:
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # truncated, not a zip, ...
             raise HeadError(f"{path}: not a spotter head ({exc})") from None
         if n == 0 or head.weights[-1].shape[1] != len(head.classes):
             raise HeadError(f"{path}: output size does not match its vocabulary of {len(head.vocabulary)} words")
+        if head.crop_width and (not head.crop_starts or min(head.crop_starts) < 0
+                                or max(head.crop_starts) + head.crop_width > FRAMES
+                                or head.mean.size != head.crop_width * EMBED_DIM):
+            raise HeadError(f"{path}: crops {crop} do not fit {FRAMES} frames of {EMBED_DIM} or the input size")
         return head

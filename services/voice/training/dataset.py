@@ -64,10 +64,35 @@ class Sizes:
     more_positives: int = 300
     """Per command, `positives` split: more command clips by the training voices (other draws), so
     that the one-edit neighbours do not outnumber the commands."""
+    speaker_positives: int = 320
+    """Per command, `speakers` split: virtual speakers (`tts.vocal_tract`) made from the training voices,
+    half of them from the two recorded (flite) training speakers."""
+    speaker_neighbour_repeats: int = 3
+    """Per train one-edit neighbour and per hand-picked neighbour, `speakers` split."""
+    speaker_common_repeats: int = 1
+    speaker_rounds: int = 2
+    """`speakers` splits: `speakers`, `speakers:1`, ... (each its own draws, cached on its own)."""
+    tune_speaker_positives: int = 40
+    """Per command, `speakers-tune`: virtual speakers of the tune voices (with the tune neighbours)."""
+    tune_speaker_neighbour_repeats: int = 2
+
+
+VTL_RANGE = (0.84, 1.22)
+"""Vocal-tract factors of virtual speakers (log-uniform): about the spread of adult speakers' formants,
+men to women, around a synthesiser's speaker."""
 
 
 def _voice_draw(rng: random.Random, voices: list[str]) -> tuple[str, float, float]:
     return rng.choice(voices), rng.uniform(0.75, 1.35), rng.uniform(0.7, 1.5)
+
+
+def _speaker_draw(rng: random.Random, voices: list[str]) -> tuple[str, float, float]:
+    """A virtual speaker: half the time one of the recorded (non-espeak) voices, then a vocal-tract
+    factor; pitch is drawn independently of it (a narrower range: the factor already moves formants)."""
+    recorded = [v for v in voices if not v.startswith("espeak:")]
+    voice = rng.choice(recorded if recorded and rng.random() < 0.5 else voices)
+    factor = float(np.exp(rng.uniform(np.log(VTL_RANGE[0]), np.log(VTL_RANGE[1]))))
+    return tts.virtual_speaker(voice, factor), rng.uniform(0.8, 1.3), rng.uniform(0.8, 1.3)
 
 
 def neighbours(sizes: Sizes, seed: int) -> dict[str, tuple[str, ...]]:
@@ -78,30 +103,37 @@ def neighbours(sizes: Sizes, seed: int) -> dict[str, tuple[str, ...]]:
 
 
 def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
-    """Every clip of the `train`, `engines`, `neighbours`, `positives`, `tune` or `neighbours-tune` split (the
-    held-out split belongs to the bench).
+    """Every clip of the `train`, `engines`, `neighbours`, `positives`, `speakers`, `tune`, `neighbours-tune`
+    or `speakers-tune` split (the held-out split belongs to the bench).
+
+    `speakers` and `speakers-tune` are said by virtual speakers (`_speaker_draw`, `tts.vocal_tract`).
 
     `neighbours` and `neighbours-tune` speak the train and tune one-edit neighbours of the commands
     (`corpus.neighbour_split`: glow, goat, so, ... for "go"). `engines` adds clips of the training voices of engines other than espeak-ng (flite kal16 and awb):
     in `train` they are 2 of 177 voices, and espeak-ng alone does not teach what speech made from
     recordings sounds like."""
     rng = random.Random(f"{seed}:{split}")
-    voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train",
-                            "neighbours-tune": "tune"}.get(split, split))
+    kind = split.partition(":")[0]  # speakers:1 is another round of speakers
+    voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
+                            "neighbours-tune": "tune", "speakers-tune": "tune"}.get(kind, split))
     if split == "engines":
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
     out: list[Recipe] = []
+    draw = _speaker_draw if split.startswith("speakers") else _voice_draw
 
     def add(text: str, label: int, n: int, strength_clean: float = 0.2) -> None:
         for _ in range(n):
-            v, s, p = _voice_draw(rng, voices)
+            v, s, p = draw(rng, voices)
             strength = 0.0 if rng.random() < strength_clean else 1.0
             out.append(Recipe(text, label, v, round(s, 3), round(p, 3), rng.randrange(2**31), strength))
 
-    if split == "train":
+    def add_commands(n: int) -> None:
         for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.positives)
+            add(word, i, n)
+
+    if split == "train":
+        add_commands(sizes.positives)
         negatives = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
         for word in negatives:
             add(word, OTHER, sizes.neighbour_repeats)
@@ -111,16 +143,14 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(phrase, OTHER, sizes.phrase_repeats)
         n_noise = sizes.noise
     elif split == "engines":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.engines_positives)
+        add_commands(sizes.engines_positives)
         for word in [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws] + list(corpus.PHRASES_TRAIN):
             add(word, OTHER, sizes.engines_repeats)
         for word in pool[: sizes.common_words]:
             add(word, OTHER, sizes.engines_repeats)
         n_noise = 0
     elif split == "positives":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.more_positives)
+        add_commands(sizes.more_positives)
         n_noise = 0
     elif split in ("neighbours", "neighbours-tune"):
         words = neighbours(sizes, seed)["train" if split == "neighbours" else "tune"]
@@ -131,9 +161,21 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             for word in words:
                 add(word, OTHER, sizes.neighbour_repeats_engines)
         n_noise = 0
+    elif kind == "speakers":
+        add_commands(sizes.speaker_positives)
+        hand_picked = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
+        for word in hand_picked + list(neighbours(sizes, seed)["train"]):
+            add(word, OTHER, sizes.speaker_neighbour_repeats)
+        for word in pool[: sizes.common_words]:
+            add(word, OTHER, sizes.speaker_common_repeats)
+        n_noise = 0
+    elif split == "speakers-tune":
+        add_commands(sizes.tune_speaker_positives)
+        for word in neighbours(sizes, seed)["tune"]:
+            add(word, OTHER, sizes.tune_speaker_neighbour_repeats)
+        n_noise = 0
     elif split == "tune":
-        for i, word in enumerate(corpus.VOCABULARY):
-            add(word, i, sizes.tune_positives)
+        add_commands(sizes.tune_positives)
         forbidden = corpus.forbidden_negatives()
         for word in OOV_TUNE:
             if word not in forbidden:

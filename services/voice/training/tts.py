@@ -5,6 +5,13 @@ built-in voices: kal16 is a diphone voice, awb/rms/slt are clustergen voices bui
 of three different speakers) and `festival:kal` (Festival's diphone voice). Every engine returns float
 samples at 16 kHz; speed is a duration factor (1.0 = the engine's default, 1.2 = 20 % slower) and
 pitch a factor on the engine's base pitch.
+
+A voice may end in `@vtl<factor>` (`flite:awb@vtl1.15`): a *virtual speaker* whose vocal tract is
+shorter (factor > 1: formants scaled up, towards a child's or a woman's) or longer (< 1) than the
+engine's speaker (`vocal_tract`). Pitch and duration are kept: the engine speaks at pitch / factor and
+duration x factor, then the audio is resampled by the factor, which scales every frequency (formants
+and pitch) by it and the duration by its inverse. This is how two recorded training speakers become
+many (vocal-tract-length perturbation; held-out speakers differ from the training ones mostly there).
 """
 
 from __future__ import annotations
@@ -73,12 +80,34 @@ def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
 ENGINES = {"espeak": espeak, "flite": flite, "festival": festival}
 
 
+VTL_MARK = "@vtl"
+
+
+def vocal_tract(x: np.ndarray, factor: float) -> np.ndarray:
+    """Every frequency of `x` scaled by `factor` (and its duration by 1 / factor): resampling."""
+    up = 200
+    return resample_poly(x, up, round(up * factor))
+
+
+def virtual_speaker(voice: str, factor: float) -> str:
+    return voice if round(factor, 2) == 1.0 else f"{voice}{VTL_MARK}{factor:.2f}"
+
+
 def synthesise(text: str, voice: str, speed: float = 1.0, pitch: float = 1.0) -> np.ndarray:
-    """`voice` is `engine:name`; returns float samples at 16 kHz, peak-normalised to 0.5."""
-    engine, _, name = voice.partition(":")
+    """`voice` is `engine:name[@vtl<factor>]`; returns float samples at 16 kHz, peak-normalised to 0.5."""
+    base, _, warp = voice.partition(VTL_MARK)
+    engine, _, name = base.partition(":")
     if engine not in ENGINES:
         raise TtsError(f"unknown TTS engine {engine!r} in {voice!r}: one of {', '.join(ENGINES)}")
-    x = ENGINES[engine](text, name, speed, pitch)
+    try:
+        factor = float(warp) if warp else 1.0
+    except ValueError:
+        raise TtsError(f"bad vocal-tract factor in {voice!r}") from None
+    if not 0.5 <= factor <= 2.0:
+        raise TtsError(f"vocal-tract factor {factor} in {voice!r} is outside 0.5-2.0")
+    x = ENGINES[engine](text, name, speed * factor, pitch / factor)
+    if factor != 1.0:
+        x = vocal_tract(x, factor)
     if x.size == 0 or not np.any(x):
         raise TtsError(f"{voice} produced no audio for {text!r}")
     return 0.5 * x / np.max(np.abs(x))
