@@ -89,9 +89,10 @@ def test_held_out_generator_frames_are_labelled_and_mostly_found(detector: MarkD
         shape = SHAPES[i % 3]
         img, label = a.frame(shape)
         img2, label2 = b.frame(shape)
-        # same seed, same scene (the pixels may differ by a grey level in a few places: float filtering)
+        # same seed, same frame, pixel for pixel (a background drawn at random, skimage's
+        # binary_blobs without a seed, once made the held-out set differ from run to run)
         assert label2 == label and img.shape == (480, 640, 3)
-        assert float(np.mean(cv2.absdiff(img, img2))) < 0.5
+        assert np.array_equal(img, img2)
         assert label is not None and label.shape is shape
         x, y, w, h = label.box
         assert 0 <= x and 0 <= y and x + w <= 640 and y + h <= 480 and min(w, h) >= 8
