@@ -184,3 +184,13 @@ def test_why_while_getting_up_for_a_walk_sends_no_second_stand_up(agent: SoarAge
     agent.step(say("stop", stamp=NOW))
     agent.step(posture="sitting")
     assert motions(agent.step(say("go", 0.9, stamp=NOW + 1))) == ["stand_up"]  # a new walk stands up again
+
+
+def test_why_after_an_o_asked_about_an_unsure_refused_go(agent: SoarAgent) -> None:
+    agent.step(posture="standing")
+    agent.step(seen("X", stamp=NOW - 20))
+    agent.step(say("go", confidence=0.6, stamp=NOW - 10))  # refused: danger
+    assert [d.verdict for d in decisions(agent.step(seen("O", stamp=NOW - 2)))] == ["ask"]
+    answer = why(agent)
+    assert answer.template == "asked"
+    assert text(answer) == "I was not sure I heard 'go', so I asked first."
