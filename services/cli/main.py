@@ -35,6 +35,7 @@ from services.cli.router import DEFAULT_PORT
 from services.cli.utterance import DEFAULT_VOICE
 from services.runtime import ConfigError, ServiceContext, SessionRefused, configure_logging, default_keys_dir
 from services.runtime.cli import ConnectOption, RobotOption
+from services.runtime.logs import settings_error as log_settings_error
 
 # rich_markup_mode=None: help text is printed as written ("[default: op2]" is not read as Rich markup)
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__, rich_markup_mode=None)
@@ -99,6 +100,8 @@ def up(
     Secure by default: every service runs as its own identity, the router listens on loopback,
     requires credentials and applies the access rules generated from schemas/access.py.
     """
+    if problem := log_settings_error():  # every service would exit 2 with it, and be restarted
+        fail(problem, 2)
     folder = None if open_bus else (keys_dir or default_keys_dir())
     if folder is not None and not deployment_keys.exists(folder) and connect is not None:
         folder = None  # joining a router: anonymous unless this deployment's keys were copied here

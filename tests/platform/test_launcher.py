@@ -137,3 +137,9 @@ def test_up_connect_joins_an_existing_router(router_endpoint: str, robot_id: str
 def test_unknown_service_is_refused() -> None:
     out = hri("up", "--only", "dance", env=dict(os.environ))
     assert out.returncode != 0 and "unknown service" in out.stderr
+
+
+def test_a_bad_log_level_is_refused_before_anything_starts() -> None:
+    out = hri("up", "--open", "--port", str(free_port()), env={**os.environ, "HRI_LOG_LEVEL": "loud"})
+    assert out.returncode == 2
+    assert "HRI_LOG_LEVEL='loud'" in out.stderr and "started" not in out.stderr
