@@ -141,3 +141,19 @@ def test_builtin_cycle_scenario_changes_shape_over_time() -> None:
     assert src.current_shape() is Shape.O
     src._t0 -= 6.0
     assert src.current_shape() is None
+
+
+def test_synthetic_frames_carry_sensor_noise_that_changes_between_frames(tmp_path: Path) -> None:
+    sched = tmp_path / "s.txt"
+    sched.write_text("100 none\n")
+    src = open_source(f"synthetic:{sched}")
+    assert isinstance(src, SyntheticSource)
+    src.open()
+    before = time.time()
+    frames = [src.read(1.0) for _ in range(12)]
+    images = [f.image for f in frames if f is not None]
+    assert len(images) == 12 and all(before <= f.stamp <= time.time() for f in frames if f is not None)
+    still = src._stills[None].astype(np.int16)
+    for image in images:  # noise of about NOISE_SIGMA grey levels on every frame, never the bare still
+        assert 2.0 < float(np.std(image.astype(np.int16) - still)) < 4.0
+    assert len({img.tobytes() for img in images}) > 1  # not one pattern for every frame
