@@ -26,7 +26,7 @@ import typer
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
-from services.vision.synthetic import SceneGenerator, Variation
+from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 from services.vision.verifier import CLASSES, MODEL_PATH, Verifier
 
 ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
@@ -34,7 +34,10 @@ ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 # 40 % of triangle marks (25 %; on a card they are marks, on a wall clutter, and only the context
 # tells them apart); 60 % of cards have fingers (40 %), half of them over the mark's edge (30 %)
 DEFAULT = Variation(filled_triangle=0.4, fingers=0.6, finger_over=0.5)
-CLUTTERED = DEFAULT.only(distractors=(8, 14))
+# the cluttered chunks draw the tuning generator's main sources of false marks three times as often:
+# filled triangles off cards (half on plain light walls), text (letters O and X in words) and decoy cards
+HARD = ("filled_triangle", "text", "card")
+CLUTTERED = DEFAULT.only(distractors=(8, 14), kinds=DISTRACTORS + HARD + HARD)
 IOU = 0.4
 HIDDEN = 64
 

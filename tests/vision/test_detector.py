@@ -170,10 +170,17 @@ def _cross_on(paper: np.ndarray, ink: int) -> np.ndarray:
 def test_a_faint_cross_is_not_a_mark(detector: MarkDetector) -> None:
     # darker than its surroundings by less than `min_contrast` grey levels: a shadow or a crease in
     # a texture, not print (the old rule, ink below 0.72 of the margin, let it through)
-    faint = _cross_on(np.full((480, 640), 100.0), ink=68)
+    faint = _cross_on(np.full((480, 640), 70.0), ink=48)
     assert detector.detect(faint) == []
     assert [d.shape for d in MarkDetector(DetectorConfig(min_contrast=0)).detect(faint)] == [Shape.X]
     assert [d.shape for d in detector.detect(_cross_on(np.full((480, 640), 100.0), ink=55))] == [Shape.X]
+
+
+def test_a_mark_under_dim_light_is_found(detector: MarkDetector) -> None:
+    # dim paper (grey 100) and ink 30 levels darker: print, though below the old 35-level limit
+    dim = _cross_on(np.full((480, 640), 100.0), ink=70)
+    assert [d.shape for d in detector.detect(dim)] == [Shape.X]
+    assert MarkDetector(DetectorConfig(min_contrast=35)).detect(dim) == []
 
 
 def test_a_cross_in_a_busy_surround_is_not_a_mark() -> None:

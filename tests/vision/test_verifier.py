@@ -116,3 +116,27 @@ def test_the_harvest_is_deterministic_and_labelled() -> None:
     assert feats.shape[1] == N_FEATURES
     assert set(labels.tolist()) <= set(range(len(CLASSES)))
     assert len(labels) == len(kept) > 0
+
+
+def _filled_triangle(half: int, r: int) -> np.ndarray:
+    """A dark filled triangle of radius `r` on a light surface reaching `half` px from it on a darker
+    wall: a card when `half` is small, a poster or painted wall when it fills the frame."""
+    img = cv2.GaussianBlur(np.random.default_rng(0).integers(40, 90, (480, 640)).astype(np.uint8), (9, 9), 0)
+    cv2.rectangle(img, (320 - half, 240 - half), (320 + half, 240 + half), 222, -1)
+    a = np.radians(17 + 120 * np.arange(3))
+    pts = np.stack([320 + r * np.cos(a), 240 + r * np.sin(a)], axis=1).astype(np.int32)
+    cv2.fillPoly(img, [pts], 35, cv2.LINE_AA)
+    return img
+
+
+@pytest.mark.parametrize("r", [45, 70])
+def test_a_filled_triangle_is_a_mark_on_a_card_but_not_on_a_wall(r: int) -> None:
+    """Only the verifier's context crop tells the two apart (the card tests accept any plain light
+    surface); training draws triangles on walls three times as often as the tuning generator."""
+    det = MarkDetector()
+    assert [d.shape for d in det.detect(_filled_triangle(int(1.4 * r), r))] == [Shape.TRIANGLE]
+    assert det.detect(_filled_triangle(300, r)) == []
+    # the card tests alone pass both
+    assert [d.shape for d in MarkDetector(DetectorConfig(verify=False)).detect(_filled_triangle(300, r))] == [
+        Shape.TRIANGLE
+    ]
