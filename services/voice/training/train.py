@@ -57,6 +57,11 @@ class TrainConfig:
     ensemble: int = 3
     """MLPs fitted with seeds seed, seed + 1, ...; their logits averaged (one wider MLP in the head)."""
     sizes: dataset.Sizes = field(default_factory=dataset.Sizes)
+    tune_splits: tuple[str, ...] = ("tune", "neighbours-tune", "speakers-tune", "recorded-tune")
+    """The splits the temperature and the knots are chosen on."""
+
+
+TUNE_SPLITS = ("tune", "neighbours-tune", "speakers-tune", "recorded-tune")
 
 
 def speaker_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
@@ -167,7 +172,7 @@ def tune_figures(head: Head, x: np.ndarray, y: np.ndarray) -> dict[str, float]:
 def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
     t0 = time.time()
     tune_parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers)
-                  for split in ("tune", "neighbours-tune", "speakers-tune")]
+                  for split in TUNE_SPLITS if split in cfg.tune_splits]
     tune = (np.concatenate([p[0] for p in tune_parts]), np.concatenate([p[1] for p in tune_parts]))
     parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers)
              for split in ("train", "engines", "positives", "neighbours", *speaker_splits(cfg.sizes))]
