@@ -11,7 +11,9 @@ Besides, the held-out one-edit neighbours of the commands (`corpus.neighbour_spl
 one phoneme insertion, deletion or substitution from a command, split off by pronunciation group with
 a fixed seed before any training) are each rendered 16 times by random held-out voices, clean or noisy,
 and reported in their own row (`one-edit-heldout`), not in "ALL", so that "ALL" stays comparable with
-earlier runs.
+earlier runs. So is each voice of `corpus.HELDOUT_EXTRA` (Festival's HTS slt: the slt speaker through
+another synthesiser than flite's; it ignores the speed, so each word is said at its own rate, once clean
+and three times noisy).
 
 Per engine and per family: command accuracy (right command published; an "asked" go, i.e. published
 with a confidence between the reasoner's `^min-confidence` and `^confirm-below`, counts as right when a
@@ -117,6 +119,23 @@ def heldout_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
 
 NEIGHBOURS = "one-edit-heldout"
 NEIGHBOUR_RENDERINGS = 16
+SEPARATE = {NEIGHBOURS, *corpus.HELDOUT_EXTRA}
+"""Families reported in their own rows only, not in "ALL"."""
+
+
+def extra_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
+    """The commands and `OOV_HELDOUT` by each `corpus.HELDOUT_EXTRA` voice: once clean, three times noisy."""
+    rng = random.Random(f"bench-extra:{seed}")
+    forbidden = corpus.forbidden_negatives()
+    out: list[tuple[dataset.Recipe, str]] = []
+    for voice in corpus.HELDOUT_EXTRA:
+        for cond, strength in (("clean", 0.0), ("noisy", 1.0), ("noisy", 1.0), ("noisy", 1.0)):
+            for i, word in enumerate(WORDS):
+                out.append((dataset.Recipe(word, i, voice, 1.0, 1.0, rng.randrange(2**31), strength), cond))
+            for word in synth.OOV_HELDOUT:
+                if word not in forbidden:
+                    out.append((dataset.Recipe(word, OTHER, voice, 1.0, 1.0, rng.randrange(2**31), strength), cond))
+    return out
 
 
 def neighbour_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
@@ -161,7 +180,7 @@ def heldout_items(seed: int, workers: int) -> list[Item]:
               for it in _rendered(neighbour_recipes(seed), workers)]
     for clip in synth.noise_set("heldout"):
         items.append(Item("noise", "", OTHER, clip.text, "noise", read_wav(clip.path)))
-    return items
+    return items + _rendered(extra_recipes(seed), workers)
 
 
 @dataclass
@@ -216,7 +235,7 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
     scores: dict[str, Score] = {}
     for i, it in enumerate(items):
         cmd, conf, dt = results[i]
-        for fam in (it.family,) if it.family == NEIGHBOURS else (it.family, "ALL"):
+        for fam in (it.family,) if it.family in SEPARATE else (it.family, "ALL"):
             s = scores.setdefault(fam, Score(engine_name, fam))
             s.decode_s += dt
             s.audio_s += len(it.pcm) / 2 / SAMPLE_RATE
@@ -307,7 +326,7 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
         scores, _ = score("spotter", SpotterEngine(head), mine, policy)
         row = next(s for s in scores if s.family == "ALL").row()
         out[name] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct", "false_asks")}
-    others = [it for it in items if it.voice != voice and it.family != "noise"][::3]
+    others = [it for it in items if it.voice != voice and it.family not in ("noise", *corpus.HELDOUT_EXTRA)][::3]
     scores, _ = score("spotter", SpotterEngine(enrolled), others, policy)
     row = next(s for s in scores if s.family == "ALL").row()
     out["after_on_other_voices"] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct")}
@@ -334,7 +353,7 @@ def main() -> int:
             row = s.row()
             if s.family == "ALL":
                 row.update(extra)
-                row["stream_latency"] = stream_latency(engine, items)
+                row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA])
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:

@@ -9,7 +9,7 @@ import pytest
 
 from services.voice.spotter.features import EMBED_DIM, FRAMES
 from services.voice.spotter.head import Head, HeadError
-from services.voice.synth import OOV_HELDOUT
+from services.voice.synth import OOV_HELDOUT, OOV_TUNE
 from services.voice.training import corpus, dataset, tts
 from services.voice.training.train import TrainConfig, fit, fit_temperature, speaker_splits
 
@@ -41,11 +41,55 @@ def test_heldout_neighbours_are_disjoint_from_training_and_tuning() -> None:
     # No spelling of a held-out neighbour's pronunciation group is trained or tuned on.
     held_groups = [set(g) for g in corpus.one_edit_neighbours() if held & set(g)]
     names = ("train", "engines", "neighbours", "positives", "tune", "neighbours-tune", "speakers-tune",
-             *speaker_splits(sizes))
+             "recorded-tune", *speaker_splits(sizes))
     spoken = {r.text for name in names for r in dataset.recipes(name, sizes, 12)}
     assert not spoken & set().union(*held_groups)
     assert not spoken & set(OOV_HELDOUT)
     assert "glow" not in spoken
+
+
+def test_two_edit_words_keep_the_vowel_and_stay_out_of_tune_and_heldout() -> None:
+    sizes = dataset.Sizes()
+    words = corpus.two_edit_neighbours(sizes.two_edit_words, dataset.TWO_EDIT_SEED)
+    prons = corpus._cmudict()
+    assert set(words) == set(corpus.VOCABULARY) and all(len(ws) == sizes.two_edit_words for ws in words.values())
+    for command, ws in words.items():
+        targets = [corpus._phones(p) for p in prons[command]]
+        for w in ws:
+            assert any(corpus._edits(corpus._phones(p), t) == 2 for p in prons[w] for t in targets), (command, w)
+    every = set(dataset.two_edit(sizes))
+    split = dataset.neighbours(sizes, 12)
+    one_edit = {w for g in corpus.one_edit_neighbours() for w in g}
+    assert not every & (one_edit | set(OOV_HELDOUT) | set(OOV_TUNE) | corpus.forbidden_negatives())
+    reserved = {corpus._phones(p) for w in set(split["heldout"]) | set(OOV_HELDOUT) for p in prons.get(w, [])}
+    assert not {corpus._phones(p) for w in every for p in prons[w]} & reserved  # no held-out homophone either
+    spoken = {r.text for r in dataset.recipes("neighbours", sizes, 12)}
+    assert every - corpus.tts_homophones(list(every)) <= spoken
+
+
+def test_words_espeak_says_like_a_command_are_never_negatives() -> None:
+    # "wei" and "wy" are one-edit neighbours in the dictionary, but espeak-ng reads both as "why"
+    assert {"wei", "wy"} <= corpus.tts_homophones(["wei", "wy", "way", "white"])
+    assert not {"way", "white"} & corpus.tts_homophones(["way", "white"])
+    sizes = dataset.Sizes()
+    assert {"wei", "wy"} <= set(dataset.neighbours(sizes, 12)["train"])
+    negatives = {r.text for name in ("neighbours", "speakers", "tune", "neighbours-tune")
+                 for r in dataset.recipes(name, sizes, 12) if r.label == dataset.OTHER and r.voice}
+    assert len(negatives) > 300 and not negatives & corpus.tts_homophones(list(negatives))
+
+
+def test_recorded_speakers_train_and_tune_but_never_the_heldout_ones() -> None:
+    sizes = dataset.Sizes()
+    assert "festival:ked" in corpus.RECORDED_TRAIN and "festival:ked" in corpus.voices("train")
+    recorded = dataset.recipes("recorded-tune", sizes, 12)
+    by_voice = {v: sum(r.voice == v and r.label < dataset.OTHER for r in recorded) for v in corpus.RECORDED_TRAIN}
+    assert by_voice == {v: sizes.recorded_tune_positives * len(corpus.VOCABULARY) for v in corpus.RECORDED_TRAIN}
+    engines = {r.voice for r in dataset.recipes("engines", sizes, 12)}
+    assert engines == set(corpus.RECORDED_TRAIN)
+    held = set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
+    assert not held & (set(corpus.voices("train")) | set(corpus.voices("tune")))
+    with pytest.raises(tts.TtsError, match="unknown Festival voice"):
+        tts.synthesise("stop", "festival:nobody")
 
 
 def test_temperature_scaling_softens_an_over_confident_head() -> None:
@@ -80,7 +124,7 @@ def test_virtual_speakers_come_from_their_own_split_only() -> None:
         factors = [float(r.voice.partition(tts.VTL_MARK)[2] or 1.0) for r in recipes]
         assert min(factors) >= dataset.VTL_RANGE[0] - 0.01 and max(factors) <= dataset.VTL_RANGE[1] + 0.01
         assert np.std(factors) > 0.05  # many speakers, not one
-        # about half of them made from the recorded (flite) training speakers
+        # about half of them made from the recorded training speakers
         recorded = sum(not r.voice.startswith("espeak:") for r in recipes) / len(recipes)
         assert 0.4 < recorded < 0.65, split
     # rounds are different draws, reproducibly

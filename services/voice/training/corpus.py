@@ -2,16 +2,19 @@
 
 Splits differ in how the speech is *made*, not only in seed:
 
-- `train` (fit the head): espeak-ng accents and variants of `ESPEAK_TRAIN_*`, flite kal16 (diphone)
-  and flite awb (clustergen, one speaker); negatives from `NEIGHBOURS_TRAIN`, `PHRASES_TRAIN` and a
-  sample of the pocketsphinx dictionary.
+- `train` (fit the head): espeak-ng accents and variants of `ESPEAK_TRAIN_*` and three recorded
+  speakers (`RECORDED_TRAIN`): flite kal16 (diphone), flite awb (clustergen) and Festival ked
+  (diphone); negatives from `NEIGHBOURS_TRAIN`, `PHRASES_TRAIN`, a sample of the pocketsphinx
+  dictionary and (`two_edit_neighbours`) words two phonemes from a command that keep its vowel.
 - `tune` (choose thresholds and the confidence calibration): the same engines, other espeak variants.
 - `heldout` (the bench only): flite rms and slt (two speakers the head never heard), Festival's kal
   voice (another synthesiser), espeak-ng accents and variants not used above, and the non-command
-  words of `services.voice.synth.OOV_HELDOUT`, which no other split contains.
+  words of `services.voice.synth.OOV_HELDOUT`, which no other split contains. `HELDOUT_EXTRA`
+  (Festival's HTS slt) is a further held-out family the bench reports on its own.
 
 Homophones of a command (same pronunciation in the CMU dictionary, e.g. "know" for "no", "y" and
-"wye" for "why") are never negatives: they are the command.
+"wye" for "why") are never negatives: they are the command. Nor are the words espeak-ng itself says
+exactly like a command (`tts_homophones`: "wei" and "wy" are `w'aI`, as "why"), in train and tune.
 
 One-edit neighbours (`neighbour_split`): every dictionary word whose pronunciation is one phoneme
 insertion, deletion or substitution away from a command's ("go" -> glow, goat, so, ago, ...), grouped
@@ -42,8 +45,11 @@ ESPEAK_TRAIN_VARIANTS = (
 )
 ESPEAK_TUNE_VARIANTS = ("m2", "f5", "klatt3", "Alex", "Andrea", "antonio", "boris", "ed", "gustave", "Hugo")
 ESPEAK_HELDOUT_VARIANTS = ("m4", "m7", "f4", "klatt5", "aunty", "Denis", "Jacky", "marcelo", "Michael", "Storm")
-FLITE_TRAIN = ("flite:kal16", "flite:awb")
+RECORDED_TRAIN = ("flite:kal16", "flite:awb", "festival:ked")
+"""The training voices made from recordings of a speaker (not espeak-ng's formant synthesis)."""
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
+HELDOUT_EXTRA = ("festival:slt_hts",)
+"""Held-out voices the bench reports in their own rows, outside its "ALL" (comparable with earlier runs)."""
 
 NEIGHBOURS_TRAIN: dict[str, tuple[str, ...]] = {
     "stand": ("sand", "stamp", "standing", "understand", "stem", "stab", "span", "tanned", "stained", "strand",
@@ -189,15 +195,93 @@ def neighbour_split(trained: frozenset[str] = frozenset()) -> dict[str, tuple[st
     }
 
 
+ESPEAK_PHONEME_VOICES = ("en-us", "en-gb", "en-gb-x-rp", "en-gb-x-gbclan", "en-gb-x-gbcwmd")
+
+
+def _espeak_phonemes(words: tuple[str, ...], voices: tuple[str, ...]) -> dict[str, tuple[str, ...]]:
+    """Per voice, espeak-ng's phonemes (`-x`, stress marks removed) for each word; one call per voice,
+    the voices in parallel."""
+    import subprocess
+
+    procs = {v: subprocess.Popen(["espeak-ng", "-q", "-x", "-v", v], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                 stderr=subprocess.DEVNULL, text=True) for v in voices}
+    out: dict[str, tuple[str, ...]] = {}
+    for v, proc in procs.items():
+        lines = proc.communicate("\n".join(words) + "\n", timeout=120)[0].splitlines()
+        if proc.returncode or len(lines) < len(words):
+            raise RuntimeError(f"espeak-ng -x -v {v} gave {len(lines)} lines for {len(words)} words")
+        out[v] = tuple(re.sub(r"[',]", "", line).strip() for line in lines[: len(words)])
+    return out
+
+
+@lru_cache(maxsize=8)
+def _tts_homophones(words: tuple[str, ...]) -> frozenset[str]:
+    phonemes = _espeak_phonemes(VOCABULARY + words, ESPEAK_PHONEME_VOICES)
+    n = len(VOCABULARY)
+    return frozenset(w for ph in phonemes.values() for w, p in zip(words, ph[n:], strict=True) if p in set(ph[:n]))
+
+
+def tts_homophones(words: tuple[str, ...] | list[str]) -> set[str]:
+    """The `words` that espeak-ng says exactly like a command in one of the training accents
+    (`espeak-ng -x`, stress ignored): such a clip *is* the command, whatever its spelling."""
+    return set(_tts_homophones(tuple(sorted(set(words)))))
+
+
+def _edits(a: tuple[str, ...], b: tuple[str, ...]) -> int:
+    prev = list(range(len(b) + 1))
+    for i, x in enumerate(a, 1):
+        cur = [i]
+        for j, y in enumerate(b, 1):
+            cur.append(min(prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (x != y)))
+        prev = cur
+    return prev[-1]
+
+
+_VOWELS = {"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW"}
+
+
+@lru_cache(maxsize=4)
+def two_edit_neighbours(per_command: int, seed: int) -> dict[str, tuple[str, ...]]:
+    """Per command, `per_command` dictionary words (2-8 letters) whose pronunciation is exactly two
+    phoneme edits from the command's and keeps its vowel ("no" -> slowed, blow, noting, ...; "stand" ->
+    scant, ...): more negatives near the commands for training. Never a word of the tune or held-out
+    lists, nor one said like any word of the tune or held-out one-edit groups, nor one of them."""
+    prons = _cmudict()
+    split_groups = [g for g in one_edit_neighbours()]
+    edit1 = {w for g in split_groups for w in g}
+    reserved = set(OOV_TUNE) | set(OOV_HELDOUT) | edit1 | forbidden_negatives()
+    reserved_prons = {_phones(p) for w in reserved for p in prons.get(w, [])}
+    candidates: list[tuple[str, list[tuple[str, ...]]]] = []
+    for word, ps in sorted(prons.items()):
+        if not (word.isalpha() and word.isascii() and 2 <= len(word) <= 8) or word in reserved:
+            continue
+        phs = [_phones(p) for p in ps]
+        if not any(ph in reserved_prons for ph in phs):
+            candidates.append((word, phs))
+    out: dict[str, tuple[str, ...]] = {}
+    for command in VOCABULARY:
+        targets = [_phones(p) for p in prons.get(command, [])]
+        vowels = {ph for t in targets for ph in t if ph in _VOWELS}
+        by_pron: dict[tuple[str, ...], str] = {}
+        for word, phs in candidates:
+            for ph in phs:
+                if (not vowels.isdisjoint(ph) and any(abs(len(ph) - len(t)) <= 2 and _edits(ph, t) == 2 for t in targets)
+                        and (ph not in by_pron or len(word) < len(by_pron[ph]))):
+                    by_pron[ph] = word
+        words = sorted(set(by_pron.values()))
+        out[command] = tuple(sorted(random.Random(f"{seed}:{command}").sample(words, min(per_command, len(words)))))
+    return out
+
+
 def espeak_voices(accents: tuple[str, ...], variants: tuple[str, ...]) -> list[str]:
     return [f"espeak:{a}+{v}" if v else f"espeak:{a}" for a in accents for v in variants]
 
 
 def voices(split: str) -> list[str]:
     if split == "train":
-        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(FLITE_TRAIN)
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(RECORDED_TRAIN)
     if split == "tune":
-        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TUNE_VARIANTS) + list(FLITE_TRAIN)
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TUNE_VARIANTS) + list(RECORDED_TRAIN)
     if split == "heldout":
         return espeak_voices(ESPEAK_HELDOUT_ACCENTS, ESPEAK_HELDOUT_VARIANTS) + list(HELDOUT_OTHER_ENGINES)
     raise ValueError(f"unknown split {split!r}")

@@ -23,7 +23,7 @@ from services.voice.spotter.features import MAX_SPEECH_S, Embedder, speech_secon
 from services.voice.synth import OOV_TUNE, cache_dir, noise
 from services.voice.training import augment, corpus, tts
 
-DATASET_VERSION = 1
+DATASET_VERSION = 2
 OTHER = len(corpus.VOCABULARY)
 NOISES = ("white", "pink", "brown", "hum", "clicks")
 
@@ -53,8 +53,8 @@ class Sizes:
     noise: int = 400
     tune_positives: int = 80
     tune_common_words: int = 300
-    engines_positives: int = 200
-    """Per command, `engines` split: the training voices of the engines other than espeak-ng."""
+    engines_positives: int = 300
+    """Per command, `engines` split: the recorded training voices (`corpus.RECORDED_TRAIN`, 100 each)."""
     engines_repeats: int = 2
     neighbour_repeats_all: int = 4
     """Per train one-edit neighbour (`corpus.neighbour_split`), `neighbours` split, any training voice."""
@@ -75,6 +75,14 @@ class Sizes:
     tune_speaker_positives: int = 40
     """Per command, `speakers-tune`: virtual speakers of the tune voices (with the tune neighbours)."""
     tune_speaker_neighbour_repeats: int = 2
+    two_edit_words: int = 40
+    """Per command, words two phoneme edits from it (`corpus.two_edit_neighbours`), train only."""
+    two_edit_repeats: int = 3
+    """Per two-edit word in `neighbours` (any training voice), plus one by a recorded voice and one per
+    round of `speakers`."""
+    recorded_tune_positives: int = 30
+    """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
+    tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
 
 
 VTL_RANGE = (0.84, 1.22)
@@ -95,6 +103,14 @@ def _speaker_draw(rng: random.Random, voices: list[str]) -> tuple[str, float, fl
     return tts.virtual_speaker(voice, factor), rng.uniform(0.8, 1.3), rng.uniform(0.8, 1.3)
 
 
+TWO_EDIT_SEED = 7
+
+
+def two_edit(sizes: Sizes) -> list[str]:
+    words = corpus.two_edit_neighbours(sizes.two_edit_words, TWO_EDIT_SEED)
+    return sorted({w for ws in words.values() for w in ws})
+
+
 def neighbours(sizes: Sizes, seed: int) -> dict[str, tuple[str, ...]]:
     """The one-edit neighbours of the commands split into train / tune / held-out words, the
     dictionary words sampled for training counted as train."""
@@ -109,20 +125,31 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     `speakers` and `speakers-tune` are said by virtual speakers (`_speaker_draw`, `tts.vocal_tract`).
 
     `neighbours` and `neighbours-tune` speak the train and tune one-edit neighbours of the commands
-    (`corpus.neighbour_split`: glow, goat, so, ... for "go"). `engines` adds clips of the training voices of engines other than espeak-ng (flite kal16 and awb):
-    in `train` they are 2 of 177 voices, and espeak-ng alone does not teach what speech made from
-    recordings sounds like."""
+    (`corpus.neighbour_split`: glow, goat, so, ... for "go"); `neighbours` and `speakers` also the
+    two-edit words (`two_edit`). `engines` adds clips of the recorded training voices
+    (`corpus.RECORDED_TRAIN`: flite kal16 and awb, Festival ked): in `train` they are 3 of 178 voices,
+    and espeak-ng alone does not teach what speech made from recordings sounds like. `recorded-tune`:
+    the recorded voices (not warped) saying the commands and the tune non-commands.
+
+    A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
     kind = split.partition(":")[0]  # speakers:1 is another round of speakers
     voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                            "neighbours-tune": "tune", "speakers-tune": "tune"}.get(kind, split))
-    if split == "engines":
+                            "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split))
+    if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
     out: list[Recipe] = []
     draw = _speaker_draw if split.startswith("speakers") else _voice_draw
 
+    said_as_command = corpus.tts_homophones(
+        [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws] + list(corpus.PHRASES_TRAIN) + pool
+        + list(corpus.neighbour_split(frozenset(pool))["train"]) + list(corpus.neighbour_split(frozenset(pool))["tune"])
+        + list(OOV_TUNE) + two_edit(sizes))
+
     def add(text: str, label: int, n: int, strength_clean: float = 0.2) -> None:
+        if label == OTHER and text in said_as_command:
+            return
         for _ in range(n):
             v, s, p = draw(rng, voices)
             strength = 0.0 if rng.random() < strength_clean else 1.0
@@ -157,9 +184,13 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         for word in words:
             add(word, OTHER, sizes.neighbour_repeats_all if split == "neighbours" else sizes.tune_neighbour_repeats)
         if split == "neighbours":
+            for word in two_edit(sizes):
+                add(word, OTHER, sizes.two_edit_repeats)
             voices = [v for v in voices if not v.startswith("espeak:")]
             for word in words:
                 add(word, OTHER, sizes.neighbour_repeats_engines)
+            for word in two_edit(sizes):
+                add(word, OTHER, 1)
         n_noise = 0
     elif kind == "speakers":
         add_commands(sizes.speaker_positives)
@@ -168,11 +199,22 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(word, OTHER, sizes.speaker_neighbour_repeats)
         for word in pool[: sizes.common_words]:
             add(word, OTHER, sizes.speaker_common_repeats)
+        for word in two_edit(sizes):
+            add(word, OTHER, 1)
         n_noise = 0
     elif split == "speakers-tune":
         add_commands(sizes.tune_speaker_positives)
         for word in neighbours(sizes, seed)["tune"]:
             add(word, OTHER, sizes.tune_speaker_neighbour_repeats)
+        n_noise = 0
+    elif split == "recorded-tune":
+        for voice in tuple(voices):
+            voices = [voice]
+            add_commands(sizes.recorded_tune_positives)
+            for word in OOV_TUNE:
+                add(word, OTHER, 3)
+            for word in neighbours(sizes, seed)["tune"]:
+                add(word, OTHER, 1)
         n_noise = 0
     elif split == "tune":
         add_commands(sizes.tune_positives)
@@ -239,23 +281,32 @@ def _key(items: list[Recipe]) -> str:
 
 def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """(X: n x FRAMES x 96 float16, y: n) for the recipes that render; cached."""
+    x, y, _ = indexed_features(items, workers, progress)
+    return x, y
+
+
+def indexed_features(items: list[Recipe], workers: int = 2,
+                     progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`features` and, for each row, the index of its recipe in `items`."""
     path = cache_dir() / f"spotter-features-{_key(items)}.npz"
     if path.exists():
         data = np.load(path)
-        return data["x"], data["y"]
+        return data["x"], data["y"], data["idx"]
     xs: list[np.ndarray] = []
     ys: list[int] = []
+    kept: list[int] = []
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(workers) as pool:
         for i, (r, f) in enumerate(zip(items, pool.imap(_features, items, chunksize=16), strict=True)):
             if f is not None:
                 xs.append(f)
                 ys.append(r.label)
+                kept.append(i)
             if progress and (i + 1) % 500 == 0:
                 get_logger("voice.train").info("features", done=i + 1, clips=len(items))
-    x, y = np.stack(xs), np.asarray(ys, dtype=np.int16)
+    x, y, idx = np.stack(xs), np.asarray(ys, dtype=np.int16), np.asarray(kept, dtype=np.int32)
     tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, x=x, y=y)
+    np.savez_compressed(tmp, x=x, y=y, idx=idx)
     tmp.replace(path)
-    return x, y
+    return x, y, idx
 

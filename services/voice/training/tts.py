@@ -2,9 +2,11 @@
 
 Each voice is `engine:name`: `espeak:<language>+<variant>` (espeak-ng), `flite:<voice>` (flite's
 built-in voices: kal16 is a diphone voice, awb/rms/slt are clustergen voices built from recordings
-of three different speakers) and `festival:kal` (Festival's diphone voice). Every engine returns float
-samples at 16 kHz; speed is a duration factor (1.0 = the engine's default, 1.2 = 20 % slower) and
-pitch a factor on the engine's base pitch.
+of three different speakers) and Festival's `festival:kal` and `festival:ked` (diphone voices: ked is
+a third recorded American male speaker) and `festival:slt_hts` (the slt speaker through Festival's HTS
+statistical-parametric synthesiser: another engine than flite's clustergen slt; it ignores the speed).
+Every engine returns float samples at 16 kHz; speed is a duration factor (1.0 = the engine's default,
+1.2 = 20 % slower) and pitch a factor on the engine's base pitch.
 
 A voice may end in `@vtl<factor>` (`flite:awb@vtl1.15`): a *virtual speaker* whose vocal tract is
 shorter (factor > 1: formants scaled up, towards a child's or a woman's) or longer (< 1) than the
@@ -69,11 +71,23 @@ def flite(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
         return _wav_samples(out.read_bytes())
 
 
+FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "slt_hts": "cmu_us_slt_arctic_hts"}
+"""`festival:<name>` -> Festival's voice function `voice_<value>`."""
+
+
 def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    if voice not in FESTIVAL_VOICES:
+        raise TtsError(f"unknown Festival voice {voice!r}: one of {', '.join(FESTIVAL_VOICES)}")
+    argv = ["text2wave", "-o", "", "-eval", f"(voice_{FESTIVAL_VOICES[voice]})",
+            "-eval", f"(Parameter.set 'Duration_Stretch {speed:.3f})"]
+    if round(pitch, 3) != 1.0 and FESTIVAL_VOICES[voice].endswith("_diphone"):
+        # the diphone voices' intonation model (Int_Targets_LR) maps onto this mean and spread
+        lr = f"(target_f0_mean {105 * pitch:.1f}) (target_f0_std {15 * pitch:.1f}) (model_f0_mean 170) (model_f0_std 34)"
+        argv += ["-eval", f"(set! int_lr_params '({lr}))"]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "x.wav"
-        _run(["text2wave", "-o", str(out), "-eval", f"(voice_{voice}_diphone)",
-              "-eval", f"(Parameter.set 'Duration_Stretch {speed:.3f})"], stdin=text.encode())
+        argv[2] = str(out)
+        _run(argv, stdin=text.encode())
         return _wav_samples(out.read_bytes())
 
 
