@@ -116,12 +116,18 @@ def test_unknown_scenario_is_a_source_error() -> None:
         open_source("synthetic:nosuchscenario").open()
 
 
-def test_synthetic_source_follows_schedule_and_commands(tmp_path: Path) -> None:
+def _synthetic(tmp_path: Path, schedule: str) -> SyntheticSource:
+    """An open synthetic source following `schedule`."""
     sched = tmp_path / "s.txt"
-    sched.write_text("100 O\n")
+    sched.write_text(schedule)
     src = open_source(f"synthetic:{sched}")
     assert isinstance(src, SyntheticSource)
     src.open()
+    return src
+
+
+def test_synthetic_source_follows_schedule_and_commands(tmp_path: Path) -> None:
+    src = _synthetic(tmp_path, "100 O\n")
     det = MarkDetector()
     frame = src.read(1.0)
     assert frame is not None and frame.image.shape == (480, 640, 3)
@@ -144,11 +150,7 @@ def test_builtin_cycle_scenario_changes_shape_over_time() -> None:
 
 
 def test_synthetic_frames_carry_sensor_noise_that_changes_between_frames(tmp_path: Path) -> None:
-    sched = tmp_path / "s.txt"
-    sched.write_text("100 none\n")
-    src = open_source(f"synthetic:{sched}")
-    assert isinstance(src, SyntheticSource)
-    src.open()
+    src = _synthetic(tmp_path, "100 none\n")
     before = time.time()
     frames = [src.read(1.0) for _ in range(12)]
     images = [f.image for f in frames if f is not None]

@@ -73,6 +73,8 @@ def flite(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
 
 FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "slt_hts": "cmu_us_slt_arctic_hts"}
 """`festival:<name>` -> Festival's voice function `voice_<value>`."""
+FESTIVAL_PACKAGES = {"kal": "festvox-kallpc16k", "ked": "festvox-kdlpc16k", "slt_hts": "festvox-us-slt-hts"}
+"""The Debian package that carries each Festival voice."""
 
 
 def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
@@ -87,7 +89,11 @@ def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "x.wav"
         argv[2] = str(out)
-        _run(argv, stdin=text.encode())
+        try:
+            _run(argv, stdin=text.encode())
+        except TtsError as exc:
+            raise TtsError(f"{exc} (is Festival's {voice} voice installed? apt-get install "
+                           f"{FESTIVAL_PACKAGES[voice]})") from None
         return _wav_samples(out.read_bytes())
 
 
