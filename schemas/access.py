@@ -178,3 +178,32 @@ def owners(key: str) -> tuple[str, ...]:
 def may_put(identity: str, key: str, *, operator_writes: bool = True) -> bool:
     """Whether the table lets `identity` put the relative `key`."""
     return identity in owners(key) and (operator_writes or identity != OPERATOR)
+
+
+RATE_LIMITS: dict[str, float] = {
+    "voice/command": 1000.0,
+    "vision/marks": 200.0,
+}
+"""Puts a second that one session may make on the reasoner's inputs (keys relative to
+`hri/<robot>/`); the router drops the rest on arrival (Zenoh downsampling, per session), so a flood
+from an allowed identity (a bug, a stolen password) is cut to this before it reaches the reasoner or
+anyone else's link. Downsampling drops any put that comes sooner than 1/rate after the last one let
+through, whatever it says, so the limits sit far above what a real publisher does: the voice service
+puts once per utterance, and a command that answers a question follows the question's decision, which
+takes milliseconds to come back; a camera gives some tens of frames a second, and a mark observation
+only repeats the state of the one before. Motion goals, the reasoner's outputs and the simulator's
+scene are not limited: a stop must never be dropped, and the operator may change the scene twice in
+a millisecond."""
+
+
+def downsampling(robot: str) -> list[dict[str, Any]]:
+    """The router's `downsampling` section for robot `robot`, from `RATE_LIMITS`."""
+    validate_robot_id(robot)
+    return [
+        {
+            "id": "hri-input-rates",
+            "flows": ["ingress"],
+            "messages": ["put"],
+            "rules": [{"key_expr": f"hri/{robot}/{key}", "freq": freq} for key, freq in RATE_LIMITS.items()],
+        }
+    ]

@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 
 import serial
 from dynamixel_sdk import COMM_SUCCESS, GroupBulkRead, GroupSyncWrite, PacketHandler, PortHandler
+from dynamixel_sdk.group_bulk_read import PARAM_NUM_DATA, PARAM_NUM_LENGTH
 from dynamixel_sdk.robotis_def import COMM_RX_TIMEOUT
 
 from services.motion.joints import CM740_ID, CM740_MODEL, JOINT_IDS, MX28_MODEL, describe
@@ -285,6 +286,17 @@ class Op2Bus:
                 timeout=timeout,
                 message=self._ph.getTxRxResult(result),
             )
+        for jid, entry in self._bulk.data_dict.items():
+            if len(entry[PARAM_NUM_DATA]) < entry[PARAM_NUM_LENGTH]:
+                # The SDK takes the first status packet with the right ID, whatever its length: a
+                # late reply to an earlier request (a loaded machine, a slow bus) lines up with this
+                # one. That is a bad read, not a broken bus; drop what is queued so the next lines up.
+                self.counters.read_failures += 1
+                self.counters.rx_corrupt += 1
+                self._discard_input()
+                return ReadResult(ok=False, failed_id=jid,
+                                  message=f"short reply from ID {jid} ({len(entry[PARAM_NUM_DATA])} of "
+                                          f"{entry[PARAM_NUM_LENGTH]} bytes): a late status packet")
         positions = {
             jid: int(self._bulk.getData(jid, ADDR_PRESENT_POSITION, 2)) for jid in self._bulk.data_dict
         }

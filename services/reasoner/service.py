@@ -54,9 +54,11 @@ def _log_restored(ctx: ServiceContext, store: StateStore, restored: Memory, conf
     log(line, state_file=str(store.path), situation=restored.situation, resume_go=resume,
         saved_at=store.saved_at, episodes=episodes, debugger_port=config.debugger_port)
 
-# Flood limits. Marks and commands wait in bounded queues (the runtime drops the oldest beyond
-# INPUT_QUEUE), are handed to the agent only while fewer than *_BACKLOG inputs wait for it, and
-# commands at most COMMAND_RATE a second; the rest are dropped and counted in health `dropped`.
+# Flood limits, the second line behind the router's per-session rate limits (schemas.access
+# RATE_LIMITS) and the one that holds on routers configured without them. Marks and commands wait
+# in bounded queues (the runtime drops the oldest beyond INPUT_QUEUE), are handed to the agent only
+# while fewer than *_BACKLOG inputs wait for it, and commands at most COMMAND_RATE a second; the rest
+# are dropped and counted in health `dropped`.
 # A publisher flooding commands can neither grow the reasoner's memory, nor queue work in front of
 # an X, nor keep the agent (and the process's Python threads) too busy to read the next mark.
 # Marks get more room than commands, so a command flood never crowds out a danger sign.
@@ -131,7 +133,8 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         ctx,
         ctx.publisher(keys.motion_goal, MotionGoal, block=True, priority=zenoh.Priority.REAL_TIME),
         ctx.publisher(keys.speech_say, SpeechRequest),
-        ctx.publisher(keys.reasoner_decision, Decision),
+        # above commands, so a command flood does not crowd a decision off a watcher's link
+        ctx.publisher(keys.reasoner_decision, Decision, priority=zenoh.Priority.INTERACTIVE_HIGH),
         store,
         keepalive_s=options.keepalive_s,
     )

@@ -12,6 +12,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import zenoh
+
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.vision.debounce import Confirmation, Debouncer
@@ -61,7 +63,9 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
     settings = settings or VisionSettings()
-    pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation)
+    # express, above commands: a busy link must not queue a danger sign behind other traffic
+    pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation, priority=zenoh.Priority.INTERACTIVE_HIGH,
+                        express=True)
     detector = MarkDetector()
     debounce = Debouncer(settings.debounce)
     stats = _Stats()

@@ -17,7 +17,7 @@ from schemas.messages import Action, HealthStatus, Posture
 from services.motion.config import MotionSettings
 from services.motion.executor import GoalRequest, Snapshot
 from services.motion.gait import ready_pose
-from services.motion.joints import HEAD_TILT, NOD_TILT, SIT, STAND, pose_error
+from services.motion.joints import HEAD_TILT, JOINT_IDS, NOD_TILT, SIT, STAND, pose_error
 from services.motion.loop import ControlLoop
 from services.motion.simbus import SimBus
 from services.runtime import get_logger
@@ -28,11 +28,13 @@ from tests.conftest import wait_for
 class Probe:
     states: list[tuple[Snapshot, bool]] = field(default_factory=list)
     health: list[tuple[HealthStatus, dict[str, Any]]] = field(default_factory=list)
+    details: list[dict[str, Any]] = field(default_factory=list)
 
     def publish(self, snap: Snapshot, ok: bool) -> None:
         self.states.append((snap, ok))
 
     def on_health(self, status: HealthStatus | None, **detail: Any) -> None:
+        self.details.append(detail)
         if status is not None:
             self.health.append((status, detail))
 
@@ -162,6 +164,21 @@ def test_silent_servo_stops_the_walk_and_is_named(rig: Rig) -> None:
     rig.sim.revive(13)
     wait_for(lambda: rig.probe.states[-1][1], 3)
     assert rig.probe.health[-1][0] == HealthStatus.OK
+
+
+def test_a_late_status_packet_is_a_bad_read_not_a_broken_bus(rig: Rig) -> None:
+    """The SDK takes the first status packet with the right ID as the BULK_READ answer, whatever its
+    length; a late reply to an earlier request (a loaded host) must cost one read, not the bus."""
+    rig.posture_is(Posture.SITTING)
+    rig.goal(Action.STAND_UP, "up")
+    rig.posture_is(Posture.STANDING)
+    failed_before = len(rig.probe.health)
+    rig.sim.stray_reply(JOINT_IDS[0])  # read first: the SDK skips packets of other IDs
+    wait_for(lambda: any(d.get("bus", {}).get("rx_corrupt", 0) >= 1 for d in rig.probe.details), 3)
+    assert rig.probe.states[-1][1] and rig.probe.last.posture == Posture.STANDING
+    assert all(status == HealthStatus.OK for status, _ in rig.probe.health[failed_before:])
+    rig.goal(Action.WALK_FORWARD, "go")
+    rig.posture_is(Posture.WALKING, 1)
 
 
 def test_missing_servo_at_start_is_named_and_retried() -> None:

@@ -167,6 +167,9 @@ def test_silent_servo_breaks_the_bulk_read_chain_and_corrupt_replies_are_detecte
     sim.corrupt_replies(1)
     assert group.txRxPacket() == COMM_RX_CORRUPT and group.failed_id == 1
     assert group.txRxPacket() == COMM_SUCCESS
+    sim.stray_reply(1)  # the SDK takes a late, empty status packet as ID 1's answer
+    assert group.txRxPacket() == COMM_SUCCESS and len(group.data_dict[1][0]) < 2
+    assert group.txRxPacket() == COMM_SUCCESS and group.getData(1, ADDR_PRESENT_POSITION, 2) == int(SIT[1])
 
 
 def test_torque_sync_write_and_power_cycle(sim: SimBus, port: WaitingPortHandler) -> None:
@@ -225,6 +228,8 @@ def test_standalone_simulator_takes_fault_commands_on_stdin() -> None:
         assert PH.ping(handler, 7)[1] == COMM_SUCCESS
         assert ask("corrupt 1") == {"ok": True}
         assert PH.ping(handler, 7)[1] == COMM_RX_CORRUPT
+        assert ask("stray 7") == {"ok": True}
+        assert ask("stray") == {"ok": False, "error": "usage: stray <id>"}
         assert ask("fly away")["ok"] is False
         assert ask("silence x")["ok"] is False
         assert ask("positions")["positions"]["13"] == int(SIT[13])  # type: ignore[index]

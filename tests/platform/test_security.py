@@ -19,7 +19,18 @@ import zenoh
 from cryptography import x509
 from cryptography.x509.oid import NameOID
 
-from schemas.access import ACCESS, IDENTITIES, OBSERVER, OPERATOR, Kind, access_control, may_put, owners
+from schemas.access import (
+    ACCESS,
+    IDENTITIES,
+    OBSERVER,
+    OPERATOR,
+    RATE_LIMITS,
+    Kind,
+    access_control,
+    downsampling,
+    may_put,
+    owners,
+)
 from schemas.keys import SERVICES, Keys
 from services.cli import keys as deployment_keys
 from services.cli.router import free_port, wait_listening
@@ -257,6 +268,35 @@ def test_the_router_drops_puts_the_table_does_not_allow(
             s.close()
 
 
+def test_the_router_limits_the_rate_of_one_session_on_the_reasoners_inputs(
+    secure_router: tuple[str, str], keys_dir: Path
+) -> None:
+    """A flood from one allowed session is cut to `RATE_LIMITS` at the router; another session's
+    put on the same key still gets through, and motion goals are never limited."""
+    tcp, _tls = secure_router
+    k = Keys("sec")
+    reasoner, voice, operator, motion = (open_as(tcp, keys_dir / n) for n in ("reasoner", "voice", "operator",
+                                                                            "motion"))
+    try:
+        commands, goals = Inbox(reasoner, k.voice_command), Inbox(motion, k.motion_goal)
+        flood, person = voice.declare_publisher(k.voice_command), operator.declare_publisher(k.voice_command)
+        goal = reasoner.declare_publisher(k.motion_goal, congestion_control=zenoh.CongestionControl.BLOCK)
+        wait_for(lambda: flood.matching_status.matching and goal.matching_status.matching, timeout=5)
+        t0 = time.monotonic()
+        while (elapsed := time.monotonic() - t0) < 1.0:
+            flood.put(b"flood")
+        for _ in range(2000):  # a burst far above every input limit
+            goal.put(b"goal")
+        person.put(b"stop")
+        wait_for(lambda: b"stop" in commands.got and len(goals.got) == 2000, timeout=10)
+        time.sleep(0.3)
+        flooded = commands.got.count(b"flood")
+        assert 0 < flooded <= RATE_LIMITS["voice/command"] * elapsed * 1.2, flooded
+    finally:
+        for s in (reasoner, voice, operator, motion):
+            s.close()
+
+
 def test_a_stolen_password_without_its_certificate_gets_no_rights(
     secure_router: tuple[str, str], keys_dir: Path, tmp_path: Path
 ) -> None:
@@ -363,4 +403,5 @@ def test_router_config_file_is_a_zenoh_configuration_with_the_rules(keys_dir: Pa
     assert conf["transport"]["auth"]["usrpwd"]["dictionary_file"] == "/etc/hri/router/dictionary"
     assert conf["transport"]["link"]["tls"]["enable_mtls"] is True
     assert conf["access_control"] == access_control("r9", tls=True)
+    assert conf["downsampling"] == downsampling("r9")
     assert "password" not in text  # the dictionary stays a file; no secret is copied into the config

@@ -16,6 +16,7 @@ import pytest
 import zenoh
 
 from schemas import Action, MotionGoal, Posture, VoiceCommand
+from schemas.access import RATE_LIMITS
 from schemas.keys import SERVICES
 from services.runtime import Credentials, client_config, encode
 from tests.conftest import ROOT
@@ -148,8 +149,12 @@ def rss_mib(pid: int) -> float:
 
 def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> None:
     """`voice` may put commands; flooding them (about 50,000/s asked) must not delay an X's stop
-    behind the flood nor grow the reasoner's memory; the reasoner reports what it dropped.
-    (The latency under flood is measured by bench/security_bench.py.)"""
+    behind the flood nor grow the reasoner's memory. The router lets one session put at most
+    `RATE_LIMITS` commands a second and drops the rest on arrival, so the flood reaches neither the
+    reasoner nor this test's recorder. (The reasoner's own bounded queue, for routers without the
+    limits, is tested in tests/platform; the latency under flood is measured by
+    bench/security_bench.py.)"""
+    flood_start = time.monotonic()
     robot.play([{"send": "go", "expect": {"verdict": "obey", "posture": "walking"}}])
     reasoner = robot.launcher.pid("reasoner")
     assert reasoner is not None
@@ -177,7 +182,8 @@ def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> N
         assert stop is not None
     finally:
         flood.join(30)
-    health = robot.health("reasoner")
-    assert health is not None and health.detail.get("dropped", {}).get("voice/command", 0) > 0, health
+    # What got through the router: at most the session's rate over the flood's 6 s (and some did).
+    flooded = [h for h in robot.rec.since(flood_start, "heard") if h.engine == "flood"]
+    assert 0 < len(flooded) <= RATE_LIMITS["voice/command"] * 6.0 * 1.25, len(flooded)
     assert rss_mib(reasoner) - before < 25, (before, rss_mib(reasoner))
     assert robot.launcher.pid("reasoner") == reasoner  # it never went down

@@ -3,7 +3,7 @@
 The first line on stdout is the pty path (e.g. /dev/pts/7); point any Dynamixel tool at it at
 1,000,000 bps. Runs until SIGTERM, Ctrl-C, or (with --parent-pid) until that process is gone.
 With --control, fault-injection commands are read from stdin, one per line (see
-services/motion/simbus/control.py: silence, revive, corrupt, power, positions, stats), each answered
+services/motion/simbus/control.py: silence, revive, corrupt, stray, power, positions, stats), each answered
 with one JSON line on stdout.
 """
 

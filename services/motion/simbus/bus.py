@@ -62,6 +62,7 @@ class SimBus:
         self._lock = threading.RLock()
         self._silent: set[int] = set()
         self._corrupt_left = 0
+        self._stray: list[int] = []
         self._booted_at: float | None = None
         self._bus_free = 0.0
         self._reader = PacketReader()
@@ -141,6 +142,12 @@ class SimBus:
         with self._lock:
             self._corrupt_left = count
 
+    def stray_reply(self, dev_id: int) -> None:
+        """The next BULK_READ answer is preceded by a late status packet from `dev_id` carrying no
+        data (the answer to an earlier request that had already timed out, as on a loaded host)."""
+        with self._lock:
+            self._stray.append(dev_id)
+
     def set_power(self, on: bool) -> None:
         with self._lock:
             was = self.cm740.power
@@ -208,7 +215,9 @@ class SimBus:
             elif packet.instruction == Instruction.SYNC_WRITE:
                 self._sync_write(packet, now)
             elif packet.instruction == Instruction.BULK_READ:
-                replies.extend(self._bulk_read(packet, now))
+                stray = [self._status(d, 0) for i in self._stray if (d := self._alive(i, now)) is not None]
+                self._stray.clear()
+                replies.extend([*stray, *self._bulk_read(packet, now)])
             elif packet.id == BROADCAST_ID:
                 if packet.instruction == Instruction.WRITE and len(packet.params) >= 2:
                     for dev_id in list(self._devices):

@@ -41,6 +41,10 @@ def apply_command(bus: SimBus, line: str) -> dict[str, Any]:
             if len(args) != 1 or int(args[0]) < 0:
                 raise ValueError("usage: corrupt <count>")
             bus.corrupt_replies(int(args[0]))
+        elif cmd == "stray":
+            if len(args) != 1:
+                raise ValueError("usage: stray <id>")
+            bus.stray_reply(_ids(args)[0])
         elif cmd == "power":
             if args not in (["on"], ["off"]):
                 raise ValueError("usage: power on|off")
@@ -58,7 +62,7 @@ def apply_command(bus: SimBus, line: str) -> dict[str, Any]:
                 "corrupted": stats.corrupted,
             }
         else:
-            raise ValueError(f"unknown command {cmd!r}: silence, revive, corrupt, power, positions, stats")
+            raise ValueError(f"unknown command {cmd!r}: silence, revive, corrupt, stray, power, positions, stats")
     except ValueError as exc:
         return {"ok": False, "error": str(exc)}
     return {"ok": True}
