@@ -83,6 +83,12 @@ class EnrolConfig:
     copies: int = 4
     """Noisy copies of each user sample."""
     anchors: bool = True
+    reversed_others: int = 1
+    """Copies of each user command sample played backwards and labelled "other" (0: none): the
+    user's own voice saying no command. Tune (recorded training speakers, 5 samples per command):
+    non-commands accepted after enrolment 18.0 % -> 14.9 %, accuracy 0.897 -> 0.894; 3 copies:
+    13.9 % but below the un-enrolled accuracy on one speaker; halves of two commands joined as
+    "other" (also tried): 9.2 %, but accuracy 0.838, below the un-enrolled head's."""
     seed: int = 0
 
 
@@ -120,6 +126,13 @@ def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = E
         for k in range(cfg.copies + 1):
             feats.append(embedder.utterance(pcm if k == 0 else _noisy(pcm, rng), seed=k))
             labels.append(classes.index(label))
+    for label, pcm in samples:
+        if label == classes[-1]:
+            continue
+        backwards = np.frombuffer(pcm, dtype="<i2")[::-1].tobytes()
+        for k in range(cfg.reversed_others):
+            feats.append(embedder.utterance(backwards if k == 0 else _noisy(backwards, rng), seed=k))
+            labels.append(len(classes) - 1)
     if cfg.anchors:
         for pcm in _anchor_audio():
             feats.append(embedder.utterance(pcm))
