@@ -131,6 +131,13 @@ def test_enrolment_improves_an_unseen_voice(spotter: SpotterEngine) -> None:
     after = adapt(spotter.head, enrol, EnrolConfig(), spotter.embedder)
     before_n, after_n = score(spotter.head), score(after)
     assert after_n >= before_n + 2 or after_n == len(test) * 2, (before_n, after_n)
+    # The enrolment samples played backwards are "other": this voice saying no command. Without
+    # them the adapted head leans towards "anything this voice says is a command".
+    backwards = np.stack([spotter.embedder.utterance(np.frombuffer(p, "<i2")[::-1].tobytes()) for _, p in test])
+    without = adapt(spotter.head, enrol, EnrolConfig(reversed_others=0), spotter.embedder)
+    other_with = after.probabilities(backwards)[:, -1].mean()
+    other_without = without.probabilities(backwards)[:, -1].mean()
+    assert other_with > other_without, (other_with, other_without)
     # enrolment never makes the robot walk unasked where the calibrated head would not
     for word in ("goal", "go"):
         pcm = _utterance(word, voice)
