@@ -6,6 +6,7 @@ Each recording is trimmed and embedded as the service does. The head's last laye
 by gradient descent on:
 
 - the user's samples (and copies of them with noise and gain changes),
+- the user's command samples played backwards, labelled "other": the user's voice saying no command,
 - synthesised anchors: the command words' nearest non-command neighbours spoken by espeak-ng, labelled
   "other", so that the head does not learn "anything this voice says is a command",
 

@@ -290,8 +290,9 @@ def test_the_router_limits_the_rate_of_one_session_on_the_reasoners_inputs(
         person.put(b"stop")
         wait_for(lambda: b"stop" in commands.got and len(goals.got) == 2000, timeout=10)
         time.sleep(0.3)
+        window = time.monotonic() - t0  # the flood was sent in the first second, and drained since
         flooded = commands.got.count(b"flood")
-        assert 0 < flooded <= RATE_LIMITS["voice/command"] * elapsed * 1.2, flooded
+        assert elapsed >= 1.0 and 0 < flooded <= RATE_LIMITS["voice/command"] * window + 10, flooded
     finally:
         for s in (reasoner, voice, operator, motion):
             s.close()

@@ -150,11 +150,10 @@ def rss_mib(pid: int) -> float:
 def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> None:
     """`voice` may put commands; flooding them (about 50,000/s asked) must not delay an X's stop
     behind the flood nor grow the reasoner's memory. The router lets one session put at most
-    `RATE_LIMITS` commands a second and drops the rest on arrival, so the flood reaches neither the
-    reasoner nor this test's recorder. (The reasoner's own bounded queue, for routers without the
+    `RATE_LIMITS` commands a second and drops the rest on arrival, so what reaches the reasoner and
+    this test's recorder is cut 50-fold. (The reasoner's own bounded queue, for routers without the
     limits, is tested in tests/platform; the latency under flood is measured by
     bench/security_bench.py.)"""
-    flood_start = time.monotonic()
     robot.play([{"send": "go", "expect": {"verdict": "obey", "posture": "walking"}}])
     reasoner = robot.launcher.pid("reasoner")
     assert reasoner is not None
@@ -171,6 +170,7 @@ def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> N
             50_000.0,
         ),
     )
+    flood_start = time.monotonic()
     flood.start()
     try:
         time.sleep(2.0)  # the flood is in full swing
@@ -182,8 +182,9 @@ def test_a_flooding_voice_cannot_stop_the_robot_from_stopping(robot: Robot) -> N
         assert stop is not None
     finally:
         flood.join(30)
-    # What got through the router: at most the session's rate over the flood's 6 s (and some did).
+    # What got through the router: some, and at most the session's rate over the flood's life.
     flooded = [h for h in robot.rec.since(flood_start, "heard") if h.engine == "flood"]
-    assert 0 < len(flooded) <= RATE_LIMITS["voice/command"] * 6.0 * 1.25, len(flooded)
+    window = time.monotonic() - flood_start
+    assert 0 < len(flooded) <= RATE_LIMITS["voice/command"] * window + 10, (len(flooded), window)
     assert rss_mib(reasoner) - before < 25, (before, rss_mib(reasoner))
     assert robot.launcher.pid("reasoner") == reasoner  # it never went down
