@@ -196,6 +196,31 @@ scene are not limited: a stop must never be dropped, and the operator may change
 a millisecond."""
 
 
+INPUT_PRIORITIES: dict[str, str] = {
+    "voice/command": "data",
+    "vision/scene": "data",
+    "vision/marks": "interactive_high",
+}
+"""The Zenoh priority the router gives every put on the reasoner's inputs (and the simulator's
+scene), whatever the publisher asked for: a danger sign travels above commands, and no publisher of
+a command can claim a priority above the marks' (the stop goal's `real_time`, for one)."""
+
+
+def qos_overwrites(robot: str) -> list[dict[str, Any]]:
+    """The router's `qos/network` section for robot `robot`, from `INPUT_PRIORITIES`."""
+    validate_robot_id(robot)
+    return [
+        {
+            "id": f"hri-priority-{key.replace('/', '-')}",
+            "messages": ["put"],
+            "flows": ["ingress"],
+            "key_exprs": [f"hri/{robot}/{key}"],
+            "overwrite": {"priority": priority},
+        }
+        for key, priority in INPUT_PRIORITIES.items()
+    ]
+
+
 def downsampling(robot: str) -> list[dict[str, Any]]:
     """The router's `downsampling` section for robot `robot`, from `RATE_LIMITS`."""
     validate_robot_id(robot)

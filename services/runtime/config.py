@@ -19,7 +19,7 @@ from pathlib import Path
 
 import zenoh
 
-from schemas.access import access_control, downsampling
+from schemas.access import access_control, downsampling, qos_overwrites
 from schemas.keys import validate_robot_id
 
 DEFAULT_CONNECT = "tcp/127.0.0.1:7447"
@@ -262,8 +262,8 @@ def check_listen(listen: list[str], security: RouterSecurity | None) -> None:
 
 def router_config(listen: list[str], security: RouterSecurity | None = None) -> zenoh.Config:
     """A zenoh-python router listening only where told (the defaults listen on all interfaces);
-    with `security`, every client must authenticate, and the access rules and input rate limits of
-    `schemas.access` apply."""
+    with `security`, every client must authenticate, and the access rules, input rate limits and
+    input priorities of `schemas.access` apply."""
     conf = zenoh.Config()
     conf.insert_json5("mode", json.dumps("router"))
     conf.insert_json5("listen/endpoints", json.dumps(listen))
@@ -288,6 +288,7 @@ def router_security_settings(security: RouterSecurity, listen: list[str], *,
         "transport/auth/usrpwd/dictionary_file": f"{base}/dictionary",
         "access_control": access_control(security.robot, tls=True, operator_writes=security.operator_writes),
         "downsampling": downsampling(security.robot),
+        "qos/network": qos_overwrites(security.robot),
     }
     if tls:
         if folder is None:

@@ -30,6 +30,7 @@ from schemas.access import (
     downsampling,
     may_put,
     owners,
+    qos_overwrites,
 )
 from schemas.keys import SERVICES, Keys
 from services.cli import keys as deployment_keys
@@ -298,6 +299,27 @@ def test_the_router_limits_the_rate_of_one_session_on_the_reasoners_inputs(
             s.close()
 
 
+def test_the_router_sets_the_priority_of_the_reasoners_inputs(secure_router: tuple[str, str], keys_dir: Path) -> None:
+    """Whatever priority a publisher asks for, commands arrive at `data` and marks above them."""
+    tcp, _tls = secure_router
+    k = Keys("sec")
+    reasoner, voice, vision = (open_as(tcp, keys_dir / n) for n in ("reasoner", "voice", "vision"))
+    try:
+        got: dict[str, zenoh.Priority] = {}
+        _subs = [reasoner.declare_subscriber(key, lambda s: got.setdefault(str(s.key_expr), s.priority))
+                 for key in (k.voice_command, k.vision_marks)]  # held: a dropped subscriber is undeclared
+        command = voice.declare_publisher(k.voice_command, priority=zenoh.Priority.REAL_TIME)
+        marks = vision.declare_publisher(k.vision_marks, priority=zenoh.Priority.DATA_LOW)
+        wait_for(lambda: command.matching_status.matching and marks.matching_status.matching, timeout=5)
+        command.put(b"go")
+        marks.put(b"{}")
+        wait_for(lambda: len(got) == 2, timeout=5)
+        assert got == {k.voice_command: zenoh.Priority.DATA, k.vision_marks: zenoh.Priority.INTERACTIVE_HIGH}
+    finally:
+        for s in (reasoner, voice, vision):
+            s.close()
+
+
 def test_a_stolen_password_without_its_certificate_gets_no_rights(
     secure_router: tuple[str, str], keys_dir: Path, tmp_path: Path
 ) -> None:
@@ -405,4 +427,5 @@ def test_router_config_file_is_a_zenoh_configuration_with_the_rules(keys_dir: Pa
     assert conf["transport"]["link"]["tls"]["enable_mtls"] is True
     assert conf["access_control"] == access_control("r9", tls=True)
     assert conf["downsampling"] == downsampling("r9")
+    assert conf["qos"]["network"] == qos_overwrites("r9")
     assert "password" not in text  # the dictionary stays a file; no secret is copied into the config
