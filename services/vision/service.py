@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import zenoh
 
+from schemas.access import INPUT_PRIORITIES
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.vision.debounce import Confirmation, Debouncer
@@ -63,9 +64,10 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
     settings = settings or VisionSettings()
-    # express, above commands: a busy link must not queue a danger sign behind other traffic
-    pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation, priority=zenoh.Priority.INTERACTIVE_HIGH,
-                        express=True)
+    # express, above commands (the priority the router gives marks anyway): a busy link must not
+    # queue a danger sign behind other traffic
+    priority = getattr(zenoh.Priority, INPUT_PRIORITIES["vision/marks"].upper())
+    pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation, priority=priority, express=True)
     detector = MarkDetector()
     debounce = Debouncer(settings.debounce)
     stats = _Stats()
