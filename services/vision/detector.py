@@ -46,9 +46,10 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class DetectorConfig:
-    levels: tuple[tuple[int, int], ...] = ((1, 31), (4, 31))
-    """(downscale factor, adaptive-threshold window in pixels at that scale): full resolution for small
-    marks, a quarter for large ones (whose strokes are wider than the full-resolution window)."""
+    levels: tuple[tuple[int, ...], ...] = ((1, 31), (4, 31))
+    """(downscale factor, adaptive-threshold window in pixels at that scale[, largest component judged
+    there, pixels at that scale]): full resolution for small marks, a quarter for large ones (whose
+    strokes are wider than the full-resolution window)."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     full_res_max: int = 0
@@ -81,8 +82,10 @@ class DetectorConfig:
     triangle with a finger over a corner) still go to the verifier when they are dark on a light
     surround (`loose_contrast`, `loose_texture`); it names their shape, with the stricter
     `Verifier.loose_thresholds`, and the card tests judge them as any other mark. Needs `verify`."""
-    loose_contrast: float = 45.0  # the frame around the box at least this much lighter than the ink
-    loose_texture: float = 0.5  # and its grey-level spread at most this share of that contrast
+    loose_contrast: float = 35.0
+    """the frame around the box at least this much lighter than the ink (45 with the HOG verifier: the
+    CNN rejects false candidates well enough for 35 and 0.7, chosen on tuning seeds 555 and 1234)"""
+    loose_texture: float = 0.7  # and its grey-level spread at most this share of that contrast (0.5)
     loose_max_size: int = 96
     """at full resolution only components up to this size are loose candidates: a bigger mark is
     also a component of the quarter-scale level, where its patch costs a sixteenth"""
@@ -195,7 +198,7 @@ class MarkDetector:
         self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
-        for f, block in self.config.levels:
+        for f, block, *_ in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
 
@@ -247,7 +250,7 @@ class MarkDetector:
         """Every pyramid level, then one batched verifier call for all of their candidates."""
         found: list[Detection] = []
         pending: list[_Pending] = []
-        for f, block in self.config.levels:
+        for f, block, *cap in self.config.levels:
             if f == 1:
                 g = cv2.GaussianBlur(gray, (3, 3), 0)
             else:
@@ -256,7 +259,9 @@ class MarkDetector:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
             self._f = f
-            self._max_size = self.config.full_res_max if f == 1 and len(self.config.levels) > 1 else 0
+            self._max_size = cap[0] if cap else 0
+            if f == 1 and len(self.config.levels) > 1 and self.config.full_res_max:
+                self._max_size = self.config.full_res_max
             found += self._detect_scale(g, block, text_check=f <= 2, pending=pending)
         if pending:
             found += self._verify(pending)

@@ -285,9 +285,9 @@ def main(
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.5,
-    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.5,
-    loose_x: Annotated[float, typer.Option(help="probability a loose candidate needs to be named X")] = 0.6,
-    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.9,
+    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.7,
+    loose_x: Annotated[float, typer.Option(help="probability a loose candidate needs to be named X")] = 0.5,
+    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.8,
     loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.85,
 ) -> None:
     t0 = time.monotonic()
