@@ -107,36 +107,44 @@ def test_the_detector_uses_the_verifier_and_can_do_without() -> None:
 
 
 class _Counting:
-    """An onnxruntime session stand-in that counts calls and batch sizes."""
+    """An onnxruntime session stand-in that records each call's claims."""
 
     def __init__(self, inner: object) -> None:
         self.inner = inner
-        self.batches: list[int] = []
+        self.claims: list[np.ndarray] = []
 
     def run(self, names: object, feeds: dict[str, np.ndarray]) -> object:
-        self.batches.append(len(feeds["crops"]))
+        self.claims.append(feeds["claim"].copy())
         return self.inner.run(names, feeds)  # type: ignore[attr-defined]
 
 
 def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
-    """Marks at both pyramid levels (a small X at full resolution, a big O at a quarter) and a loose
-    candidate (a blurred small triangle): one call to the network for the frame."""
-    img = np.full((480, 640), 120, np.uint8)
-    cv2.rectangle(img, (20, 20), (620, 460), 235, -1)
-    cv2.circle(img, (430, 240), 120, 30, 24, cv2.LINE_AA)
+    """A small X (full resolution), a big O (quarter scale) and a small triangle smeared by motion
+    blur (a loose candidate: no shape test reads it), each on its own card: one network call."""
+    img = np.full((480, 640), 110, np.uint8)
+    cv2.rectangle(img, (70, 70), (150, 150), 235, -1)  # a border of about half the mark's width
     for a in (45, -45):
         dx, dy = 25 * math.cos(math.radians(a)), 25 * math.sin(math.radians(a))
-        cv2.line(img, (int(110 - dx), int(120 - dy)), (int(110 + dx), int(120 + dy)), 30, 7, cv2.LINE_AA)
-    tri = np.array([(110, 330), (80, 385), (140, 385)], np.int32)
-    cv2.polylines(img, [tri], True, 30, 6, cv2.LINE_AA)
+        cv2.line(img, (int(110 - dx), int(110 - dy)), (int(110 + dx), int(110 + dy)), 30, 7, cv2.LINE_AA)
+    cv2.rectangle(img, (410, 230), (630, 450), 235, -1)
+    cv2.circle(img, (520, 340), 80, 30, 18, cv2.LINE_AA)
+    cv2.rectangle(img, (290, 210), (350, 270), 235, -1)
+    angles = np.radians(90 + 120 * np.arange(3))
+    pts = np.stack([320 + 15 * np.cos(angles), 240 + 15 * np.sin(angles)], axis=1).astype(np.int32)
+    cv2.polylines(img, [pts], True, 30, 4, cv2.LINE_AA)
+    kernel = np.zeros((13, 13), np.float32)
+    kernel[6, :] = 1.0 / 13
+    img[200:280, 280:360] = cv2.filter2D(img, -1, kernel)[200:280, 280:360]
     v = Verifier.load()
     counting = _Counting(v.session)
     det = MarkDetector(verifier=dataclasses.replace(v, session=counting))
     found = det.detect(img)
-    assert {d.shape for d in found} >= {Shape.X, Shape.O, Shape.TRIANGLE}
-    assert len(counting.batches) == 1 and counting.batches[0] >= 3
+    assert sorted(d.shape.value for d in found) == ["O", "TRIANGLE", "X"]
+    assert len(counting.claims) == 1
+    claims = counting.claims[0]
+    assert claims[:, 3].sum() >= 1 and claims[:, :3].sum() >= 2  # loose and claimed candidates together
     assert det.detect(np.full((480, 640), 200, np.uint8)) == []
-    assert len(counting.batches) == 1  # no candidates: no call
+    assert len(counting.claims) == 1  # no candidates: no call
 
 
 def test_a_file_that_is_not_a_verifier_model_is_refused(tmp_path: Path) -> None:
