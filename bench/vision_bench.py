@@ -149,7 +149,7 @@ def _detector(settings: list[str]) -> MarkDetector:
     for item in settings:
         key, _, value = item.partition("=")
         if key in ("thresholds", "loose_thresholds"):
-            verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})
+            verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
         elif key in {f.name for f in dataclasses.fields(DetectorConfig)} and key != "levels":
             kind = type(getattr(DetectorConfig(), key))
             config[key] = value.lower() in ("1", "true") if kind is bool else kind(value)
