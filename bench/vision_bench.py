@@ -2,7 +2,7 @@
 mark size, tilt, blur and finger occlusion, and single-thread frames per second at 640x480.
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
-                                           [--failures DIR] [--json]
+                                           [--failures DIR] [--json] [--set KEY=VALUE ...]
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
@@ -17,6 +17,7 @@ core).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import statistics
@@ -30,7 +31,8 @@ import numpy as np
 import typer
 
 from schemas.messages import Shape
-from services.vision.detector import Detection, MarkDetector, box_overlap
+from services.vision.detector import Detection, DetectorConfig, MarkDetector, box_overlap
+from services.vision.verifier import Verifier
 
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 TIMED_FRAMES = 200
@@ -52,10 +54,18 @@ def main(
     split: Annotated[str, typer.Option(help="heldout (report this) or tuning")] = "heldout",
     failures: Annotated[Path | None, typer.Option(help="write misses and false marks here")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set",
+            help="KEY=VALUE: a DetectorConfig field (loose_contrast=45), or the verifier's thresholds or "
+            "loose_thresholds (thresholds=0.25,0.5,0.5): to compare variants on the tuning split",
+        ),
+    ] = None,
 ) -> None:
     cv2.setNumThreads(1)
     frame_of = _generator(split, seed)
-    det = MarkDetector()
+    det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
     n_true: dict[Shape, int] = defaultdict(int)
@@ -131,6 +141,21 @@ def main(
         },
     }
     print(json.dumps(result, indent=2) if as_json else _tables(result))
+
+
+def _detector(settings: list[str]) -> MarkDetector:
+    config: dict[str, Any] = {}
+    verifier = Verifier.load()
+    for item in settings:
+        key, _, value = item.partition("=")
+        if key in ("thresholds", "loose_thresholds"):
+            verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
+        elif key in {f.name for f in dataclasses.fields(DetectorConfig)} and key != "levels":
+            kind = type(getattr(DetectorConfig(), key))
+            config[key] = value.lower() in ("1", "true") if kind is bool else kind(value)
+        else:
+            raise typer.BadParameter(f"--set {item}: not a DetectorConfig field or the verifier's thresholds")
+    return MarkDetector(DetectorConfig(**config), verifier=verifier)
 
 
 Meta = dict[str, str]

@@ -39,16 +39,17 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
-from services.vision.verifier import MODEL_PATH, Verifier, patch_features
+from services.vision.verifier import MODEL_PATH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
 
 
 @dataclass(frozen=True)
 class DetectorConfig:
-    levels: tuple[tuple[int, int], ...] = ((1, 31), (4, 31))
-    """(downscale factor, adaptive-threshold window in pixels at that scale): full resolution for small
-    marks, a quarter for large ones (whose strokes are wider than the full-resolution window)."""
+    levels: tuple[tuple[int, ...], ...] = ((1, 31), (4, 31))
+    """(downscale factor, adaptive-threshold window in pixels at that scale[, largest component judged
+    there, pixels at that scale]): full resolution for small marks, a quarter for large ones (whose
+    strokes are wider than the full-resolution window)."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     full_res_max: int = 0
@@ -81,8 +82,10 @@ class DetectorConfig:
     triangle with a finger over a corner) still go to the verifier when they are dark on a light
     surround (`loose_contrast`, `loose_texture`); it names their shape, with the stricter
     `Verifier.loose_thresholds`, and the card tests judge them as any other mark. Needs `verify`."""
-    loose_contrast: float = 45.0  # the frame around the box at least this much lighter than the ink
-    loose_texture: float = 0.5  # and its grey-level spread at most this share of that contrast
+    loose_contrast: float = 35.0
+    """the frame around the box at least this much lighter than the ink (45 with the HOG verifier: the
+    CNN rejects false candidates well enough for 35 and 0.7, chosen on tuning seeds 555 and 1234)"""
+    loose_texture: float = 0.7  # and its grey-level spread at most this share of that contrast (0.5)
     loose_max_size: int = 96
     """at full resolution only components up to this size are loose candidates: a bigger mark is
     also a component of the quarter-scale level, where its patch costs a sixteenth"""
@@ -96,12 +99,13 @@ class DetectorConfig:
 @dataclass
 class Candidate:
     """A component that passed the shape tests, or a loose one (for training the verifier): its claimed
-    shape, box in input pixels, patch features, and whether the whole detector (before the verifier)
-    kept it (never, for a loose one: without the verifier nothing names it)."""
+    shape, box in input pixels, the verifier's image input (`verifier.crops`) and whether the whole
+    detector (before the verifier) kept it (never, for a loose one: without the verifier nothing names
+    it)."""
 
     shape: Shape | None  # None: a loose candidate (the shape tests found none, the verifier names it)
     box: Box
-    features: np.ndarray
+    crops: np.ndarray  # (3, 32, 32) uint8: tight, wide and context crops
     kept: bool = False
 
 
@@ -152,6 +156,34 @@ class _Blob:
     size: float  # max(w, h) at this scale
 
 
+@dataclass(frozen=True)
+class _Level:
+    """One pyramid level of a frame: its grey image, binarisation, components and downscale factor."""
+
+    g: np.ndarray
+    binary: np.ndarray
+    labels: np.ndarray
+    stats: np.ndarray
+    f: int
+    text_check: bool
+
+
+@dataclass
+class _Pending:
+    """A candidate waiting for the frame's one verifier call: `shape` is what the shape tests claimed
+    (then `det` passed every other test) or None for a loose one (then `blob` and `own` are kept for the
+    context tests once the verifier has named it). `box` is in the level's pixels."""
+
+    level: _Level
+    i: int
+    box: Box
+    shape: Shape | None
+    det: Detection | None = None
+    blob: _Blob | None = None
+    own: np.ndarray | None = None
+    trace_at: int | None = None  # its entry in the trace, updated with the verifier's verdict
+
+
 class MarkDetector:
     """Stateless per frame; safe to reuse for every frame of a stream (not across threads)."""
 
@@ -163,16 +195,15 @@ class MarkDetector:
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None
         self._claimed: Shape | None = None  # the shape the last judged component was taken for
-        self._loose_named = False  # the last judged component was a loose one the verifier named
         self._why = ""  # the stage at which `_judge` last rejected a component
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
-        for f, block in self.config.levels:
+        for f, block, *_ in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
 
     def candidates(self, image: np.ndarray) -> list[Candidate]:
-        """Every component that passes the shape tests, with its features and the detector's verdict
+        """Every component that passes the shape tests, with its crops and the detector's verdict
         (before the verifier): the verifier's training data. `image` must be at most `max_side`."""
         gray = to_gray(image)
         if max(gray.shape) > self.config.max_side:
@@ -216,8 +247,10 @@ class MarkDetector:
         ]
 
     def _detect_gray(self, gray: np.ndarray) -> list[Detection]:
+        """Every pyramid level, then one batched verifier call for all of their candidates."""
         found: list[Detection] = []
-        for f, block in self.config.levels:
+        pending: list[_Pending] = []
+        for f, block, *cap in self.config.levels:
             if f == 1:
                 g = cv2.GaussianBlur(gray, (3, 3), 0)
             else:
@@ -226,14 +259,50 @@ class MarkDetector:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
             self._f = f
-            self._max_size = self.config.full_res_max if f == 1 and len(self.config.levels) > 1 else 0
-            for det in self._detect_scale(g, block, text_check=f <= 2):
-                x, y, w, h = det.box
-                found.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
+            self._max_size = cap[0] if cap else 0
+            if f == 1 and len(self.config.levels) > 1 and self.config.full_res_max:
+                self._max_size = self.config.full_res_max
+            found += self._detect_scale(g, block, text_check=f <= 2, pending=pending)
+        if pending:
+            found += self._verify(pending)
         return _merge(found, self.config.overlap)
 
+    def _verify(self, pending: list[_Pending]) -> list[Detection]:
+        """The learned verifier on every candidate of the frame in one call: a claimed one stays if it
+        agrees; a loose one gets the shape it names, then the card tests judge it like any other."""
+        assert self.verifier is not None
+        probs = self.verifier.probabilities(
+            np.stack([crops(p.level.g, p.box) for p in pending]), np.stack([claim(p.shape) for p in pending])
+        )
+        out: list[Detection] = []
+        for p, row in zip(pending, probs, strict=True):
+            det: Detection | None = None
+            if p.shape is not None:
+                claimed, stage = p.shape, "verifier"
+                if self.verifier.accepts(row, p.shape):
+                    det, stage = p.det, "kept"
+            else:
+                claimed, prob, ok = self.verifier.name(row)
+                stage = "verifier"
+                if ok:
+                    assert p.blob is not None and p.own is not None
+                    det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob)
+                    stage = "kept" if det is not None else self._why
+            if self._trace is not None and p.trace_at is not None:
+                t = self._trace[p.trace_at]
+                self._trace[p.trace_at] = Traced(t.box, claimed, stage, t.scale)
+            if det is not None:
+                f = p.level.f
+                x, y, w, h = det.box
+                out.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
+        return out
+
     # ------------------------------------------------------------------ one pyramid level
-    def _detect_scale(self, g: np.ndarray, block: int, text_check: bool) -> list[Detection]:
+    def _detect_scale(
+        self, g: np.ndarray, block: int, text_check: bool, pending: list[_Pending]
+    ) -> list[Detection]:
+        """The detections of one level the verifier need not see (it is off), in this level's pixels
+        scaled to the input's; the candidates it must judge are added to `pending`."""
         cfg = self.config
         binary = cv2.adaptiveThreshold(
             g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV, block, cfg.offset
@@ -267,31 +336,34 @@ class MarkDetector:
         trace = self._trace
         if trace is not None:
             self._trace_prefilter(stats, keep, candidates, min(H, W))
+        level = _Level(g, binary, labels, stats, self._f, text_check)
         out: list[Detection] = []
         for i in candidates:
-            det = self._judge(g, binary, labels, int(i), stats[i])
+            judged = self._judge(level, int(i))
             stage = self._why
-            if det is not None and det.confidence < cfg.min_confidence:
-                stage, det = "confidence", None
-            if det is not None and text_check and _in_text_line(stats, int(i), g, labels):
-                stage, det = "text line", None
-            if det is not None:
+            wait: _Pending | None = None
+            det: Detection | None = None
+            if isinstance(judged, _Pending):
+                wait, stage = judged, "verifier"
+            elif judged is not None:
                 if self._seen:
                     self._seen[-1].kept = True
-                stage = "kept"
-                if (
-                    self.verifier is not None
-                    and not self._loose_named
-                    and not self.verifier.accepts(g, det.box, det.shape)
-                ):
-                    stage, det = "verifier", None
+                if self.verifier is not None:
+                    wait, stage = _Pending(level, int(i), judged.box, judged.shape, det=judged), "verifier"
+                else:
+                    det, stage = judged, "kept"
             if trace is not None:
                 f = self._f
-                x, y, w, h = (int(v) * f for v in stats[i][:4])
-                claimed = det.shape if det is not None else self._claimed
-                trace.append(Traced((x, y, w, h), claimed, stage, f))
+                bx, by, bw, bh = (int(v) * f for v in stats[i][:4])
+                claimed = judged.shape if judged is not None else self._claimed
+                trace.append(Traced((bx, by, bw, bh), claimed, stage, f))
+            if wait is not None:
+                wait.trace_at = len(trace) - 1 if trace is not None else None
+                pending.append(wait)
             if det is not None:
-                out.append(det)
+                f = self._f
+                bx, by, bw, bh = det.box
+                out.append(Detection(det.shape, det.confidence, (bx * f, by * f, bw * f, bh * f)))
         return out
 
     def _trace_prefilter(self, stats: np.ndarray, keep: np.ndarray, passed: np.ndarray, side: int) -> None:
@@ -312,31 +384,40 @@ class MarkDetector:
             x, y, w, h = (int(v) * f for v in stats[i][:4])
             self._trace.append(Traced((x, y, w, h), None, "frame ink", f))
 
-    def _judge(
-        self, g: np.ndarray, binary: np.ndarray, labels: np.ndarray, i: int, stat: np.ndarray
-    ) -> Detection | None:
-        cfg = self.config
-        x, y, w, h = (int(v) for v in stat[:4])
+    def _judge(self, level: _Level, i: int) -> Detection | _Pending | None:
+        """Component `i`: a detection in the level's pixels if the shape tests read a mark and every
+        context test passes (the verifier still to come); a pending loose candidate for the verifier
+        to name; or None (`_why` says where it stopped)."""
+        x, y, w, h = (int(v) for v in level.stats[i][:4])
         size = float(max(w, h))
-        self._why, self._claimed, self._loose_named = "shape", None, False
+        self._why, self._claimed = "shape", None
         # the shape first, on the component's own box (cheap: most candidates end here)
-        own = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
+        own = np.where(level.labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
         blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
         if blob is None:
             return None
         judged = _classify(blob)
         if judged is None:
-            judged = self._loose(g, own, blob, (x, y, w, h))
-            if judged is None:
-                return None
+            if self._loose(level.g, own, blob, (x, y, w, h)):
+                return _Pending(level, i, (x, y, w, h), None, blob=blob, own=own)
+            return None
         shape, conf = judged
-        self._why, self._claimed = "card", shape
-        if self._seen is not None and not self._loose_named:
+        if self._seen is not None:
             f = self._f
-            self._seen.append(
-                Candidate(shape, (x * f, y * f, w * f, h * f), patch_features(g, (x, y, w, h), shape))
-            )
-        # then the card, with room for whatever lies on it within `surround` of the mark
+            self._seen.append(Candidate(shape, (x * f, y * f, w * f, h * f), crops(level.g, (x, y, w, h))))
+        return self._finish(level, i, blob, own, shape, conf)
+
+    def _finish(
+        self, level: _Level, i: int, blob: _Blob, own: np.ndarray, shape: Shape, conf: float
+    ) -> Detection | None:
+        """The context tests of a component taken for `shape` (by the shape tests or, for a loose one,
+        the verifier): the card, the O's margin, the hole, the confidence and a line of text."""
+        cfg = self.config
+        g, binary = level.g, level.binary
+        x, y, w, h = (int(v) for v in level.stats[i][:4])
+        size = float(max(w, h))
+        self._why, self._claimed = "card", shape
+        # the card, with room for whatever lies on it within `surround` of the mark
         pad = math.ceil(3 * cfg.surround * size) + 2
         x0, y0 = max(0, x - pad), max(0, y - pad)
         x1, y1 = min(g.shape[1], x + w + pad), min(g.shape[0], y + h + pad)
@@ -376,18 +457,25 @@ class MarkDetector:
                     return None
             elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
+        if conf < cfg.min_confidence:
+            self._why = "confidence"
+            return None
+        if level.text_check and _in_text_line(level.stats, i, g, level.labels):
+            self._why = "text line"
+            return None
+        self._why = "kept"
         return Detection(shape, conf, (x, y, w, h))
 
-    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> tuple[Shape, float] | None:
-        """A component the shape tests found no mark in: if it is ink on a light, plain surround, the
-        verifier names its shape (stricter thresholds); else None. While harvesting training
-        candidates (no verifier) it is recorded with no claimed shape and goes no further."""
+    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> bool:
+        """A component the shape tests found no mark in: is it ink on a light, plain surround, for the
+        verifier to name (stricter thresholds)? While harvesting training candidates (no verifier) it
+        is recorded with no claimed shape and goes no further (False)."""
         cfg = self.config
         if not cfg.loose or len(blob.holes) > 1 or (self.verifier is None and self._seen is None):
-            return None
+            return False
         x, y, w, h = box
         if self._f == 1 and max(w, h) > cfg.loose_max_size:
-            return None
+            return False
         m = max(2, math.ceil(0.1 * max(w, h)))
         x0, y0 = max(0, x - m), max(0, y - m)
         x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
@@ -395,7 +483,7 @@ class MarkDetector:
         inner = region[y - y0 : y - y0 + h, x - x0 : x - x0 + w]
         n_ring = region.size - inner.size
         if n_ring <= 0:
-            return None
+            return False
         ring_sum = float(region.sum() - inner.sum())
         ring_sq = float((region * region).sum() - (inner * inner).sum())
         ring = ring_sum / n_ring
@@ -407,20 +495,11 @@ class MarkDetector:
             or ink > cfg.max_contrast_ratio * ring
             or spread > cfg.loose_texture * contrast
         ):
-            return None
-        features = patch_features(g, box, None)
+            return False
         if self._seen is not None:
             f = self._f
-            self._seen.append(Candidate(None, (x * f, y * f, w * f, h * f), features))
-        if self.verifier is None:
-            return None
-        shape, p, ok = self.verifier.name(features)
-        self._claimed = shape
-        if not ok:
-            self._why = "verifier"
-            return None
-        self._loose_named = True
-        return shape, p
+            self._seen.append(Candidate(None, (x * f, y * f, w * f, h * f), crops(g, box)))
+        return self.verifier is not None
 
 
 def _on_card(

@@ -1,7 +1,8 @@
-"""The learned mark verifier: the committed model, its features, and the training harvest."""
+"""The learned mark verifier: the committed model, its inputs, one call per frame, and the training harvest."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -11,7 +12,7 @@ import pytest
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
-from services.vision.verifier import CLASSES, MODEL_PATH, N_FEATURES, Verifier, hog, patch_features
+from services.vision.verifier import CLASSES, MODEL_PATH, PATCH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
 
@@ -46,19 +47,45 @@ def _card(shape: Shape, size: int = 120, angle: float = 20.0) -> tuple[np.ndarra
 
 def test_the_committed_model_loads_and_is_small() -> None:
     v = Verifier.load()
-    assert MODEL_PATH.stat().st_size < 200_000
-    p = v.probabilities(np.zeros((3, N_FEATURES), np.float32))
+    assert MODEL_PATH.stat().st_size < 1_000_000
+    p = v.probabilities(np.zeros((3, 3, PATCH, PATCH), np.uint8), np.stack([claim(None)] * 3))
     assert p.shape == (3, len(CLASSES))
-    assert np.allclose(p.sum(axis=1), 1.0)
+    assert np.allclose(p.sum(axis=1), 1.0, atol=1e-5)
+    assert v.probabilities(np.zeros((0, 3, PATCH, PATCH), np.uint8), np.zeros((0, 4))).shape == (0, 4)
+
+
+def test_the_crops_are_three_scales_stretched_to_the_mark() -> None:
+    img, box = _card(Shape.O)
+    dim = (img.astype(np.float32) * 0.4 + 20).astype(np.uint8)  # a dim frame: the stretch undoes it
+    c = crops(dim, box)
+    assert c.shape == (3, PATCH, PATCH) and c.dtype == np.uint8
+    assert c[0].min() == 0 and c[0].max() >= 254  # the full range (truncated, not rounded)
+    assert np.abs(c.astype(int) - crops(img, box).astype(int)).max() <= 12
+    # the tight crop holds the ring's ink; the wide (2.2 x) and context (4 x) crops reach past the
+    # card onto the wall (darker than half-way), the context crop furthest
+    dark = [float(np.mean(ch < 128)) for ch in c]
+    assert dark[2] > dark[1] > dark[0] > 0.05
+
+
+def test_a_batch_gives_what_each_candidate_gives_alone() -> None:
+    v = Verifier.load()
+    boxes = [_card(s) for s in (Shape.X, Shape.O, Shape.TRIANGLE)]
+    x = np.stack([crops(img, box) for img, box in boxes])
+    c = np.stack([claim(Shape.X), claim(Shape.O), claim(None)])
+    together = v.probabilities(x, c)
+    alone = np.concatenate([v.probabilities(x[k : k + 1], c[k : k + 1]) for k in range(3)])
+    assert np.allclose(together, alone, atol=1e-5)
 
 
 @pytest.mark.parametrize("shape", [Shape.X, Shape.O, Shape.TRIANGLE])
 def test_a_clean_mark_is_its_own_class_and_not_another(shape: Shape) -> None:
     v = Verifier.load()
     img, box = _card(shape)
-    assert v.accepts(img, box, shape)
-    probs = v.probabilities(patch_features(img, box, shape))[0]
-    assert int(np.argmax(probs)) == CLASSES.index(shape)
+    assert v.check(img, box, shape)
+    for claimed in (shape, None):  # what the shape tests claimed, or a loose candidate
+        probs = v.probabilities(crops(img, box)[None], claim(claimed)[None])[0]
+        assert int(np.argmax(probs)) == CLASSES.index(shape)
+    assert v.name(probs)[0] is shape
 
 
 def test_texture_is_not_a_mark() -> None:
@@ -66,7 +93,7 @@ def test_texture_is_not_a_mark() -> None:
     yy, xx = np.mgrid[0:480, 0:640]
     img = np.where(((yy // 9) + (xx // 9)) % 2 == 0, 40, 220).astype(np.uint8)
     for shape in (Shape.X, Shape.O, Shape.TRIANGLE):
-        assert not v.accepts(img, (280, 200, 80, 80), shape)
+        assert not v.check(img, (280, 200, 80, 80), shape)
 
 
 def test_the_detector_uses_the_verifier_and_can_do_without() -> None:
@@ -75,35 +102,56 @@ def test_the_detector_uses_the_verifier_and_can_do_without() -> None:
     assert MarkDetector().verifier is not None
     assert MarkDetector(DetectorConfig(verify=False)).verifier is None
     strict = Verifier.load(thresholds=(1.01, 1.01, 1.01))  # nothing is that sure: every candidate is refused
+    assert strict.loose_thresholds == Verifier.load().loose_thresholds
     assert MarkDetector(verifier=strict).detect(img) == []
 
 
-def test_hog_is_normalised_and_orientation_sensitive() -> None:
-    vertical = np.zeros((32, 32), np.uint8)
-    vertical[:, 16:] = 255
-    h_v = hog(vertical)
-    h_h = hog(np.ascontiguousarray(vertical.T))
-    assert h_v.shape == (324,)
-    assert np.all(h_v >= 0) and np.all(h_v <= 1.0)
-    assert not np.allclose(h_v, h_h)
+class _Counting:
+    """An onnxruntime session stand-in that records each call's claims."""
+
+    def __init__(self, inner: object) -> None:
+        self.inner = inner
+        self.claims: list[np.ndarray] = []
+
+    def run(self, names: object, feeds: dict[str, np.ndarray]) -> object:
+        self.claims.append(feeds["claim"].copy())
+        return self.inner.run(names, feeds)  # type: ignore[attr-defined]
 
 
-def test_save_and_load_round_trip(tmp_path: Path) -> None:
+def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
+    """A small X (full resolution), a big O (quarter scale) and a small triangle smeared by motion
+    blur (a loose candidate: no shape test reads it), each on its own card: one network call."""
+    img = np.full((480, 640), 110, np.uint8)
+    cv2.rectangle(img, (70, 70), (150, 150), 235, -1)  # a border of about half the mark's width
+    for a in (45, -45):
+        dx, dy = 25 * math.cos(math.radians(a)), 25 * math.sin(math.radians(a))
+        cv2.line(img, (int(110 - dx), int(110 - dy)), (int(110 + dx), int(110 + dy)), 30, 7, cv2.LINE_AA)
+    cv2.rectangle(img, (410, 230), (630, 450), 235, -1)
+    cv2.circle(img, (520, 340), 80, 30, 18, cv2.LINE_AA)
+    cv2.rectangle(img, (290, 210), (350, 270), 235, -1)
+    angles = np.radians(90 + 120 * np.arange(3))
+    pts = np.stack([320 + 15 * np.cos(angles), 240 + 15 * np.sin(angles)], axis=1).astype(np.int32)
+    cv2.polylines(img, [pts], True, 30, 4, cv2.LINE_AA)
+    kernel = np.zeros((13, 13), np.float32)
+    kernel[6, :] = 1.0 / 13
+    img[200:280, 280:360] = cv2.filter2D(img, -1, kernel)[200:280, 280:360]
     v = Verifier.load()
-    out = tmp_path / "v.npz"
-    Verifier(v.mean, v.scale, v.weights, v.biases, thresholds=(0.2, 0.7, 0.6)).save(out)
-    w = Verifier.load(out)
-    assert w.thresholds == pytest.approx((0.2, 0.7, 0.6))
-    x = np.random.default_rng(0).standard_normal((5, N_FEATURES)).astype(np.float32)
-    assert np.allclose(v.probabilities(x), w.probabilities(x), atol=1e-5)
+    counting = _Counting(v.session)
+    det = MarkDetector(verifier=dataclasses.replace(v, session=counting))
+    found = det.detect(img)
+    assert sorted(d.shape.value for d in found) == ["O", "TRIANGLE", "X"]
+    assert len(counting.claims) == 1
+    claims = counting.claims[0]
+    assert claims[:, 3].sum() >= 1 and claims[:, :3].sum() >= 2  # loose and claimed candidates together
+    assert det.detect(np.full((480, 640), 200, np.uint8)) == []
+    assert len(counting.claims) == 1  # no candidates: no call
 
 
-def test_a_model_for_other_features_is_refused(tmp_path: Path) -> None:
-    v = Verifier.load()
-    bad = Verifier(v.mean[:-1], v.scale[:-1], (v.weights[0][:-1], *v.weights[1:]), v.biases)
-    bad.save(tmp_path / "bad.npz")
-    with pytest.raises(ValueError, match="features"):
-        Verifier.load(tmp_path / "bad.npz")
+def test_a_file_that_is_not_a_verifier_model_is_refused(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(b"not an onnx model")
+    with pytest.raises(ValueError, match="not a verifier model"):
+        Verifier.load(bad)
 
 
 def test_the_harvest_is_deterministic_and_labelled() -> None:
@@ -112,10 +160,11 @@ def test_the_harvest_is_deterministic_and_labelled() -> None:
     a = harvest(3, 8)
     b = harvest(3, 8)
     assert all(np.array_equal(p, q) for p, q in zip(a, b, strict=True))
-    feats, labels, kept = a
-    assert feats.shape[1] == N_FEATURES
-    assert set(labels.tolist()) <= set(range(len(CLASSES)))
-    assert len(labels) == len(kept) > 0
+    images, claims, labels, kept = a
+    assert images.shape[1:] == (3, PATCH, PATCH) and images.dtype == np.uint8
+    assert set(claims.tolist()) <= set(range(4)) and set(labels.tolist()) <= set(range(len(CLASSES)))
+    assert len(labels) == len(kept) == len(claims) == len(images) > 0
+    assert not kept[claims == 3].any()  # a loose candidate is never kept without the verifier
 
 
 def _filled_triangle(half: int, r: int) -> np.ndarray:
