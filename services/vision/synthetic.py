@@ -78,6 +78,7 @@ class Variation:
     distractors: tuple[int, int] = (2, 7)  # how many clutter objects
     kinds: tuple[str, ...] = DISTRACTORS
     border: tuple[float, float] = (0.03, 0.6)  # card border beside the mark, fraction of its width
+    stroke: tuple[float, float] = (0.11, 0.19)  # stroke width range, fraction of the mark's width
     colour_ink: float = 0.35  # share of marks in red, blue or green ink instead of dark grey
     filled_triangle: float = 0.25  # share of triangle marks drawn filled
     fingers: float = 0.4  # share of cards with fingers reaching towards the mark
@@ -173,7 +174,7 @@ class SceneGenerator:
             background=self._background(),
             shape=shape,
             size=size,
-            stroke=float(rng.uniform(0.11, 0.19)),
+            stroke=float(rng.uniform(*v.stroke)),
             rotation_deg=rotation,
             tilt=tilt,
             center=(cx, cy),

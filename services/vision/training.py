@@ -43,9 +43,15 @@ ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 # tells them apart); 60 % of cards have fingers (40 %), half of them over the mark's edge (30 %)
 DEFAULT = Variation(filled_triangle=0.4, fingers=0.6, finger_over=0.5)
 # the cluttered chunks draw the tuning generator's main sources of false marks three times as often:
-# filled triangles off cards (half on plain light walls), text (letters O and X in words) and decoy cards
+# filled triangles off cards (half on plain light walls), text (letters O and X in words) and decoy
+# cards. Their marks also reach past the generator's defaults: cards with borders up to 1.5 x the
+# mark's width (3-60 % elsewhere: a small mark on a large sheet is a mark too) and strokes up to a
+# quarter of the mark's width (11-19 % elsewhere; an X's bars up to about a fifth of their length, as
+# a marker pen draws a small X) - the first CNN, trained without them, refused a small thick X
 HARD = ("filled_triangle", "text", "card")
-CLUTTERED = DEFAULT.only(distractors=(8, 14), kinds=DISTRACTORS + HARD + HARD)
+CLUTTERED = DEFAULT.only(
+    distractors=(8, 14), kinds=DISTRACTORS + HARD + HARD, border=(0.03, 1.5), stroke=(0.11, 0.25)
+)
 IOU = 0.4
 CHUNK = 250
 # the harvest's detector: geometric tests only, and the loose gate the committed model was harvested
@@ -288,10 +294,10 @@ def main(
     ] = None,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
-    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.5,
+    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.7,
     threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.7,
     loose_x: Annotated[float, typer.Option(help="probability a loose candidate needs to be named X")] = 0.5,
-    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.8,
+    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.9,
     loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.85,
 ) -> None:
     t0 = time.monotonic()
