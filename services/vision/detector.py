@@ -292,9 +292,7 @@ class MarkDetector:
                 t = self._trace[p.trace_at]
                 self._trace[p.trace_at] = Traced(t.box, claimed, stage, t.scale)
             if det is not None:
-                f = p.level.f
-                x, y, w, h = det.box
-                out.append(Detection(det.shape, det.confidence, (x * f, y * f, w * f, h * f)))
+                out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
         return out
 
     # ------------------------------------------------------------------ one pyramid level
@@ -353,17 +351,13 @@ class MarkDetector:
                 else:
                     det, stage = judged, "kept"
             if trace is not None:
-                f = self._f
-                bx, by, bw, bh = (int(v) * f for v in stats[i][:4])
                 claimed = judged.shape if judged is not None else self._claimed
-                trace.append(Traced((bx, by, bw, bh), claimed, stage, f))
+                trace.append(Traced(_up(stats[i], self._f), claimed, stage, self._f))
             if wait is not None:
                 wait.trace_at = len(trace) - 1 if trace is not None else None
                 pending.append(wait)
             if det is not None:
-                f = self._f
-                bx, by, bw, bh = det.box
-                out.append(Detection(det.shape, det.confidence, (bx * f, by * f, bw * f, bh * f)))
+                out.append(Detection(det.shape, det.confidence, _up(det.box, self._f)))
         return out
 
     def _trace_prefilter(self, stats: np.ndarray, keep: np.ndarray, passed: np.ndarray, side: int) -> None:
@@ -378,11 +372,9 @@ class MarkDetector:
         frame_dropped = keep.copy()
         frame_dropped[passed] = False
         for i in np.flatnonzero(big & ~keep):
-            x, y, w, h = (int(v) * f for v in stats[i][:4])
-            self._trace.append(Traced((x, y, w, h), None, "size/fill", f))
+            self._trace.append(Traced(_up(stats[i], f), None, "size/fill", f))
         for i in np.flatnonzero(frame_dropped):
-            x, y, w, h = (int(v) * f for v in stats[i][:4])
-            self._trace.append(Traced((x, y, w, h), None, "frame ink", f))
+            self._trace.append(Traced(_up(stats[i], f), None, "frame ink", f))
 
     def _judge(self, level: _Level, i: int) -> Detection | _Pending | None:
         """Component `i`: a detection in the level's pixels if the shape tests read a mark and every
@@ -403,8 +395,7 @@ class MarkDetector:
             return None
         shape, conf = judged
         if self._seen is not None:
-            f = self._f
-            self._seen.append(Candidate(shape, (x * f, y * f, w * f, h * f), crops(level.g, (x, y, w, h))))
+            self._seen.append(Candidate(shape, _up((x, y, w, h), self._f), crops(level.g, (x, y, w, h))))
         return self._finish(level, i, blob, own, shape, conf)
 
     def _finish(
@@ -497,8 +488,7 @@ class MarkDetector:
         ):
             return False
         if self._seen is not None:
-            f = self._f
-            self._seen.append(Candidate(None, (x * f, y * f, w * f, h * f), crops(g, box)))
+            self._seen.append(Candidate(None, _up(box, self._f), crops(g, box)))
         return self.verifier is not None
 
 
@@ -862,6 +852,13 @@ def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int
     x, y, w, h = (int(v) for v in stats[i][:4])
     mask = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
     return float(cv2.mean(g[y : y + h, x : x + w], mask=mask)[0])
+
+
+def _up(box: Box | np.ndarray, f: int) -> Box:
+    """A box (x, y, w, h; or a row of connected-component stats) at a pyramid level of downscale `f`,
+    in the input's pixels."""
+    x, y, w, h = (int(v) * f for v in box[:4])
+    return (x, y, w, h)
 
 
 def _merge(dets: list[Detection], overlap: float) -> list[Detection]:
