@@ -39,7 +39,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
-from services.vision.verifier import MODEL_PATH, Verifier, claim, crops
+from services.vision.verifier import CLASSES, MODEL_PATH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
 
@@ -89,6 +89,16 @@ class DetectorConfig:
     loose_max_size: int = 96
     """at full resolution only components up to this size are loose candidates: a bigger mark is
     also a component of the quarter-scale level, where its patch costs a sixteenth"""
+    card_rescue: float = 0.95
+    """an X or TRIANGLE (claimed by the shape tests, or a loose candidate the verifier named) that one of
+    the card tests in `card_rescue_from` refused is still kept if the verifier gives its shape at least
+    this probability (0: off). Only danger marks: a false one stops the robot, a missed one lets it
+    walk on; an O is never rescued (a false O lifts a danger)."""
+    card_rescue_from: tuple[str, ...] = ("band", "texture", "ink", "ratio")
+    """the card tests (`_on_card`'s reasons) the verifier may overrule: not "faint" (under
+    `min_contrast` a cross is a shadow or a crease; the network sees contrast-stretched crops and
+    cannot tell) and not "letter" (a letter of a word; a rescued letter was the false X the tuning
+    frames showed), nor a letter inside a line of text"""
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
@@ -182,6 +192,7 @@ class _Pending:
     blob: _Blob | None = None
     own: np.ndarray | None = None
     trace_at: int | None = None  # its entry in the trace, updated with the verifier's verdict
+    rescue: bool = False  # a danger mark the card tests refused: kept only if the network is very sure
 
 
 class MarkDetector:
@@ -196,6 +207,7 @@ class MarkDetector:
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None
         self._claimed: Shape | None = None  # the shape the last judged component was taken for
         self._why = ""  # the stage at which `_judge` last rejected a component
+        self._card_refusal = ""  # and, at the card stage, which test (`_on_card`)
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
         for f, block, *_ in self.config.levels:
@@ -277,7 +289,12 @@ class MarkDetector:
         out: list[Detection] = []
         for p, row in zip(pending, probs, strict=True):
             det: Detection | None = None
-            if p.shape is not None:
+            if p.rescue:
+                assert p.shape is not None
+                claimed, stage = p.shape, "card"
+                if row[CLASSES.index(p.shape)] >= self.config.card_rescue:
+                    det, stage = p.det, "kept"
+            elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
                 if self.verifier.accepts(row, p.shape):
                     det, stage = p.det, "kept"
@@ -288,12 +305,32 @@ class MarkDetector:
                     assert p.blob is not None and p.own is not None
                     det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob)
                     stage = "kept" if det is not None else self._why
+                    if (
+                        det is None
+                        and self._rescuable(claimed, p.level, p.i)
+                        and prob >= self.config.card_rescue
+                    ):
+                        det, stage = Detection(claimed, prob, p.box), "kept"
             if self._trace is not None and p.trace_at is not None:
                 t = self._trace[p.trace_at]
                 self._trace[p.trace_at] = Traced(t.box, claimed, stage, t.scale)
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
         return out
+
+    def _rescuable(self, shape: Shape, level: _Level, i: int) -> bool:
+        """Whether component `i`, just refused by `_finish`, may still be kept on the verifier's word
+        alone (`DetectorConfig.card_rescue`): a danger mark refused by one of the card tests in
+        `card_rescue_from`, and not a letter in a line of text (a word is clutter whatever the network
+        thinks of one of its letters)."""
+        cfg = self.config
+        return (
+            cfg.card_rescue > 0
+            and self._why == "card"
+            and self._card_refusal in cfg.card_rescue_from
+            and shape in (Shape.X, Shape.TRIANGLE)
+            and not (level.text_check and _in_text_line(level.stats, i, level.g, level.labels))
+        )
 
     # ------------------------------------------------------------------ one pyramid level
     def _detect_scale(
@@ -384,7 +421,7 @@ class MarkDetector:
         size = float(max(w, h))
         self._why, self._claimed = "shape", None
         # the shape first, on the component's own box (cheap: most candidates end here)
-        own = np.where(level.labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
+        own = cv2.inRange(level.labels[y : y + h, x : x + w], i, i)  # 255 where the label is i
         blob = _blob(cv2.copyMakeBorder(own, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), size)
         if blob is None:
             return None
@@ -396,7 +433,11 @@ class MarkDetector:
         shape, conf = judged
         if self._seen is not None:
             self._seen.append(Candidate(shape, _up((x, y, w, h), self._f), crops(level.g, (x, y, w, h))))
-        return self._finish(level, i, blob, own, shape, conf)
+        det = self._finish(level, i, blob, own, shape, conf)
+        if det is None and self.verifier is not None and self._rescuable(shape, level, i):
+            box = (x, y, w, h)
+            return _Pending(level, i, box, shape, det=Detection(shape, conf, box), rescue=True)
+        return det
 
     def _finish(
         self, level: _Level, i: int, blob: _Blob, own: np.ndarray, shape: Shape, conf: float
@@ -422,7 +463,8 @@ class MarkDetector:
         g_roi = g[y0:y1, x0:x1]
         ink = cv2.mean(g_roi, mask=comp)[0]
         paper = _on_card(g_roi, filled, ink, blob.outer, cfg)
-        if paper is None:
+        if isinstance(paper, str):
+            self._card_refusal = paper
             return None
         if (
             shape is Shape.O
@@ -470,13 +512,14 @@ class MarkDetector:
         m = max(2, math.ceil(0.1 * max(w, h)))
         x0, y0 = max(0, x - m), max(0, y - m)
         x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
-        region = g[y0:y1, x0:x1].astype(np.float32)
-        inner = region[y - y0 : y - y0 + h, x - x0 : x - x0 + w]
+        region = g[y0:y1, x0:x1]
+        inner = g[y : y + h, x : x + w]
         n_ring = region.size - inner.size
         if n_ring <= 0:
             return False
-        ring_sum = float(region.sum() - inner.sum())
-        ring_sq = float((region * region).sum() - (inner * inner).sum())
+        # sums of grey levels and of their squares, in doubles (OpenCV: no float32 rounding, no copies)
+        ring_sum = cv2.sumElems(region)[0] - cv2.sumElems(inner)[0]
+        ring_sq = cv2.norm(region, cv2.NORM_L2SQR) - cv2.norm(inner, cv2.NORM_L2SQR)
         ring = ring_sum / n_ring
         spread = math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
         ink = cv2.mean(g[y : y + h, x : x + w], mask=own)[0]
@@ -494,9 +537,14 @@ class MarkDetector:
 
 def _on_card(
     g_roi: np.ndarray, filled: np.ndarray, ink: float, outer: np.ndarray, cfg: DetectorConfig
-) -> float | None:
+) -> float | str:
     """The card test: is the mark (filled outline `filled`, mean grey `ink`) printed on a plain light
-    card? Returns the card's grey level, or None.
+    card? Returns the card's grey level, or the first test that refused it, in this order: "band" (no
+    band), "faint" (less than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a
+    letter-sized shape beside it: a word), "ratio" (the ink not dark enough next to the paper), "band"
+    (the band not paper), "texture" (the card near it not plain), "ink" (other ink on the card). The
+    order matters only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may
+    overrule come after the two it may not.
 
     The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
     `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
@@ -512,23 +560,32 @@ def _on_card(
     band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # skip the blurred outline
     band_n = cv2.countNonZero(band)
     if band_n == 0:
-        return None
+        return "band"
     paper = float(np.median(g_roi[band > 0]))
-    if paper < 20 or ink > cfg.max_contrast_ratio * paper or paper - ink < cfg.min_contrast:
-        return None
-    light = np.where(g_roi > ink + 0.5 * (paper - ink), np.uint8(255), np.uint8(0))
+    if paper < 20 or paper - ink < cfg.min_contrast:
+        return "faint"
+    dark = ink + 0.3 * (paper - ink)
+    cut = ink + 0.5 * (paper - ink)
+    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
+        return "letter"
+    if ink > cfg.max_contrast_ratio * paper:
+        return "ratio"
+    # lighter than half-way from ink to paper (for whole grey levels, > t is > floor(t))
+    light = cv2.threshold(g_roi, math.floor(ink + 0.5 * (paper - ink)), 255, cv2.THRESH_BINARY)[1]
     light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
     if cv2.countNonZero(cv2.bitwise_and(light, band)) < cfg.min_band_paper * band_n:
-        return None
+        return "band"
     # the card: light regions touching the band
-    _, labels = cv2.connectedComponents(light, connectivity=8)
-    touching = np.unique(labels[(band > 0) & (light > 0)])
-    card = np.where(np.isin(labels, touching[touching > 0]), np.uint8(255), np.uint8(0))
+    n, labels = cv2.connectedComponents(light, connectivity=8)
+    touching = np.zeros(n, np.uint8)
+    touching[labels[(band > 0) & (light > 0)]] = 255
+    touching[0] = 0
+    card = touching[labels]
     near = cv2.inRange(dist, 1.5, max(3.0, cfg.surround * extent))
     card_near = cv2.bitwise_and(card, near)
     mean, std = cv2.meanStdDev(g_roi, mask=card_near)
     if float(std[0][0]) > cfg.max_margin_texture * (paper - ink):
-        return None
+        return "texture"
     # dark things enclosed by the card (not reaching the edge of the region looked at) are on it
     other = cv2.bitwise_not(cv2.bitwise_or(card, filled))
     _, labels, stats, _ = cv2.connectedComponentsWithStats(other, connectivity=4)
@@ -540,13 +597,9 @@ def _on_card(
         # from the border band outwards: nearer, the mark's own blurred edge is neither ink nor paper
         halo = max(2.5, cfg.border * extent)
         close = (dist >= halo) & (dist <= max(halo + 1.0, cfg.clutter_radius * extent))
-        on_card = np.isin(labels, np.flatnonzero(inside)) & close
+        on_card = inside[labels] & close
         if int(on_card.sum()) > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
-            return None
-    dark = ink + 0.3 * (paper - ink)
-    cut = ink + 0.5 * (paper - ink)
-    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
-        return None
+            return "ink"
     return float(mean[0][0])
 
 
@@ -850,7 +903,7 @@ def _in_text_line(stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray) 
 
 def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
     x, y, w, h = (int(v) for v in stats[i][:4])
-    mask = np.where(labels[y : y + h, x : x + w] == i, np.uint8(255), np.uint8(0))
+    mask = cv2.inRange(labels[y : y + h, x : x + w], i, i)
     return float(cv2.mean(g[y : y + h, x : x + w], mask=mask)[0])
 
 
