@@ -74,7 +74,10 @@ class Embedder:
 
     def embed(self, samples: np.ndarray) -> np.ndarray:
         """Samples in int16 units -> (n, 96) embeddings, one per 80 ms."""
-        spec = self.mel(samples)
+        return self.embed_mel(self.mel(samples))
+
+    def embed_mel(self, spec: np.ndarray) -> np.ndarray:
+        """A (transformed) mel spectrogram, as `mel` returns it -> (n, 96) embeddings, one per 80 ms."""
         starts = range(0, spec.shape[0] - MEL_WINDOW + 1, MEL_STEP)
         batch = np.stack([spec[i : i + MEL_WINDOW] for i in starts])[..., None].astype(np.float32)
         return self._emb.run(None, {"input_1": batch})[0].reshape(len(starts), EMBED_DIM)
@@ -82,6 +85,10 @@ class Embedder:
     def utterance(self, pcm: bytes, seed: int = 0) -> np.ndarray:
         """One utterance (16-bit PCM) centred in a WINDOW_S window -> (FRAMES, 96)."""
         return self.embed(centre(pcm, seed))[:FRAMES]
+
+    def utterance_mel(self, pcm: bytes, seed: int = 0) -> np.ndarray:
+        """The mel spectrogram `utterance` embeds: (mel frames, 32) of the centred WINDOW_S window."""
+        return self.mel(centre(pcm, seed))
 
 
 def speech_seconds(pcm: bytes) -> float:

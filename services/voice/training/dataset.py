@@ -3,7 +3,8 @@
 A recipe says what is said (or which noise), by which voice, at which speed and pitch, with which
 augmentation seed; rendering runs the same path as the service (`trim_to_speech`, then the spotter's
 `Embedder.utterance`). Features are cached under the synth cache folder, keyed by the recipes, so a
-second `train` run only fits the head. Nothing here is committed.
+second `train` run only fits the head; the mel spectrograms they were computed from are cached with them
+(float16, `indexed_mels`), for mel-level variants that need only the embedding pass. Nothing here is committed.
 """
 
 from __future__ import annotations
@@ -13,13 +14,14 @@ import json
 import multiprocessing
 import random
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
 from services.runtime import get_logger
 from services.voice.audio import SAMPLE_RATE, to_pcm
 from services.voice.sources import trim_to_speech
-from services.voice.spotter.features import MAX_SPEECH_S, Embedder, speech_seconds
+from services.voice.spotter.features import FRAMES, MAX_SPEECH_S, Embedder, speech_seconds
 from services.voice.synth import OOV_TUNE, cache_dir, noise
 from services.voice.training import augment, corpus, tts
 
@@ -266,17 +268,52 @@ def render_utterance(r: Recipe) -> bytes:
     return trim_to_speech(to_pcm(x))
 
 
-def _features(r: Recipe) -> np.ndarray | None:
+def _features(r: Recipe) -> tuple[np.ndarray, np.ndarray] | None:
+    """The recipe's (FRAMES, 96) embeddings and the mel spectrogram they were computed from (both
+    float16; the embeddings are computed from the float32 spectrogram), or None if it does not render."""
     try:
         pcm = render(r)
     except tts.TtsError:
         return None
-    return None if pcm is None else _embedder().utterance(pcm, seed=r.seed).astype(np.float16)
+    if pcm is None:
+        return None
+    spec = _embedder().utterance_mel(pcm, seed=r.seed)
+    return _embedder().embed_mel(spec)[:FRAMES].astype(np.float16), spec.astype(np.float16)
 
 
 def _key(items: list[Recipe]) -> str:
     blob = json.dumps([DATASET_VERSION] + [asdict(r) for r in items], sort_keys=True).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
+
+
+def _save(path: Path, **arrays: np.ndarray) -> None:
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]
+    tmp.replace(path)
+
+
+def _render_all(items: list[Recipe], workers: int, progress: bool) -> None:
+    """Render and embed every recipe once; cache the features and (float16) the mel spectrograms."""
+    xs: list[np.ndarray] = []
+    mels: list[np.ndarray] = []
+    ys: list[int] = []
+    kept: list[int] = []
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(workers) as pool:
+        for i, (r, f) in enumerate(zip(items, pool.imap(_features, items, chunksize=16), strict=True)):
+            if f is not None:
+                xs.append(f[0])
+                mels.append(f[1])
+                ys.append(r.label)
+                kept.append(i)
+            if progress and (i + 1) % 500 == 0:
+                get_logger("voice.train").info("features", done=i + 1, clips=len(items))
+    y, idx = np.asarray(ys, dtype=np.int16), np.asarray(kept, dtype=np.int32)
+    key = _key(items)
+    features_path = cache_dir() / f"spotter-features-{key}.npz"
+    if not features_path.exists():  # rendering is deterministic: an existing file holds the same numbers
+        _save(features_path, x=np.stack(xs), y=y, idx=idx)
+    _save(cache_dir() / f"spotter-mels-{key}.npz", mel=np.stack(mels), y=y, idx=idx)
 
 
 def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
@@ -287,26 +324,24 @@ def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tu
 
 def indexed_features(items: list[Recipe], workers: int = 2,
                      progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`features` and, for each row, the index of its recipe in `items`."""
+    """`features` and, for each row, the index of its recipe in `items`. Rendering them also caches
+    their mel spectrograms (`indexed_mels`)."""
     path = cache_dir() / f"spotter-features-{_key(items)}.npz"
-    if path.exists():
-        data = np.load(path)
-        return data["x"], data["y"], data["idx"]
-    xs: list[np.ndarray] = []
-    ys: list[int] = []
-    kept: list[int] = []
-    ctx = multiprocessing.get_context("spawn")
-    with ctx.Pool(workers) as pool:
-        for i, (r, f) in enumerate(zip(items, pool.imap(_features, items, chunksize=16), strict=True)):
-            if f is not None:
-                xs.append(f)
-                ys.append(r.label)
-                kept.append(i)
-            if progress and (i + 1) % 500 == 0:
-                get_logger("voice.train").info("features", done=i + 1, clips=len(items))
-    x, y, idx = np.stack(xs), np.asarray(ys, dtype=np.int16), np.asarray(kept, dtype=np.int32)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, x=x, y=y, idx=idx)
-    tmp.replace(path)
-    return x, y, idx
+    if not path.exists():
+        _render_all(items, workers, progress)
+    data = np.load(path)
+    return data["x"], data["y"], data["idx"]
+
+
+def indexed_mels(items: list[Recipe], workers: int = 2,
+                 progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(mel spectrograms: n x mel frames x 32 float16, y, recipe index) of the rows `indexed_features`
+    gives, as `Embedder.utterance_mel` computes them (mel / 10 + 2, the centred window), cached (~13 KB
+    a clip). For mel-level variants: transform them and embed with `Embedder.embed_mel(...)[:FRAMES]`,
+    without re-rendering the audio. Features cached before this cache existed are rendered again once."""
+    path = cache_dir() / f"spotter-mels-{_key(items)}.npz"
+    if not path.exists():
+        _render_all(items, workers, progress)
+    data = np.load(path)
+    return data["mel"], data["y"], data["idx"]
 
