@@ -54,10 +54,11 @@ CLUTTERED = DEFAULT.only(
 )
 IOU = 0.4
 CHUNK = 250
-# the harvest's detector: geometric tests only, and the loose gate the committed model was harvested
-# with (45 grey levels, spread 0.5; the service's gate is looser since, 35 and 0.7) - pinned so that
-# the command keeps reproducing the committed model
-HARVEST = DetectorConfig(verify=False, loose_contrast=45.0, loose_texture=0.5)
+# the harvest's detector: geometric tests only, and the loose gate and pyramid the committed model was
+# harvested with (45 grey levels, spread 0.5: the service's gate is looser since, 35 and 0.7; full and
+# quarter resolution: the service added a half-resolution level since) - pinned so that the command
+# keeps reproducing the committed model
+HARVEST = DetectorConfig(verify=False, loose_contrast=45.0, loose_texture=0.5, levels=((1, 31), (4, 31)))
 
 
 def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
