@@ -152,7 +152,10 @@ def _detector(settings: list[str]) -> MarkDetector:
             verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
         elif key in {f.name for f in dataclasses.fields(DetectorConfig)} and key != "levels":
             kind = type(getattr(DetectorConfig(), key))
-            config[key] = value.lower() in ("1", "true") if kind is bool else kind(value)
+            if kind is tuple:  # card_rescue_from=band,texture
+                config[key] = tuple(v for v in value.split(",") if v)
+            else:
+                config[key] = value.lower() in ("1", "true") if kind is bool else kind(value)
         else:
             raise typer.BadParameter(f"--set {item}: not a DetectorConfig field or the verifier's thresholds")
     return MarkDetector(DetectorConfig(**config), verifier=verifier)

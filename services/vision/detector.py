@@ -125,6 +125,9 @@ class Candidate:
     kept: bool = False
 
 
+CARD_TESTS: tuple[str, ...] = ("band", "faint", "letter", "ratio", "texture", "ink")
+"""The card tests `_on_card` can refuse a mark for (its docstring says what each checks)."""
+
 STAGES: tuple[str, ...] = (
     "no component",  # no binarised component overlaps the mark
     "size/fill",  # the vectorised pre-filter: size, aspect, fill ratio, frame edge
@@ -219,6 +222,9 @@ class MarkDetector:
         for f, block, *_ in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
+        unknown = set(self.config.card_rescue_from) - set(CARD_TESTS)
+        if unknown:
+            raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
 
     def candidates(self, image: np.ndarray) -> list[Candidate]:
         """Every component that passes the shape tests, with its crops and the detector's verdict
@@ -576,8 +582,8 @@ def _on_card(
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
-    # lighter than half-way from ink to paper (for whole grey levels, > t is > floor(t))
-    light = cv2.threshold(g_roi, math.floor(ink + 0.5 * (paper - ink)), 255, cv2.THRESH_BINARY)[1]
+    # lighter than half-way from ink to paper, `cut` (for whole grey levels, > t is > floor(t))
+    light = cv2.threshold(g_roi, math.floor(cut), 255, cv2.THRESH_BINARY)[1]
     light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
     if cv2.countNonZero(cv2.bitwise_and(light, band)) < cfg.min_band_paper * band_n:
         return "band"

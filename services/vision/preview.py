@@ -43,7 +43,7 @@ class PreviewPublisher:
         self._next = max(self._next + 1.0 / self.settings.fps, now)
         try:
             msg = self._pub.put(make_preview(image, frame, marks, stamp, self.settings))
-        except Exception as exc:  # a preview is a convenience: never stop the detector for it
+        except Exception as exc:  # noqa: BLE001 - a preview is a convenience: never stop the detector for it
             self.ctx.counters.bump("callback_errors")
             self.ctx.log.warning("preview failed", frame=frame, error=str(exc))
             return None

@@ -228,6 +228,13 @@ def test_a_faint_cross_or_a_letter_in_a_word_is_not_rescued(detector: MarkDetect
     assert [d.shape for d in MarkDetector(everything).detect(word)] == [Shape.X]
 
 
+def test_a_bad_configuration_is_refused_at_construction() -> None:
+    with pytest.raises(ValueError, match="unknown card tests"):
+        MarkDetector(DetectorConfig(card_rescue_from=("band", "colour")))
+    with pytest.raises(ValueError, match="bad pyramid level"):
+        MarkDetector(DetectorConfig(levels=((1, 30),)))
+
+
 def test_a_cross_in_a_busy_surround_is_not_a_mark() -> None:
     grain = np.random.default_rng(1).uniform(-50, 50, (480, 640))
     frame = _cross_on(200.0 + grain, ink=130)
