@@ -23,7 +23,8 @@ def test_router_is_the_projects_own_with_the_generated_rules_on_tls_only() -> No
     assert cmd[cmd.index("--keys-dir") + 1] == "/run/secrets/hri"
     assert cmd[cmd.index("--listen") + 1] == "tls/0.0.0.0:7447"  # never plain TCP off loopback
     assert cmd[cmd.index("--robot") + 1] == "${HRI_ROBOT:-op2}"
-    assert zenoh["volumes"] == ["${HRI_KEYS_DIR:-./keys}/router:/run/secrets/hri/router:ro"]
+    assert zenoh["volumes"] == ["${HRI_KEYS_DIR:-./keys}/router:/run/secrets/hri/router:ro",
+                                "hri-state:/var/lib/hri:ro"]
     # published on loopback unless asked otherwise, and no REST plugin (it would bypass the rules)
     assert zenoh["ports"] == ["${HRI_PUBLISH_ADDR:-127.0.0.1}:${HRI_ROUTER_PORT:-7447}:7447"]
 
@@ -132,3 +133,13 @@ def test_the_open_classroom_override_is_explicit() -> None:
         assert override["services"][name]["environment"] == {"HRI_ZENOH_CONNECT": "tcp/zenoh:7447",
                                                               "HRI_CREDENTIALS": ""}
     assert "OPEN BUS" in (ROOT / "docker-compose.open.yml").read_text()
+
+
+def test_the_state_volume_is_filled_once_by_the_router_before_the_services_are_made() -> None:
+    """Docker copies the image's /var/lib/hri into the empty volume when the first container using it is
+    created; five services created in parallel can race on that copy (seen once in CI: "mkdir
+    .../_data/speech: file exists"). The router, which all of them wait for, mounts it first, read-only."""
+    assert "hri-state:/var/lib/hri:ro" in COMPOSE["services"]["zenoh"]["volumes"]
+    for name in SERVICES:
+        svc = COMPOSE["services"][name]
+        assert "hri-state:/var/lib/hri" in svc["volumes"] and "zenoh" in svc["depends_on"]
