@@ -194,3 +194,27 @@ def test_crops_that_do_not_fit_are_refused(tmp_path) -> None:
     head.save(path)
     with pytest.raises(HeadError, match="crops"):
         Head.load(path)
+
+
+def test_the_fits_run_on_the_pinned_blas_thread_count_whatever_the_caller_set(monkeypatch) -> None:
+    """The rounding of the fits depends on how BLAS splits the products: one thread instead of two gave
+    another head. `fit` pins the count even inside a caller's lower limit (OPENBLAS_NUM_THREADS=1 does the
+    same), so the committed head is reproduced on any machine."""
+    from sklearn.neural_network import MLPClassifier
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    if not any(i["user_api"] == "blas" for i in threadpool_info()):
+        pytest.skip("no BLAS library that threadpoolctl can see")
+    seen: list[set[int]] = []
+    real_fit = MLPClassifier.fit
+
+    def recording_fit(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+        return real_fit(self, *args, **kwargs)
+
+    monkeypatch.setattr(MLPClassifier, "fit", recording_fit)
+    x, y = _toy_data()
+    with threadpool_limits(limits=1, user_api="blas"):
+        fit(x, y, TrainConfig(hidden=4, ensemble=2, crop_width=8, crop_starts=(2, 6), blas_threads=2))
+        assert {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"} == {1}  # restored
+    assert seen == [{2}, {2}]
