@@ -199,7 +199,7 @@ def test_crops_that_do_not_fit_are_refused(tmp_path) -> None:
 def test_the_fits_run_on_the_pinned_blas_thread_count_whatever_the_caller_set(monkeypatch) -> None:
     """The rounding of the fits depends on how BLAS splits the products: one thread instead of two gave
     another head. `fit` pins the count even inside a caller's lower limit (OPENBLAS_NUM_THREADS=1 does the
-    same), so the committed head is reproduced on any machine."""
+    same), so the core count of the machine that trains does not change the head."""
     from sklearn.neural_network import MLPClassifier
     from threadpoolctl import threadpool_info, threadpool_limits
 
