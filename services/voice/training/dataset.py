@@ -286,6 +286,19 @@ def _key(items: list[Recipe]) -> str:
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
+def _cache_path(kind: str, items: list[Recipe]) -> Path:
+    """Where the `kind` ("features" or "mels") of these recipes are cached."""
+    return cache_dir() / f"spotter-{kind}-{_key(items)}.npz"
+
+
+def _cached(kind: str, items: list[Recipe], workers: int, progress: bool) -> np.lib.npyio.NpzFile:
+    """The cached `kind` of these recipes, rendering them all first if it is not cached yet."""
+    path = _cache_path(kind, items)
+    if not path.exists():
+        _render_all(items, workers, progress)
+    return np.load(path)
+
+
 def _save(path: Path, **arrays: np.ndarray) -> None:
     tmp = path.with_suffix(".tmp.npz")
     np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]
@@ -309,11 +322,10 @@ def _render_all(items: list[Recipe], workers: int, progress: bool) -> None:
             if progress and (i + 1) % 500 == 0:
                 get_logger("voice.train").info("features", done=i + 1, clips=len(items))
     y, idx = np.asarray(ys, dtype=np.int16), np.asarray(kept, dtype=np.int32)
-    key = _key(items)
-    features_path = cache_dir() / f"spotter-features-{key}.npz"
+    features_path = _cache_path("features", items)
     if not features_path.exists():  # rendering is deterministic: an existing file holds the same numbers
         _save(features_path, x=np.stack(xs), y=y, idx=idx)
-    _save(cache_dir() / f"spotter-mels-{key}.npz", mel=np.stack(mels), y=y, idx=idx)
+    _save(_cache_path("mels", items), mel=np.stack(mels), y=y, idx=idx)
 
 
 def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
@@ -326,10 +338,7 @@ def indexed_features(items: list[Recipe], workers: int = 2,
                      progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`features` and, for each row, the index of its recipe in `items`. Rendering them also caches
     their mel spectrograms (`indexed_mels`)."""
-    path = cache_dir() / f"spotter-features-{_key(items)}.npz"
-    if not path.exists():
-        _render_all(items, workers, progress)
-    data = np.load(path)
+    data = _cached("features", items, workers, progress)
     return data["x"], data["y"], data["idx"]
 
 
@@ -339,9 +348,6 @@ def indexed_mels(items: list[Recipe], workers: int = 2,
     gives, as `Embedder.utterance_mel` computes them (mel / 10 + 2, the centred window), cached (~13 KB
     a clip). For mel-level variants: transform them and embed with `Embedder.embed_mel(...)[:FRAMES]`,
     without re-rendering the audio. Features cached before this cache existed are rendered again once."""
-    path = cache_dir() / f"spotter-mels-{_key(items)}.npz"
-    if not path.exists():
-        _render_all(items, workers, progress)
-    data = np.load(path)
+    data = _cached("mels", items, workers, progress)
     return data["mel"], data["y"], data["idx"]
 
