@@ -460,7 +460,7 @@ class MarkDetector:
         g, binary = level.g, level.binary
         x, y, w, h = (int(v) for v in level.stats[i][:4])
         size = float(max(w, h))
-        self._why, self._claimed = "card", shape
+        self._why, self._claimed, self._card_refusal = "card", shape, ""
         # the card, with room for whatever lies on it within `surround` of the mark
         pad = math.ceil(3 * cfg.surround * size) + 2
         x0, y0 = max(0, x - pad), max(0, y - pad)
