@@ -54,11 +54,13 @@ CLUTTERED = DEFAULT.only(
 )
 IOU = 0.4
 CHUNK = 250
-# the harvest's detector: geometric tests only, and the loose gate and pyramid the committed model was
-# harvested with (45 grey levels, spread 0.5: the service's gate is looser since, 35 and 0.7; full and
-# quarter resolution: the service added a half-resolution level since) - pinned so that the command
-# keeps reproducing the committed model
-HARVEST = DetectorConfig(verify=False, loose_contrast=45.0, loose_texture=0.5, levels=((1, 31), (4, 31)))
+# the harvest's detector: geometric tests only, with the service's loose gate (35 grey levels, spread
+# 0.7) and pyramid (full, half and quarter resolution), so that the network learns from the candidates
+# it is shown in service - pinned, so that the command keeps reproducing the committed model when the
+# service's defaults move on
+HARVEST = DetectorConfig(
+    verify=False, loose_contrast=35.0, loose_texture=0.7, levels=((1, 31), (2, 31, 50), (4, 31))
+)
 
 
 def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
@@ -295,11 +297,11 @@ def main(
     ] = None,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
-    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.7,
-    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.7,
+    threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
+    threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.8,
     loose_x: Annotated[float, typer.Option(help="probability a loose candidate needs to be named X")] = 0.5,
-    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.9,
-    loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.85,
+    loose_o: Annotated[float, typer.Option(help="... to be named O")] = 0.95,
+    loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.9,
 ) -> None:
     t0 = time.monotonic()
     parts = harvest_all(frames, seed, jobs, cache)
