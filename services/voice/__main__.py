@@ -143,8 +143,11 @@ def enroll(
     out: Annotated[Path | None, typer.Option("--out", help="[default: <state dir>/voice-head.npz]")] = None,
     head: HeadOption = None,
 ) -> None:
-    """Adapt the spotter to one person (seconds); the service uses the result when it is present."""
+    """Adapt the spotter to one person (seconds); the service uses the result when it is present.
+
+    With --mic: each command `samples` times, then a few other words once each (enrol.PROMPT_OTHERS)."""
     from services.voice.enrol import (
+        PROMPT_OTHERS,
         EnrolError,
         adapt,
         enrolled_head_path,
@@ -168,7 +171,11 @@ def enroll(
     target.parent.mkdir(parents=True, exist_ok=True)
     adapt(base, recs).save(target)
     counts = {c: sum(1 for label, _ in recs if label == c) for c in base.classes}
-    typer.echo(json.dumps({"head": str(target), "samples": counts}))
+    report: dict[str, object] = {"head": str(target), "samples": counts}
+    if not counts["other"]:  # the user's own non-command words are what keeps the enrolled head from over-accepting
+        report["hint"] = ("also record these words once each as other-<word>.wav (they make the robot take fewer "
+                          "of your other words for commands): " + " ".join(PROMPT_OTHERS))
+    typer.echo(json.dumps(report))
 
 
 if __name__ == "__main__":
