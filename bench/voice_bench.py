@@ -21,7 +21,7 @@ with a confidence between the reasoner's `^min-confidence` and `^confirm-below`,
 accepted, false walks through the reasoner's policy, real-time factor (decode time / utterance time),
 and stream latency (end of speech -> VoiceCommand: the VAD's end-of-utterance decision plus decoding).
 With `--enrol`: the figure for five samples per command of an unseen voice, who also says the words
-`--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, once each; none is scored), and without those words.
+`--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, twice each; none is scored), and without those words.
 
 False walks: a non-"go" clip published as "go" at or above `^confirm-below` walks at once ("direct");
 one between `^min-confidence` and it makes the robot ask ("false asks"), and walks only if the next
@@ -304,11 +304,11 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40) -> dict[str, 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:
     """Five samples per command of one held-out voice (speed 1.0, clean and noisy renderings made for
-    this) and, as `--mic` prompts them, each word of `enrol.PROMPT_OTHERS` once (clean; none of them is a
-    scored word), then the held-out clips of that voice before and after. Also the enrolment without the
+    this) and, as `--mic` prompts them, the words of `enrol.PROMPT_OTHERS` `PROMPT_REPEATS` times each (clean;
+    none of them is a scored word), then the held-out clips of that voice before and after. Also the enrolment without the
     prompted words (the recipe before round 9), on the same samples."""
     from services.voice.engine_spotter import SpotterEngine
-    from services.voice.enrol import PROMPT_OTHERS, adapt
+    from services.voice.enrol import PROMPT_OTHERS, PROMPT_REPEATS, adapt
     from services.voice.spotter.head import Head
 
     rng = random.Random(3)
@@ -319,9 +319,10 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
                                0.0 if k < 3 else 1.0)
             samples.append((word, dataset.render_utterance(r)))
     mine_others = []
-    for j, word in enumerate(PROMPT_OTHERS):
-        r = dataset.Recipe(word, OTHER, voice, rng.uniform(0.9, 1.1), rng.uniform(0.9, 1.1), 20_000 + j, 0.0)
-        mine_others.append(("other", dataset.render_utterance(r)))
+    for k in range(PROMPT_REPEATS):
+        for j, word in enumerate(PROMPT_OTHERS):
+            r = dataset.Recipe(word, OTHER, voice, rng.uniform(0.9, 1.1), rng.uniform(0.9, 1.1), 20_000 + 100 * k + j, 0.0)
+            mine_others.append(("other", dataset.render_utterance(r)))
     scored = {it.text for it in items if it.family != "noise"}  # a noise clip's text is its kind ("white")
     if scored & set(PROMPT_OTHERS):  # by construction (corpus rule, tested): enrolment words are never scored
         raise RuntimeError(f"prompted enrolment words among the scored clips: {sorted(scored & set(PROMPT_OTHERS))}")

@@ -145,9 +145,10 @@ def enroll(
 ) -> None:
     """Adapt the spotter to one person (seconds); the service uses the result when it is present.
 
-    With --mic: each command `samples` times, then a few other words once each (enrol.PROMPT_OTHERS)."""
+    With --mic: each command `samples` times, then a few other words twice each (enrol.PROMPT_OTHERS)."""
     from services.voice.enrol import (
         PROMPT_OTHERS,
+        PROMPT_REPEATS,
         EnrolError,
         adapt,
         enrolled_head_path,
@@ -173,8 +174,8 @@ def enroll(
     counts = {c: sum(1 for label, _ in recs if label == c) for c in base.classes}
     report: dict[str, object] = {"head": str(target), "samples": counts}
     if not counts["other"]:  # the user's own non-command words are what keeps the enrolled head from over-accepting
-        report["hint"] = ("also record these words once each as other-<word>.wav (they make the robot take fewer "
-                          "of your other words for commands): " + " ".join(PROMPT_OTHERS))
+        report["hint"] = (f"also record these words {PROMPT_REPEATS} times each as other-<word>-<n>.wav (they make the "
+                          "robot take fewer of your other words for commands): " + " ".join(PROMPT_OTHERS))
     typer.echo(json.dumps(report))
 
 

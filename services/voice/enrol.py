@@ -2,7 +2,7 @@
 
 `python -m services.voice enroll FOLDER` takes WAVs named by command (`go-1.wav`, `go_2.wav`, or
 `go/1.wav`; `other-*.wav` for the user's own non-commands) or, with `--mic`, records prompted samples
-(each command, then each word of `PROMPT_OTHERS` once). Each recording is trimmed and embedded as the
+(each command, then the words of `PROMPT_OTHERS`, twice each). Each recording is trimmed and embedded as the
 service does. The head's last layer is then refitted by gradient descent on:
 
 - the user's samples (and copies of them with noise and gain changes), their "other" words (the
@@ -44,12 +44,15 @@ ANCHOR_WORDS: tuple[str, ...] = (
 PROMPT_OTHERS: tuple[str, ...] = (
     "stem", "stab", "dawn", "done", "yeah", "mess", "so", "toe", "though", "gut", "stock", "stuck", "white", "wide",
 )
-"""Words the user says once each at enrolment (`other-<word>.wav`; `--mic` prompts them), learnt as the user's
-own "other": without them the enrolled head takes much of its user's speech for commands. Chosen by rule, not
-by what fooled a head: per command, the first two words of `corpus.NEIGHBOURS_TRAIN[command]` (its listed order)
-that are one word, contain no command's spelling and are no tune or held-out word (tested). On the tuning proxy
-(round 9: each recorded training speaker left out of a re-trained head, then enrolled) they cut that speaker's
-non-commands accepted after enrolment from 23.5 % to 14.7 % for command accuracy 0.914 -> 0.907."""
+"""Words the user says at enrolment (`PROMPT_REPEATS` times each: `other-<word>-1.wav`, ...; `--mic` prompts
+them), learnt as the user's own "other": without them the enrolled head takes much of its user's speech for
+commands. Chosen by rule, not by what fooled a head: per command, the first two words of
+`corpus.NEIGHBOURS_TRAIN[command]` (its listed order) that are one word, contain no command's spelling and are
+no tune or held-out word (tested). On the tuning proxy (round 9: each recorded training speaker left out of a
+re-trained head, then enrolled) they cut that speaker's non-commands accepted after enrolment from 23.5 % to
+14.7 % (said once) and 13.7 % (twice), for command accuracy 0.914 -> 0.907 and 0.899."""
+PROMPT_REPEATS = 2
+"""Times each `PROMPT_OTHERS` word is prompted (the list, then the list again)."""
 
 
 class EnrolError(ValueError):
@@ -179,16 +182,17 @@ def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = E
                    meta={**head.meta, "enrolled_samples": len(samples)}, base_last=base)
 
 
-def record_prompted(words: Sequence[str], per_word: int, seconds: float = 1.5,
-                    others: Sequence[str] = PROMPT_OTHERS) -> list[tuple[str, bytes]]:
+def record_prompted(words: Sequence[str], per_word: int, seconds: float = 1.5, others: Sequence[str] = PROMPT_OTHERS,
+                    other_repeats: int = PROMPT_REPEATS) -> list[tuple[str, bytes]]:
     """Prompt for each word `per_word` times on the terminal and record `seconds` from the microphone; then
-    each of `others` once, labelled "other" (the user's own non-command words)."""
+    `others` (the list, `other_repeats` times over), labelled "other": the user's own non-command words."""
     try:
         import sounddevice as sd
     except (ImportError, OSError) as exc:
         raise EnrolError(f"no microphone ({exc}); record WAVs and pass their folder instead") from None
     prompts = [(word, word, f"{i + 1}/{per_word}") for word in words for i in range(per_word)]
-    prompts += [(word, "other", f"not a command, {k + 1}/{len(others)}") for k, word in enumerate(others)]
+    again = [word for _ in range(other_repeats) for word in others]
+    prompts += [(word, "other", f"not a command, {k + 1}/{len(again)}") for k, word in enumerate(again)]
     out: list[tuple[str, bytes]] = []
     for word, label, which in prompts:
         print(f'say "{word}" ({which}) now', flush=True)
