@@ -21,7 +21,7 @@ with a confidence between the reasoner's `^min-confidence` and `^confirm-below`,
 accepted, false walks through the reasoner's policy, real-time factor (decode time / utterance time),
 and stream latency (end of speech -> VoiceCommand: the VAD's end-of-utterance decision plus decoding).
 With `--enrol`: the figure for five samples per command of an unseen voice, who also says the words
-`--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, twice each; none is scored), and without those words.
+`--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, `PROMPT_REPEATS` times each; none is scored), and without those words.
 
 False walks: a non-"go" clip published as "go" at or above `^confirm-below` walks at once ("direct");
 one between `^min-confidence` and it makes the robot ask ("false asks"), and walks only if the next

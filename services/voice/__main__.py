@@ -145,7 +145,7 @@ def enroll(
 ) -> None:
     """Adapt the spotter to one person (seconds); the service uses the result when it is present.
 
-    With --mic: each command `samples` times, then a few other words twice each (enrol.PROMPT_OTHERS)."""
+    With --mic: each command `samples` times, then a few other words once each (enrol.PROMPT_OTHERS)."""
     from services.voice.enrol import (
         PROMPT_OTHERS,
         PROMPT_REPEATS,
@@ -174,8 +174,9 @@ def enroll(
     counts = {c: sum(1 for label, _ in recs if label == c) for c in base.classes}
     report: dict[str, object] = {"head": str(target), "samples": counts}
     if not counts["other"]:  # the user's own non-command words are what keeps the enrolled head from over-accepting
-        report["hint"] = (f"also record these words {PROMPT_REPEATS} times each as other-<word>-<n>.wav (they make the "
-                          "robot take fewer of your other words for commands): " + " ".join(PROMPT_OTHERS))
+        times = "once each as other-<word>.wav" if PROMPT_REPEATS == 1 else f"{PROMPT_REPEATS} times each as other-<word>-<n>.wav"
+        report["hint"] = (f"also record these words {times} (they make the robot take fewer of your other words for "
+                          "commands): " + " ".join(PROMPT_OTHERS))
     typer.echo(json.dumps(report))
 
 

@@ -2,7 +2,7 @@
 
 `python -m services.voice enroll FOLDER` takes WAVs named by command (`go-1.wav`, `go_2.wav`, or
 `go/1.wav`; `other-*.wav` for the user's own non-commands) or, with `--mic`, records prompted samples
-(each command, then the words of `PROMPT_OTHERS`, twice each). Each recording is trimmed and embedded as the
+(each command, then each word of `PROMPT_OTHERS` once). Each recording is trimmed and embedded as the
 service does. The head's last layer is then refitted by gradient descent on:
 
 - the user's samples (and copies of them with noise and gain changes), their "other" words (the
@@ -44,15 +44,17 @@ ANCHOR_WORDS: tuple[str, ...] = (
 PROMPT_OTHERS: tuple[str, ...] = (
     "stem", "stab", "dawn", "done", "yeah", "mess", "so", "toe", "though", "gut", "stock", "stuck", "white", "wide",
 )
-"""Words the user says at enrolment (`PROMPT_REPEATS` times each: `other-<word>-1.wav`, ...; `--mic` prompts
-them), learnt as the user's own "other": without them the enrolled head takes much of its user's speech for
-commands. Chosen by rule, not by what fooled a head: per command, the first two words of
-`corpus.NEIGHBOURS_TRAIN[command]` (its listed order) that are one word, contain no command's spelling and are
-no tune or held-out word (tested). On the tuning proxy (round 9: each recorded training speaker left out of a
-re-trained head, then enrolled) they cut that speaker's non-commands accepted after enrolment from 23.5 % to
-14.7 % (said once) and 13.7 % (twice), for command accuracy 0.914 -> 0.907 and 0.899."""
-PROMPT_REPEATS = 2
-"""Times each `PROMPT_OTHERS` word is prompted (the list, then the list again)."""
+"""Words the user says once each at enrolment (`other-<word>.wav`; `--mic` prompts them), learnt as the user's
+own "other": without them the enrolled head takes much of its user's speech for commands. Chosen by rule, not
+by what fooled a head: per command, the first two words of `corpus.NEIGHBOURS_TRAIN[command]` (its listed order)
+that are one word, contain no command's spelling and are no tune or held-out word (tested). On the tuning proxy
+(round 9: each recorded training speaker left out of a re-trained head, then enrolled; three enrolment draws)
+they cut that speaker's non-commands accepted after enrolment from 22.5 % to 15.0 %, for command accuracy
+0.907 -> 0.891."""
+PROMPT_REPEATS = 1
+"""Times each `PROMPT_OTHERS` word is prompted (the list, then the list again, ...). Twice was chosen once on one
+enrolment draw of the proxy (13.7 % against 14.7 %, three clips) and dropped: over three draws it gained 0.6 points
+(14.4 against 15.0 %) for 14 more recordings, and the held-out run did not confirm it."""
 
 
 class EnrolError(ValueError):
