@@ -20,7 +20,8 @@ with a confidence between the reasoner's `^min-confidence` and `^confirm-below`,
 "yes" by the same voice would confirm it, and is reported separately), non-command words accepted, noise
 accepted, false walks through the reasoner's policy, real-time factor (decode time / utterance time),
 and stream latency (end of speech -> VoiceCommand: the VAD's end-of-utterance decision plus decoding).
-With `--enrol`: the figure for five samples per command of an unseen voice.
+With `--enrol`: the figure for five samples per command of an unseen voice, who also says the words
+`--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, `PROMPT_REPEATS` times each; none is scored), and without those words.
 
 False walks: a non-"go" clip published as "go" at or above `^confirm-below` walks at once ("direct");
 one between `^min-confidence` and it makes the robot ask ("false asks"), and walks only if the next
@@ -303,9 +304,11 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40) -> dict[str, 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:
     """Five samples per command of one held-out voice (speed 1.0, clean and noisy renderings made for
-    this), then the held-out clips of that voice before and after."""
+    this) and, as `--mic` prompts them, the words of `enrol.PROMPT_OTHERS` `PROMPT_REPEATS` times each (clean;
+    none of them is a scored word), then the held-out clips of that voice before and after. Also the enrolment without the
+    prompted words (the recipe before round 9), on the same samples."""
     from services.voice.engine_spotter import SpotterEngine
-    from services.voice.enrol import adapt
+    from services.voice.enrol import PROMPT_OTHERS, PROMPT_REPEATS, adapt
     from services.voice.spotter.head import Head
 
     rng = random.Random(3)
@@ -315,21 +318,32 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
             r = dataset.Recipe(word, i, voice, rng.uniform(0.9, 1.1), rng.uniform(0.9, 1.1), 10_000 + 7 * i + k,
                                0.0 if k < 3 else 1.0)
             samples.append((word, dataset.render_utterance(r)))
+    mine_others = []
+    for k in range(PROMPT_REPEATS):
+        for j, word in enumerate(PROMPT_OTHERS):
+            r = dataset.Recipe(word, OTHER, voice, rng.uniform(0.9, 1.1), rng.uniform(0.9, 1.1), 20_000 + 100 * k + j, 0.0)
+            mine_others.append(("other", dataset.render_utterance(r)))
+    scored = {it.text for it in items if it.family != "noise"}  # a noise clip's text is its kind ("white")
+    if scored & set(PROMPT_OTHERS):  # by construction (corpus rule, tested): enrolment words are never scored
+        raise RuntimeError(f"prompted enrolment words among the scored clips: {sorted(scored & set(PROMPT_OTHERS))}")
     base = Head.load(head_path) if head_path else Head.load()
     t0 = time.perf_counter()
-    enrolled = adapt(base, samples)
+    enrolled = adapt(base, samples + mine_others)
     adapt_s = time.perf_counter() - t0
+    without = adapt(base, samples)
     mine = [it for it in items if it.voice == voice]
-    out: dict[str, object] = {"voice": voice, "samples_per_command": 5, "adapt_s": round(adapt_s, 1)}
+    out: dict[str, object] = {"voice": voice, "samples_per_command": 5, "prompted_others": len(mine_others),
+                              "adapt_s": round(adapt_s, 1)}
     policy = Policy.from_knowledge()
-    for name, head in (("before", base), ("after", enrolled)):
+    for name, head in (("before", base), ("after", enrolled), ("after_without_prompted_others", without)):
         scores, _ = score("spotter", SpotterEngine(head), mine, policy)
         row = next(s for s in scores if s.family == "ALL").row()
         out[name] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct", "false_asks")}
     others = [it for it in items if it.voice != voice and it.family not in ("noise", *corpus.HELDOUT_EXTRA)][::3]
-    scores, _ = score("spotter", SpotterEngine(enrolled), others, policy)
-    row = next(s for s in scores if s.family == "ALL").row()
-    out["after_on_other_voices"] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct")}
+    for name, head in (("after_on_other_voices", enrolled), ("without_prompted_others_on_other_voices", without)):
+        scores, _ = score("spotter", SpotterEngine(head), others, policy)
+        row = next(s for s in scores if s.family == "ALL").row()
+        out[name] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct")}
     return out
 
 

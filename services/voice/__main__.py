@@ -143,8 +143,12 @@ def enroll(
     out: Annotated[Path | None, typer.Option("--out", help="[default: <state dir>/voice-head.npz]")] = None,
     head: HeadOption = None,
 ) -> None:
-    """Adapt the spotter to one person (seconds); the service uses the result when it is present."""
+    """Adapt the spotter to one person (seconds); the service uses the result when it is present.
+
+    With --mic: each command `samples` times, then a few other words once each (enrol.PROMPT_OTHERS)."""
     from services.voice.enrol import (
+        PROMPT_OTHERS,
+        PROMPT_REPEATS,
         EnrolError,
         adapt,
         enrolled_head_path,
@@ -168,7 +172,12 @@ def enroll(
     target.parent.mkdir(parents=True, exist_ok=True)
     adapt(base, recs).save(target)
     counts = {c: sum(1 for label, _ in recs if label == c) for c in base.classes}
-    typer.echo(json.dumps({"head": str(target), "samples": counts}))
+    report: dict[str, object] = {"head": str(target), "samples": counts}
+    if not counts["other"]:  # the user's own non-command words are what keeps the enrolled head from over-accepting
+        times = "once each as other-<word>.wav" if PROMPT_REPEATS == 1 else f"{PROMPT_REPEATS} times each as other-<word>-<n>.wav"
+        report["hint"] = (f"also record these words {times} (they make the robot take fewer of your other words for "
+                          "commands): " + " ".join(PROMPT_OTHERS))
+    typer.echo(json.dumps(report))
 
 
 if __name__ == "__main__":

@@ -218,3 +218,22 @@ def test_the_fits_run_on_the_pinned_blas_thread_count_whatever_the_caller_set(mo
         fit(x, y, TrainConfig(hidden=4, ensemble=2, crop_width=8, crop_starts=(2, 6), blas_threads=2))
         assert {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"} == {1}  # restored
     assert seen == [{2}, {2}]
+
+
+def test_enrolment_prompt_words_follow_their_rule_and_are_no_tune_or_heldout_word() -> None:
+    """enrol.PROMPT_OTHERS: per command the first two words of NEIGHBOURS_TRAIN (listed order) that are one word,
+    spell no command and are no tune or held-out word; none shares a pronunciation with a tune or held-out word
+    (so enrolment never says a word the tuning proxy or the bench scores)."""
+    from services.voice.enrol import PROMPT_OTHERS
+
+    split = dataset.neighbours(dataset.Sizes(), 12)
+    reserved = set(OOV_TUNE) | set(OOV_HELDOUT) | set(split["tune"]) | set(split["heldout"]) | corpus.forbidden_negatives()
+    expected = []
+    for command in corpus.VOCABULARY:
+        expected += [w for w in corpus.NEIGHBOURS_TRAIN[command]
+                     if w.isalpha() and w not in reserved and not any(c in w for c in corpus.VOCABULARY)][:2]
+    assert PROMPT_OTHERS == tuple(expected)
+    prons = corpus._cmudict()
+    said = {corpus._phones(p) for w in reserved | set(corpus.VOCABULARY) for p in prons.get(w, [])}
+    assert all(w in prons for w in PROMPT_OTHERS)
+    assert not {corpus._phones(p) for w in PROMPT_OTHERS for p in prons[w]} & said

@@ -138,6 +138,21 @@ def test_enrolment_improves_an_unseen_voice(spotter: SpotterEngine) -> None:
     other_with = after.probabilities(backwards)[:, -1].mean()
     other_without = without.probabilities(backwards)[:, -1].mean()
     assert other_with > other_without, (other_with, other_without)
+    # The user's own "other" words (enrol.PROMPT_OTHERS, said once each) make the enrolled head accept fewer of
+    # that user's non-command words (held-out words, none of them prompted) than enrolling without them.
+    from services.voice.enrol import PROMPT_OTHERS, PROMPT_REPEATS
+
+    assert not set(PROMPT_OTHERS) & set(NON_COMMANDS)
+    mine = [("other", _utterance(w, voice, s)) for s in (1.0, 0.9, 1.1)[:PROMPT_REPEATS] for w in PROMPT_OTHERS]
+    with_others = adapt(spotter.head, enrol + mine, EnrolConfig(), spotter.embedder)
+    words = [_utterance(w, voice, s) for w in NON_COMMANDS for s in (0.9, 1.2)]
+
+    def accepted(head: Head) -> int:
+        eng = SpotterEngine(head, spotter.embedder)
+        return sum(eng.recognise(p).command is not None for p in words)
+
+    assert accepted(with_others) < accepted(after), (accepted(with_others), accepted(after))
+    assert score(with_others) >= before_n + 2 or score(with_others) == len(test) * 2
     # enrolment never makes the robot walk unasked where the calibrated head would not
     for word in ("goal", "go"):
         pcm = _utterance(word, voice)
@@ -199,3 +214,24 @@ def test_enroll_command_writes_state_head(tmp_path: Path) -> None:
     out = _cli("enroll", str(folder), env={"HRI_STATE_DIR": str(tmp_path / "state")})
     assert out.returncode == 0, out.stderr
     assert Head.load(tmp_path / "state" / "voice-head.npz").vocabulary == corpus.VOCABULARY
+    assert "other-<word>" in out.stdout and "stock" in out.stdout  # no "other" recordings: the hint names them
+
+
+def test_mic_enrolment_prompts_the_commands_then_the_other_words(monkeypatch: pytest.MonkeyPatch,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    import types
+
+    from services.voice.enrol import PROMPT_OTHERS, PROMPT_REPEATS, record_prompted
+
+    class PortAudioError(Exception):
+        pass
+
+    tone = (0.3 * np.sin(np.arange(16000) * 0.2) * 32767).astype("<i2").reshape(-1, 1)
+    fake = types.SimpleNamespace(rec=lambda *a, **k: tone, wait=lambda: None, PortAudioError=PortAudioError)
+    monkeypatch.setitem(sys.modules, "sounddevice", fake)
+    recs = record_prompted(("go", "stop"), 2)
+    assert [label for label, _ in recs] == ["go", "go", "stop", "stop", *["other"] * (PROMPT_REPEATS * len(PROMPT_OTHERS))]
+    prompts = capsys.readouterr().out.splitlines()
+    assert [p.split('"')[1] for p in prompts] == ["go", "go", "stop", "stop", *PROMPT_OTHERS * PROMPT_REPEATS]
+    recs = record_prompted(("go",), 1, others=("stem", "dawn"), other_repeats=2)  # the list, then the list again
+    assert [p.split('"')[1] for p in capsys.readouterr().out.splitlines()] == ["go", "stem", "dawn", "stem", "dawn"]
