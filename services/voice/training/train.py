@@ -85,10 +85,15 @@ def _sigmoid(z: float) -> float:
     return float(1 / (1 + np.exp(-z)))
 
 
-def fit(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> Head:
-    from sklearn.neural_network import MLPClassifier
-    from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
+def training_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
+    """The splits the MLPs are fitted on."""
+    return ("train", "engines", "positives", "neighbours", *speaker_splits(sizes))
 
+
+def crop_rows(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                       np.ndarray, np.ndarray]:
+    """The MLP's training rows: (standardised float32 inputs, labels, sample weights with mean 1, mean, scale);
+    with crops, every crop of every clip is its own row."""
     if cfg.crop_width:
         flat = np.concatenate([x[:, s : s + cfg.crop_width].reshape(len(x), -1) for s in cfg.crop_starts])
         y = np.tile(y, len(cfg.crop_starts))
@@ -101,26 +106,46 @@ def fit(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> Head:
     flat /= scale
     counts = np.bincount(y)
     weight = (counts.max() / counts[y]) ** cfg.balance
-    members = []
+    return flat, y, weight / weight.mean(), mean, scale
+
+
+Member = tuple[list[np.ndarray], list[np.ndarray], int]
+"""One fitted MLP: (weights, biases, epochs run)."""
+
+
+def fit_member(flat: np.ndarray, y: np.ndarray, weight: np.ndarray, cfg: TrainConfig, seed: int) -> Member:
+    """One MLP of the ensemble on `crop_rows`' output, BLAS pinned to `cfg.blas_threads`."""
+    from sklearn.neural_network import MLPClassifier
+    from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
+
     with threadpool_limits(limits=cfg.blas_threads, user_api="blas"):  # raises a lower limit too
-        for k in range(cfg.ensemble):
-            clf = MLPClassifier(hidden_layer_sizes=(cfg.hidden,), alpha=cfg.alpha, max_iter=200,
-                                early_stopping=True, validation_fraction=0.1, n_iter_no_change=12,
-                                random_state=cfg.seed + k)
-            clf.fit(flat, y, sample_weight=weight / weight.mean())
-            members.append(clf)
+        clf = MLPClassifier(hidden_layer_sizes=(cfg.hidden,), alpha=cfg.alpha, max_iter=200,
+                            early_stopping=True, validation_fraction=0.1, n_iter_no_change=12,
+                            random_state=seed)
+        clf.fit(flat, y, sample_weight=weight)
     n = len(corpus.VOCABULARY)
-    if list(members[0].classes_) != list(range(n + 1)):
-        raise RuntimeError(f"training data lacks some classes: {members[0].classes_}")
-    # An ensemble is one wider MLP: the members' hidden units side by side, their last layers averaged
-    # (the logits are the mean of the members' logits).
-    w0 = np.hstack([m.coefs_[0] for m in members])
-    b0 = np.concatenate([m.intercepts_[0] for m in members])
-    w1 = np.vstack([m.coefs_[1] for m in members]) / len(members)
-    b1 = np.mean([m.intercepts_[1] for m in members], axis=0)
+    if list(clf.classes_) != list(range(n + 1)):
+        raise RuntimeError(f"training data lacks some classes: {clf.classes_}")
+    return list(clf.coefs_), list(clf.intercepts_), int(clf.n_iter_)
+
+
+def ensemble(members: list[Member], mean: np.ndarray, scale: np.ndarray, cfg: TrainConfig) -> Head:
+    """An ensemble is one wider MLP: the members' hidden units side by side, their last layers averaged
+    (the logits are the mean of the members' logits)."""
+    n = len(corpus.VOCABULARY)
+    w0 = np.hstack([m[0][0] for m in members])
+    b0 = np.concatenate([m[1][0] for m in members])
+    w1 = np.vstack([m[0][1] for m in members]) / len(members)
+    b1 = np.mean([m[1][1] for m in members], axis=0)
     return Head(corpus.VOCABULARY, mean, scale, [w0.astype(np.float32), w1.astype(np.float32)],
                 [b0.astype(np.float32), b1.astype(np.float32)], np.full(n, 0.5), np.full(n, 0.9),
                 crop_width=cfg.crop_width, crop_starts=cfg.crop_starts if cfg.crop_width else ())
+
+
+def fit(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> Head:
+    flat, y, weight, mean, scale = crop_rows(x, y, cfg)
+    members = [fit_member(flat, y, weight, cfg, cfg.seed + k) for k in range(cfg.ensemble)]
+    return ensemble(members, mean, scale, cfg)
 
 
 def fit_temperature(head: Head, x: np.ndarray, y: np.ndarray) -> float:
@@ -186,7 +211,7 @@ def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
                   for split in TUNE_SPLITS if split in cfg.tune_splits]
     tune = (np.concatenate([p[0] for p in tune_parts]), np.concatenate([p[1] for p in tune_parts]))
     parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers)
-             for split in ("train", "engines", "positives", "neighbours", *speaker_splits(cfg.sizes))]
+             for split in training_splits(cfg.sizes)]
     train_xy = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
     t1 = time.time()
     head = fit(*train_xy, cfg)
