@@ -24,6 +24,9 @@ quarter for large ones):
    loose candidate: the learned verifier names its shape (or nothing), with stricter thresholds,
    and it goes on to the context tests like any other (this finds small, blurred and partly
    covered marks whose contours the tests above reject);
+   a big full-resolution component in which they find no mark, dark on a light box and made of two
+   clearly different grey levels (ink, and a lighter finger touching it), is cut to its darker level
+   and its largest parts are judged like components (`split`; X and TRIANGLE only);
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape; and it
    may keep an X or triangle that some card tests refused (not for faint ink or a letter beside it)
    if it is very sure (`card_rescue`): a missed danger mark is the worst miss;
