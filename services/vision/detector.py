@@ -608,7 +608,9 @@ class MarkDetector:
             if not 0.08 <= area / (sw * sh) <= 0.62:
                 continue
             part = cv2.inRange(labels[sy : sy + sh, sx : sx + sw], int(j), int(j))
-            blob = _blob(cv2.copyMakeBorder(part, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), float(max(sw, sh)))
+            blob = _blob(
+                cv2.copyMakeBorder(part, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), float(max(sw, sh))
+            )
             if blob is None:
                 continue
             judged = _classify(blob)
