@@ -201,6 +201,8 @@ def _generator(split: str, seed: int) -> FrameFn:
                 "size_px": _bin(max(labels[0].box[2:]), SIZE_BINS),
                 "tilt_deg": _bin(tilt, TILT_BINS),
                 "blur_px": _bin(scene.blur[0], BLUR_BINS),
+                # fingers reaching from the card's edge towards the mark (over its edge for some)
+                "finger_near_mark": str(scene.fingers > 0).lower(),
             }
             return img, (labels[0].shape, labels[0].box), meta
 

@@ -24,6 +24,9 @@ quarter for large ones):
    loose candidate: the learned verifier names its shape (or nothing), with stricter thresholds,
    and it goes on to the context tests like any other (this finds small, blurred and partly
    covered marks whose contours the tests above reject);
+   a big full-resolution component in which they find no mark, dark on a light box and made of two
+   clearly different grey levels (ink, and a lighter finger touching it), is cut to its darker level
+   and its largest parts are judged like components (`split`; X and TRIANGLE only);
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape; and it
    may keep an X or triangle that some card tests refused (not for faint ink or a letter beside it)
    if it is very sure (`card_rescue`): a missed danger mark is the worst miss;
@@ -105,6 +108,24 @@ class DetectorConfig:
     `min_contrast` a cross is a shadow or a crease; the network sees contrast-stretched crops and
     cannot tell) and not "letter" (a letter of a word; a rescued letter was the false X the tuning
     frames showed), nor a letter inside a line of text"""
+    split: str = "grey,loose"
+    """separate a mark from a finger it touches ("" turns it off): a big component in which the shape
+    tests find no mark, dark on a light box, made of two clearly different grey levels (ink, and a
+    lighter finger: skin), is cut into the parts of its darker level, and each of its largest parts goes
+    through the shape, card and verifier path like any other component; with "loose", a part the shape
+    tests read nothing in may also be named by the verifier like a loose candidate. Only an X or a
+    TRIANGLE is taken from a part (an O touched by a finger fails its clear margin anyway, and a false
+    O can lift a danger)."""
+    split_contrast: float = 30.0  # the two grey levels' means at least this far apart
+    split_share: tuple[float, float] = (0.05, 0.03)
+    """grey split: the dark and the light part must each be at least this share of the component (a
+    finger is often binarised only along its outline, a small share)"""
+    split_explained: float = 0.7  # grey split: at least this share of the grey-level variance explained
+    split_surround: float = 40.0  # its box's mean grey at least this much lighter than its own
+    split_levels: tuple[int, ...] = (1,)  # the pyramid levels (downscale factors) it is tried at
+    split_min: int = 100  # smallest component (longest side, pixels at its level) that is split
+    split_shrink: float = 1.0  # a part the verifier is to name must be at most this share of the component
+    split_parts: int = 3  # the largest parts left are judged, at most this many
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
@@ -202,6 +223,7 @@ class _Pending:
     own: np.ndarray | None = None
     trace_at: int | None = None  # its entry in the trace, updated with the verifier's verdict
     rescue: bool = False  # a danger mark the card tests refused: kept only if the network is very sure
+    part: bool = False  # a loose part `_split` cut off a bigger component: never named O
 
 
 class MarkDetector:
@@ -219,6 +241,7 @@ class MarkDetector:
         self._card_refusal = ""  # and, at the card stage, which test (`_on_card`)
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
+        self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
         for f, block, *_ in self.config.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
@@ -274,6 +297,7 @@ class MarkDetector:
         """Every pyramid level, then one batched verifier call for all of their candidates."""
         found: list[Detection] = []
         pending: list[_Pending] = []
+        self._greys = {}
         for f, block, *cap in self.config.levels:
             if f == 1:
                 g = cv2.GaussianBlur(gray, (3, 3), 0)
@@ -283,6 +307,7 @@ class MarkDetector:
                     continue
                 g = cv2.resize(gray, (w, h), interpolation=cv2.INTER_AREA)
             self._f = f
+            self._greys[f] = g
             self._max_size = cap[0] if cap else 0
             if f == 1 and len(self.config.levels) > 1 and self.config.full_res_max:
                 self._max_size = self.config.full_res_max
@@ -296,7 +321,7 @@ class MarkDetector:
         agrees; a loose one gets the shape it names, then the card tests judge it like any other."""
         assert self.verifier is not None
         probs = self.verifier.probabilities(
-            np.stack([crops(p.level.g, p.box) for p in pending]), np.stack([claim(p.shape) for p in pending])
+            np.stack([self._crops(p) for p in pending]), np.stack([claim(p.shape) for p in pending])
         )
         out: list[Detection] = []
         for p, row in zip(pending, probs, strict=True):
@@ -313,9 +338,12 @@ class MarkDetector:
             else:
                 claimed, prob, ok = self.verifier.name(row)
                 stage = "verifier"
-                if ok:
+                if ok and not (p.part and claimed is Shape.O):
                     assert p.blob is not None and p.own is not None
-                    det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob)
+                    blob = p.blob
+                    if p.part and claimed is Shape.X:  # a loop closed by a finger's edge: no hole
+                        blob = _Blob(blob.outer, [], blob.area, blob.size)
+                    det = self._finish(p.level, p.i, blob, p.own, claimed, prob, box=p.box)
                     stage = "kept" if det is not None else self._why
                     if (
                         det is None
@@ -329,6 +357,15 @@ class MarkDetector:
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
         return out
+
+    def _crops(self, p: _Pending) -> np.ndarray:
+        """The verifier's input for a candidate; a big part `_split` cut off at full resolution is cropped
+        from the half-resolution level instead (a quarter of the pixels to resize, about the same
+        32x32 crops: a big component at full resolution is otherwise left to the coarser levels)."""
+        if p.part and p.level.f == 1 and max(p.box[2:]) > self.config.loose_max_size and 2 in self._greys:
+            x, y, w, h = p.box
+            return crops(self._greys[2], (x // 2, y // 2, max(1, w // 2), max(1, h // 2)))
+        return crops(p.level.g, p.box)
 
     def _rescuable(self, shape: Shape, level: _Level, i: int) -> bool:
         """Whether component `i`, just refused by `_finish`, may still be kept on the verifier's word
@@ -401,7 +438,8 @@ class MarkDetector:
                     det, stage = judged, "kept"
             if trace is not None:
                 claimed = judged.shape if judged is not None else self._claimed
-                trace.append(Traced(_up(stats[i], self._f), claimed, stage, self._f))
+                at = judged.box if judged is not None else stats[i]  # a part `_split` cut off
+                trace.append(Traced(_up(at, self._f), claimed, stage, self._f))
             if wait is not None:
                 wait.trace_at = len(trace) - 1 if trace is not None else None
                 pending.append(wait)
@@ -439,7 +477,12 @@ class MarkDetector:
             return None
         judged = _classify(blob)
         if judged is None:
-            if self._loose(level.g, own, blob, (x, y, w, h)):
+            whole = self._loose(level.g, own, blob, (x, y, w, h))
+            parts = self._split(level, i, own, (x, y, w, h), loose_part=not whole)
+            if parts is not None:
+                return parts
+            self._why, self._claimed = "shape", None
+            if whole:
                 return _Pending(level, i, (x, y, w, h), None, blob=blob, own=own)
             return None
         shape, conf = judged
@@ -452,13 +495,21 @@ class MarkDetector:
         return det
 
     def _finish(
-        self, level: _Level, i: int, blob: _Blob, own: np.ndarray, shape: Shape, conf: float
+        self,
+        level: _Level,
+        i: int,
+        blob: _Blob,
+        own: np.ndarray,
+        shape: Shape,
+        conf: float,
+        box: Box | None = None,
     ) -> Detection | None:
         """The context tests of a component taken for `shape` (by the shape tests or, for a loose one,
-        the verifier): the card, the O's margin, the hole, the confidence and a line of text."""
+        the verifier): the card, the O's margin, the hole, the confidence and a line of text. `box`
+        and `own` are a part of component `i` cut off by `_split` (default: the whole component)."""
         cfg = self.config
         g, binary = level.g, level.binary
-        x, y, w, h = (int(v) for v in level.stats[i][:4])
+        x, y, w, h = box if box is not None else (int(v) for v in level.stats[i][:4])
         size = float(max(w, h))
         self._why, self._claimed, self._card_refusal = "card", shape, ""
         # the card, with room for whatever lies on it within `surround` of the mark
@@ -511,7 +562,78 @@ class MarkDetector:
         self._why = "kept"
         return Detection(shape, conf, (x, y, w, h))
 
-    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box) -> bool:
+    def _split(
+        self, level: _Level, i: int, own: np.ndarray, box: Box, loose_part: bool = True
+    ) -> Detection | _Pending | None:
+        """Component `i` (mask `own` over its `box`), in which the shape tests found no mark: is it a
+        mark joined to a lighter finger? Take away its parts lighter than the ink (`DetectorConfig.split`)
+        and judge the largest parts left like components of their own: the first X or TRIANGLE that
+        passes the card tests (or that the verifier may rescue) is returned, else the first part fit to
+        be a loose candidate (if `loose_part`), else None (`_why` is then meaningless)."""
+        cfg = self.config
+        x, y, w, h = box
+        if (
+            not cfg.split
+            or max(w, h) < cfg.split_min
+            or level.f not in cfg.split_levels
+            or self._seen is not None
+        ):
+            return None
+        g_box = level.g[y : y + h, x : x + w]
+        # ink on light paper: most of its box is much lighter than the component (a mark joined to a
+        # card's edge has the background all round it, but the card inside its box)
+        if cv2.mean(g_box)[0] - cv2.mean(g_box, mask=own)[0] < cfg.split_surround:
+            return None
+        # two grey levels in one component: dark ink and a lighter finger (Otsu's split), each a
+        # sizeable share of it and clearly apart
+        hist = cv2.calcHist([g_box], [0], own, [256], [0, 256]).ravel().astype(np.float64)
+        t, dark_mean, light_mean, dark_share, explained = _otsu(hist)
+        if not (
+            cfg.split_share[0] <= dark_share <= 1 - cfg.split_share[1]
+            and light_mean - dark_mean >= cfg.split_contrast
+            and explained >= cfg.split_explained
+        ):
+            return None
+        keep = cv2.bitwise_and(own, cv2.inRange(g_box, 0, t))
+        _, labels, stats = _components(keep)
+        loose: _Pending | None = None
+        for j in np.argsort(-stats[:, 4])[: cfg.split_parts + 1]:
+            if j == 0:
+                continue
+            sx, sy, sw, sh, area = (int(v) for v in stats[j])
+            if min(sw, sh) < cfg.min_size or max(sw, sh) > cfg.max_aspect * min(sw, sh):
+                continue
+            if max(sw, sh) < 0.3 * max(w, h):  # a crumb of the finger's outline
+                continue
+            if not 0.08 <= area / (sw * sh) <= 0.62:
+                continue
+            part = cv2.inRange(labels[sy : sy + sh, sx : sx + sw], int(j), int(j))
+            blob = _blob(
+                cv2.copyMakeBorder(part, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), float(max(sw, sh))
+            )
+            if blob is None:
+                continue
+            judged = _classify(blob)
+            sub = (x + sx, y + sy, sw, sh)
+            if judged is None or judged[0] is Shape.O:
+                if (
+                    loose is None
+                    and loose_part
+                    and "loose" in cfg.split
+                    and max(sw, sh) <= cfg.split_shrink * max(w, h)
+                    and self._loose(level.g, part, blob, sub, any_size=True)
+                ):
+                    loose = _Pending(level, i, sub, None, blob=blob, own=part, part=True)
+                continue
+            shape, conf = judged
+            det = self._finish(level, i, blob, part, shape, conf, box=sub)  # type: ignore[arg-type]
+            if det is not None:
+                return det
+            if self.verifier is not None and self._rescuable(shape, level, i):
+                return _Pending(level, i, sub, shape, det=Detection(shape, conf, sub), rescue=True)
+        return loose
+
+    def _loose(self, g: np.ndarray, own: np.ndarray, blob: _Blob, box: Box, any_size: bool = False) -> bool:
         """A component the shape tests found no mark in: is it ink on a light, plain surround, for the
         verifier to name (stricter thresholds)? While harvesting training candidates (no verifier) it
         is recorded with no claimed shape and goes no further (False)."""
@@ -519,21 +641,12 @@ class MarkDetector:
         if not cfg.loose or len(blob.holes) > 1 or (self.verifier is None and self._seen is None):
             return False
         x, y, w, h = box
-        if self._f == 1 and max(w, h) > cfg.loose_max_size:
+        if self._f == 1 and max(w, h) > cfg.loose_max_size and not any_size:
             return False
-        m = max(2, math.ceil(0.1 * max(w, h)))
-        x0, y0 = max(0, x - m), max(0, y - m)
-        x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
-        region = g[y0:y1, x0:x1]
-        inner = g[y : y + h, x : x + w]
-        n_ring = region.size - inner.size
-        if n_ring <= 0:
+        around = _surround(g, box)
+        if around is None:
             return False
-        # sums of grey levels and of their squares, in doubles (OpenCV: no float32 rounding, no copies)
-        ring_sum = cv2.sumElems(region)[0] - cv2.sumElems(inner)[0]
-        ring_sq = cv2.norm(region, cv2.NORM_L2SQR) - cv2.norm(inner, cv2.NORM_L2SQR)
-        ring = ring_sum / n_ring
-        spread = math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
+        ring, spread = around
         ink = cv2.mean(g[y : y + h, x : x + w], mask=own)[0]
         contrast = ring - ink
         if (
@@ -545,6 +658,48 @@ class MarkDetector:
         if self._seen is not None:
             self._seen.append(Candidate(None, _up(box, self._f), crops(g, box)))
         return self.verifier is not None
+
+
+_LEVELS = np.arange(256, dtype=np.float64)
+
+
+def _otsu(hist: np.ndarray) -> tuple[int, float, float, float, float]:
+    """Otsu's threshold of a 256-bin grey-level histogram: the level t that best splits it into a dark
+    (<= t) and a light class, their mean levels, the dark class's share of the count and the share of
+    the grey-level variance the split explains (near 1: two clear levels)."""
+    n = hist.sum()
+    w0 = np.cumsum(hist)
+    s0 = np.cumsum(hist * _LEVELS)
+    w1 = n - w0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m0 = s0 / w0
+        m1 = (s0[-1] - s0) / w1
+        between = w0 * w1 * (m0 - m1) ** 2
+    between[~np.isfinite(between)] = -1.0
+    t = int(np.argmax(between))
+    if n <= 0 or between[t] <= 0:
+        return 255, 0.0, 0.0, 1.0, 0.0
+    total = float((hist * _LEVELS**2).sum()) - s0[-1] ** 2 / n
+    return t, float(m0[t]), float(m1[t]), float(w0[t] / n), float(between[t] / n / max(total, 1e-9))
+
+
+def _surround(g: np.ndarray, box: Box) -> tuple[float, float] | None:
+    """The mean grey level and its spread in a frame 10 % of its size wide around `box` (None if the
+    frame is empty)."""
+    x, y, w, h = box
+    m = max(2, math.ceil(0.1 * max(w, h)))
+    x0, y0 = max(0, x - m), max(0, y - m)
+    x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
+    region = g[y0:y1, x0:x1]
+    inner = g[y : y + h, x : x + w]
+    n_ring = region.size - inner.size
+    if n_ring <= 0:
+        return None
+    # sums of grey levels and of their squares, in doubles (OpenCV: no float32 rounding, no copies)
+    ring_sum = cv2.sumElems(region)[0] - cv2.sumElems(inner)[0]
+    ring_sq = cv2.norm(region, cv2.NORM_L2SQR) - cv2.norm(inner, cv2.NORM_L2SQR)
+    ring = ring_sum / n_ring
+    return ring, math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
 
 
 def _on_card(

@@ -365,3 +365,58 @@ def test_big_components_are_judged_at_the_quarter_scale_only() -> None:
         quarter = {t.stage for t in traced if t.scale == 4 and t.box[2] > 200}
         assert "kept" in quarter
         assert (full == {"size/fill"}) != judged_full
+
+
+# ---------------------------------------------------------------- marks joined to a finger (`_split`)
+SKIN = (120, 140, 175)  # BGR, grey about 150: lighter than the ink, darker than the card
+DARK_SKIN = (60, 80, 110)
+
+
+def _finger(
+    img: np.ndarray, centre: tuple[int, int], skin: tuple[int, int, int], angle: float = 0
+) -> np.ndarray:
+    """A finger (a filled ellipse 180 x 44 px) laid over the card."""
+    out = img.copy()
+    cv2.ellipse(out, centre, (90, 22), angle, 0, 360, skin, -1, cv2.LINE_AA)
+    return out
+
+
+def _outline_triangle() -> np.ndarray:
+    img = _card("blank")
+    cv2.polylines(
+        img, [np.array([[320, 170], [390, 300], [250, 300]], np.int32)], True, (30, 30, 30), 16, cv2.LINE_AA
+    )
+    return img
+
+
+@pytest.mark.parametrize(
+    ("name", "shape"),
+    [
+        ("X, a finger over one arm", Shape.X),
+        ("filled triangle, a dark finger touching it", Shape.TRIANGLE),
+        ("triangle outline, a finger across its base", Shape.TRIANGLE),
+    ],
+)
+def test_a_mark_joined_to_a_finger_is_cut_free(detector: MarkDetector, name: str, shape: Shape) -> None:
+    img = {
+        "X, a finger over one arm": lambda: _finger(_card("cross"), (400, 300), SKIN),
+        "filled triangle, a dark finger touching it": lambda: _finger(
+            _card("filled_triangle"), (420, 250), DARK_SKIN
+        ),
+        "triangle outline, a finger across its base": lambda: _finger(_outline_triangle(), (400, 300), SKIN),
+    }[name]()
+    assert MarkDetector(dataclasses.replace(detector.config, split="")).detect(img) == []  # one joined shape
+    found = detector.detect(img)
+    assert [d.shape for d in found] == [shape]
+    x, y, w, h = found[0].box
+    assert (
+        abs(x + w / 2 - 320) < 25 and abs(y + h / 2 - 240) < 25 and max(w, h) < 170
+    )  # the mark, not the finger
+
+
+@pytest.mark.parametrize("draw", ["blank", "word", "square", "disc"])
+def test_a_finger_on_a_card_or_touching_a_word_is_no_mark(detector: MarkDetector, draw: str) -> None:
+    for centre in [(440, 240), (400, 300), (320, 240), (250, 200)]:
+        for skin in (SKIN, DARK_SKIN):
+            for angle in (0, 40, 90):
+                assert detector.detect(_finger(_card(draw), centre, skin, angle)) == [], (centre, skin, angle)
