@@ -31,7 +31,7 @@ import numpy as np
 import typer
 
 from schemas.messages import Shape
-from services.vision.detector import Detection, DetectorConfig, MarkDetector, box_overlap
+from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings
 from services.vision.verifier import Verifier
 
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
@@ -144,21 +144,19 @@ def main(
 
 
 def _detector(settings: list[str]) -> MarkDetector:
-    config: dict[str, Any] = {}
     verifier = Verifier.load()
+    rest = []
     for item in settings:
         key, _, value = item.partition("=")
         if key in ("thresholds", "loose_thresholds"):
             verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
-        elif key in {f.name for f in dataclasses.fields(DetectorConfig)} and key != "levels":
-            kind = type(getattr(DetectorConfig(), key))
-            if kind is tuple:  # card_rescue_from=band,texture
-                config[key] = tuple(v for v in value.split(",") if v)
-            else:
-                config[key] = value.lower() in ("1", "true") if kind is bool else kind(value)
         else:
-            raise typer.BadParameter(f"--set {item}: not a DetectorConfig field or the verifier's thresholds")
-    return MarkDetector(DetectorConfig(**config), verifier=verifier)
+            rest.append(item)
+    try:
+        config = parse_settings(rest)  # the service's own parsing (--detector, HRI_VISION_DETECTOR)
+    except ValueError as exc:
+        raise typer.BadParameter(f"--set: {exc} (or the verifier's thresholds / loose_thresholds)") from None
+    return MarkDetector(config, verifier=verifier)
 
 
 Meta = dict[str, str]

@@ -16,7 +16,7 @@ from services.runtime import run_service
 from services.runtime.cli import ConnectOption, RobotOption
 from services.vision.annotate import annotate
 from services.vision.debounce import Confirmation, DebounceConfig
-from services.vision.detector import MarkDetector
+from services.vision.detector import MarkDetector, parse_settings
 from services.vision.service import NAME, VisionSettings, serve
 from services.vision.sources import SourceConfigError, SourceError, open_source
 
@@ -61,6 +61,15 @@ LoopOption = Annotated[
     typer.Option("--loop/--no-loop", envvar="HRI_VISION_LOOP", help="replay a video file or image folder"),
 ]
 SeedOption = Annotated[int, typer.Option("--seed", help="random seed of the synthetic scene")]
+DetectorOption = Annotated[
+    str,
+    typer.Option(
+        "--detector",
+        envvar="HRI_VISION_DETECTOR",
+        help="detector settings changed from the defaults, KEY=VALUE separated by spaces or ';' "
+        "(DetectorConfig fields, e.g. 'split=' turns the finger split off)",
+    ),
+]
 
 
 @app.callback(invoke_without_command=True)
@@ -74,6 +83,7 @@ def main(
     danger_debounce: DangerDebounceOption = "1/3",
     loop: LoopOption = False,
     seed: SeedOption = 0,
+    detector: DetectorOption = "",
 ) -> None:
     """Run the vision service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
@@ -83,13 +93,22 @@ def main(
         window = Confirmation(
             safe=DebounceConfig.parse(debounce), danger=DebounceConfig.parse(danger_debounce)
         )
+        config = parse_settings(detector)
         open_source(source, loop=loop, seed=seed)  # builds (does not open) the source: checks the spec
     except (ValueError, SourceConfigError) as exc:
         typer.echo(f"vision: invalid configuration: {exc}", err=True)
         raise typer.Exit(2) from None
     except SourceError:  # missing now (no camera, no file): the service reports it and retries
         pass
-    settings = VisionSettings(source=source, fps=fps, debounce=window, loop=loop, seed=seed)
+    settings = VisionSettings(
+        source=source,
+        fps=fps,
+        debounce=window,
+        loop=loop,
+        seed=seed,
+        detector=config,
+        detector_text=detector.strip(),
+    )
     raise typer.Exit(run_service(NAME, partial(serve, settings=settings), robot=robot, connect=connect))
 
 
@@ -99,12 +118,17 @@ def detect(
     annotate_dir: Annotated[
         Path | None, typer.Option("--annotate", help="write annotated copies here")
     ] = None,
+    settings: DetectorOption = "",
 ) -> None:
     """Print one MarkObservation JSON line per image (no debounce; `frame` is the image's position).
 
     An unreadable image prints an error on stderr instead of its line; the exit code is then 1.
     """
-    detector = MarkDetector()
+    try:
+        detector = MarkDetector(parse_settings(settings))
+    except ValueError as exc:
+        typer.echo(f"vision: invalid configuration: {exc}", err=True)
+        raise typer.Exit(2) from None
     failed = 0
     if annotate_dir is not None:
         annotate_dir.mkdir(parents=True, exist_ok=True)

@@ -39,7 +39,9 @@ isolated letter O / digit 0 or X with a clear margin is indistinguishable from a
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, fields, replace
 
 import cv2
 import numpy as np
@@ -131,6 +133,18 @@ class DetectorConfig:
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,
     0.03, 0.25, 0.4), chosen on the tuning generator: without the verifier they let more false marks
     through. The contrast limits stay: a faint cross is a shadow or a crease, not print."""
+
+    def __post_init__(self) -> None:
+        """Settings no detector could run with are refused here, wherever they come from (code, the
+        service's `--detector`, the benches' `--set`), so a service refuses them at start."""
+        for f, block, *_ in self.levels:
+            if f < 1 or block % 2 == 0 or block < 3:
+                raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
+        unknown = set(self.card_rescue_from) - set(CARD_TESTS)
+        if unknown:
+            raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
+        if set(self.split.split(",")) - {"", "grey", "loose"}:
+            raise ValueError(f"split: {self.split!r} is not '' (off), 'grey' or 'grey,loose'")
 
 
 @dataclass
@@ -226,6 +240,40 @@ class _Pending:
     part: bool = False  # a loose part `_split` cut off a bigger component: never named O
 
 
+_TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
+
+
+def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
+    """The default `DetectorConfig` with some settings changed: `KEY=VALUE` items (a string is split at
+    spaces and semicolons: `--detector` / `HRI_VISION_DETECTOR`, e.g. "split= card_rescue=0.97"; the
+    benches' `--set`). Booleans are 1/0, true/false, yes/no or on/off; a tuple's items are comma-separated
+    (`card_rescue_from=band,texture`); `split=` is the empty string (off). `levels` is not settable here.
+    ValueError names the item that is no setting or whose value is not of the setting's type."""
+    if isinstance(items, str):
+        items = [t for t in re.split(r"[;\s]+", items) if t]
+    defaults = DetectorConfig()
+    names = {f.name for f in fields(DetectorConfig)} - {"levels"}
+    changed: dict[str, object] = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        if not eq or key not in names:
+            raise ValueError(f"detector setting {item!r}: expected KEY=VALUE, KEY one of {', '.join(sorted(names))}")
+        old = getattr(defaults, key)
+        try:
+            if isinstance(old, bool):
+                if value.lower() not in _TRUE + _FALSE:
+                    raise ValueError(value)
+                changed[key] = value.lower() in _TRUE
+            elif isinstance(old, tuple):
+                kind = type(old[0]) if old else str
+                changed[key] = tuple(kind(v) for v in value.split(",") if v)
+            else:
+                changed[key] = type(old)(value)
+        except ValueError:
+            raise ValueError(f"detector setting {item!r}: {value!r} is not a {type(old).__name__}") from None
+    return replace(defaults, **changed)  # type: ignore[arg-type]  # DetectorConfig checks the values
+
+
 class MarkDetector:
     """Stateless per frame; safe to reuse for every frame of a stream (not across threads)."""
 
@@ -242,12 +290,6 @@ class MarkDetector:
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
         self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
-        for f, block, *_ in self.config.levels:
-            if f < 1 or block % 2 == 0 or block < 3:
-                raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
-        unknown = set(self.config.card_rescue_from) - set(CARD_TESTS)
-        if unknown:
-            raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
 
     def candidates(self, image: np.ndarray) -> list[Candidate]:
         """Every component that passes the shape tests, with its crops and the detector's verdict

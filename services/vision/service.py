@@ -18,7 +18,7 @@ from schemas.access import INPUT_PRIORITIES
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.vision.debounce import Confirmation, Debouncer
-from services.vision.detector import MarkDetector
+from services.vision.detector import DetectorConfig, MarkDetector
 from services.vision.preview import PreviewPublisher
 from services.vision.sources import (
     ALTERNATIVES,
@@ -42,6 +42,8 @@ class VisionSettings:
     max_retry_s: float = 30.0  # ... doubling up to this
     stall_s: float = 2.0  # a camera silent this long is reported
     seed: int = 0  # synthetic scenes
+    detector: DetectorConfig = field(default_factory=DetectorConfig)
+    detector_text: str = ""  # the settings changed from the defaults, as given (`--detector`), for health
 
 
 @dataclass
@@ -68,10 +70,15 @@ def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
     # queue a danger sign behind other traffic
     priority = getattr(zenoh.Priority, INPUT_PRIORITIES["vision/marks"].upper())
     pub = ctx.publisher(ctx.keys.vision_marks, MarkObservation, priority=priority, express=True)
-    detector = MarkDetector()
+    detector = MarkDetector(settings.detector)
     debounce = Debouncer(settings.debounce)
     stats = _Stats()
-    ctx.update_detail(source=settings.source, debounce=str(settings.debounce), fps_cap=settings.fps)
+    ctx.update_detail(
+        source=settings.source,
+        debounce=str(settings.debounce),
+        fps_cap=settings.fps,
+        detector=settings.detector_text or "defaults",
+    )
 
     holder = _SourceHolder(settings)
     ctx.on_close(holder.close)

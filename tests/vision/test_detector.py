@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import zlib
 
 import cv2
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from schemas.messages import Shape
-from services.vision.detector import Detection, DetectorConfig, MarkDetector, box_overlap
+from services.vision.detector import Detection, DetectorConfig, MarkDetector, box_overlap, parse_settings
 from services.vision.synthetic import MILD, SceneGenerator, Variation
 
 SHAPES = (Shape.X, Shape.O, Shape.TRIANGLE)
@@ -420,3 +421,36 @@ def test_a_finger_on_a_card_or_touching_a_word_is_no_mark(detector: MarkDetector
         for skin in (SKIN, DARK_SKIN):
             for angle in (0, 40, 90):
                 assert detector.detect(_finger(_card(draw), centre, skin, angle)) == [], (centre, skin, angle)
+
+
+# ---------------------------------------------------------------- settings (`--detector`, `HRI_VISION_DETECTOR`)
+def test_detector_settings_are_parsed_by_type_and_bad_ones_named() -> None:
+    cfg = parse_settings(
+        "split= card_rescue=0.97;card_rescue_from=band,texture  loose=off split_share=0.1,0.02"
+    )
+    assert cfg.split == "" and cfg.card_rescue == 0.97 and cfg.loose is False
+    assert cfg.card_rescue_from == ("band", "texture") and cfg.split_share == (0.1, 0.02)
+    assert (
+        dataclasses.replace(
+            cfg,
+            split="grey,loose",
+            card_rescue=0.95,
+            card_rescue_from=DetectorConfig().card_rescue_from,
+            loose=True,
+            split_share=DetectorConfig().split_share,
+        )
+        == DetectorConfig()
+    )
+    assert parse_settings("") == DetectorConfig() and parse_settings(["min_size=20"]).min_size == 20
+    for bad, says in [
+        ("nosuch=1", "'nosuch=1': expected KEY=VALUE"),
+        ("split", "'split': expected KEY=VALUE"),
+        ("levels=1", "'levels=1': expected KEY=VALUE"),  # the pyramid is not a one-value setting
+        ("min_size=1.5", "'1.5' is not a int"),
+        ("loose=maybe", "'maybe' is not a bool"),
+        ("split_share=a,b", "'a,b' is not a tuple"),
+        ("card_rescue_from=band,colour", "unknown card tests ['colour']"),  # DetectorConfig's own checks
+        ("split=yes", "split: 'yes' is not"),
+    ]:
+        with pytest.raises(ValueError, match=re.escape(says)):
+            parse_settings(bad)

@@ -22,6 +22,7 @@ from schemas.messages import Health, HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext
 from services.vision.synthetic import MILD, SceneGenerator
 from tests.conftest import ROOT, wait_for
+from tests.vision.test_detector import SKIN, _card, _finger
 
 pytestmark = pytest.mark.system
 
@@ -183,6 +184,33 @@ def test_invalid_source_spec_exits_2_with_one_line(source: str, says: str) -> No
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and says in lines[0] and "synthetic:none" in lines[0]
+
+
+def test_bad_detector_setting_exits_2_naming_it() -> None:
+    done = _run_vision(HRI_VISION_SOURCE="synthetic", HRI_VISION_DETECTOR="split= card_rescue=high")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "'card_rescue=high'" in lines[0]
+
+
+def test_detect_command_takes_detector_settings(tmp_path: Path) -> None:
+    # an X a finger lies across: found only while the finger split (on by default) is on
+    image = tmp_path / "x-finger.png"
+    cv2.imwrite(str(image), _finger(_card("cross"), (400, 300), SKIN))
+
+    def shapes(*extra: str) -> list[Shape]:
+        res = subprocess.run(
+            [sys.executable, "-m", "services.vision", "detect", str(image), *extra],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert res.returncode == 0, res.stderr
+        return [m.shape for m in MarkObservation.model_validate_json(res.stdout).marks]
+
+    assert shapes() == [Shape.X]
+    assert shapes("--detector", "split=") == []
 
 
 def test_bad_debounce_exits_2() -> None:
