@@ -22,7 +22,7 @@ keeps them (`<speaker>-s<seed>.npz`, with the recipe they were fitted on; a file
 settings is refused). The held-out split is never read.
 
     nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy
-    nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy --enrol --draws 0 1 2
+    nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy --enrol --draws 0 --draws 1 --draws 2
 """
 
 from __future__ import annotations
