@@ -75,11 +75,11 @@ class Verifier:
     session: Any = field(repr=False)
     """an onnxruntime InferenceSession of the network (inputs `crops`, `claim`; output `probabilities`)"""
     thresholds: tuple[float, float, float]
-    """the probability X, O and TRIANGLE each need (the committed model's: 0.25, 0.7, 0.7): a false X
+    """the probability X, O and TRIANGLE each need (the committed model's: 0.25, 0.8, 0.8): a false X
     only stops the robot, a missed X is the worst miss, so X needs least; a false O lifts a danger"""
     loose_thresholds: tuple[float, float, float]
     """the same for a loose candidate, whose shape only this model names (no shape test agreed; the
-    committed model's: 0.5, 0.9, 0.85)"""
+    committed model's: 0.5, 0.95, 0.9)"""
 
     @classmethod
     def load(cls, path: Path = MODEL_PATH, thresholds: tuple[float, float, float] | None = None) -> Verifier:
