@@ -107,7 +107,6 @@ def main(
         loop=loop,
         seed=seed,
         detector=config,
-        detector_text=detector.strip(),
     )
     raise typer.Exit(run_service(NAME, partial(serve, settings=settings), robot=robot, connect=connect))
 

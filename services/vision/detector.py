@@ -243,6 +243,18 @@ class _Pending:
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
 
 
+def changed_settings(config: DetectorConfig) -> str:
+    """The settings of `config` that differ from the defaults, as `parse_settings` reads them ("" for none)."""
+    defaults = DetectorConfig()
+    out = []
+    for f in fields(DetectorConfig):
+        value = getattr(config, f.name)
+        if value != getattr(defaults, f.name):
+            text = ",".join(str(v) for v in value) if isinstance(value, tuple) else str(value)
+            out.append(f"{f.name}={text}")
+    return " ".join(out)
+
+
 def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
     """The default `DetectorConfig` with some settings changed: `KEY=VALUE` items (a string is split at
     spaces and semicolons: `--detector` / `HRI_VISION_DETECTOR`, e.g. "split= card_rescue=0.97"; the

@@ -18,7 +18,7 @@ from schemas.access import INPUT_PRIORITIES
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.vision.debounce import Confirmation, Debouncer
-from services.vision.detector import DetectorConfig, MarkDetector
+from services.vision.detector import DetectorConfig, MarkDetector, changed_settings
 from services.vision.preview import PreviewPublisher
 from services.vision.sources import (
     ALTERNATIVES,
@@ -43,7 +43,6 @@ class VisionSettings:
     stall_s: float = 2.0  # a camera silent this long is reported
     seed: int = 0  # synthetic scenes
     detector: DetectorConfig = field(default_factory=DetectorConfig)
-    detector_text: str = ""  # the settings changed from the defaults, as given (`--detector`), for health
 
 
 @dataclass
@@ -77,7 +76,7 @@ def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
         source=settings.source,
         debounce=str(settings.debounce),
         fps_cap=settings.fps,
-        detector=settings.detector_text or "defaults",
+        detector=changed_settings(settings.detector) or "defaults",
     )
 
     holder = _SourceHolder(settings)

@@ -11,7 +11,14 @@ import numpy as np
 import pytest
 
 from schemas.messages import Shape
-from services.vision.detector import Detection, DetectorConfig, MarkDetector, box_overlap, parse_settings
+from services.vision.detector import (
+    Detection,
+    DetectorConfig,
+    MarkDetector,
+    box_overlap,
+    changed_settings,
+    parse_settings,
+)
 from services.vision.synthetic import MILD, SceneGenerator, Variation
 
 SHAPES = (Shape.X, Shape.O, Shape.TRIANGLE)
@@ -442,6 +449,9 @@ def test_detector_settings_are_parsed_by_type_and_bad_ones_named() -> None:
         == DetectorConfig()
     )
     assert parse_settings("") == DetectorConfig() and parse_settings(["min_size=20"]).min_size == 20
+    assert (
+        parse_settings(changed_settings(cfg)) == cfg and changed_settings(DetectorConfig()) == ""
+    )  # health's string
     for bad, says in [
         ("nosuch=1", "'nosuch=1': expected KEY=VALUE"),
         ("split", "'split': expected KEY=VALUE"),
