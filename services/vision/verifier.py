@@ -54,8 +54,9 @@ def crops(g: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
     cx, cy, size = x + w / 2.0, y + h / 2.0, float(max(w, h))
     out = np.stack([_crop(g, cx, cy, k * size) for k in (TIGHT, WIDE, CONTEXT)]).astype(np.float32)
     lo, hi = float(out[0].min()), float(out[0].max())
-    out = (out - lo) * (255.0 / max(hi - lo, 8.0))
-    return np.clip(out, 0, 255).astype(np.uint8)
+    out -= lo  # in place, in float32: (out - lo) * scale, clipped
+    out *= 255.0 / max(hi - lo, 8.0)
+    return np.clip(out, 0, 255, out=out).astype(np.uint8)
 
 
 def claim(shape: Shape | None) -> np.ndarray:

@@ -464,3 +464,31 @@ def test_detector_settings_are_parsed_by_type_and_bad_ones_named() -> None:
     ]:
         with pytest.raises(ValueError, match=re.escape(says)):
             parse_settings(bad)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_distance_to_a_mark_is_exact_where_the_context_tests_look(seed: int) -> None:
+    """`_distance` computes the distance transform only near the mark (a speed-up): wherever it is
+    finite it must equal OpenCV's transform of the whole card region (but for float32 rounding: a
+    unit or two in the last place, where equally short paths are summed in another order), and it may
+    be infinite only beyond the reach of every context test."""
+    from services.vision.detector import _distance, _reach
+
+    rng = np.random.default_rng(seed)
+    h, w = (int(v) for v in rng.integers(60, 400, size=2))
+    filled = np.zeros((h, w), np.uint8)
+    bw, bh = int(rng.integers(8, max(9, w // 2))), int(rng.integers(8, max(9, h // 2)))
+    x, y = int(rng.integers(0, w - bw + 1)), int(rng.integers(0, h - bh + 1))
+    pts = np.stack([rng.integers(x, x + bw, 7), rng.integers(y, y + bh, 7)], axis=1).astype(np.int32)
+    cv2.fillPoly(filled, [cv2.convexHull(pts)], 255)
+    cv2.line(filled, (x, y), (x + bw - 1, y + bh - 1), 255, 2)  # not convex either
+    ys, xs = np.nonzero(filled)
+    box = (int(xs.min()), int(ys.min()), int(np.ptp(xs)) + 1, int(np.ptp(ys)) + 1)
+    extent = float(np.sqrt(max(cv2.contourArea(cv2.convexHull(np.stack([xs, ys], 1))), 1.0)))
+    reach = _reach(DetectorConfig(), extent)
+    cut = _distance(filled, box, reach)
+    whole = cv2.distanceTransform(cv2.bitwise_not(filled), cv2.DIST_L2, 3)
+    finite = np.isfinite(cut)
+    assert np.allclose(cut[finite], whole[finite], rtol=1e-6, atol=0)
+    assert (whole[~finite] > reach).all()
+    assert finite.sum() < filled.size or max(h, w) < 3 * reach  # it does leave something out
