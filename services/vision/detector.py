@@ -143,8 +143,8 @@ class DetectorConfig:
         unknown = set(self.card_rescue_from) - set(CARD_TESTS)
         if unknown:
             raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
-        if set(self.split.split(",")) - {"", "grey", "loose"}:
-            raise ValueError(f"split: {self.split!r} is not '' (off), 'grey' or 'grey,loose'")
+        if set(self.split.split(",")) - {"", "grey", "loose", "edge"}:
+            raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
 
 
 @dataclass
@@ -471,13 +471,30 @@ class MarkDetector:
             candidates = candidates[
                 _clear_frames(binary, stats[candidates], cfg.frame_margin, cfg.frame_max_ink)
             ]
+        # a mark joined to a finger that runs on out of the frame (a hand holding the card) is cut by
+        # the frame edge as one component: it is only ever split (`DetectorConfig.split`, "edge")
+        cut = np.zeros_like(keep)
+        if self._splits_edge():
+            cut = (
+                (short_side >= cfg.min_size)
+                & (long_side >= cfg.split_min)
+                & (long_side <= 0.98 * min(H, W))
+                & (long_side <= cfg.max_aspect * short_side)
+                & (fill >= 0.08)
+                & (fill <= 0.62)
+                & ((x == 0) | (y == 0) | (x + w == W) | (y + h == H))
+            )
+            if self._max_size:
+                cut &= long_side <= self._max_size
+            cut[0] = False
+        at_edge = set(np.flatnonzero(cut).tolist())
         trace = self._trace
         if trace is not None:
-            self._trace_prefilter(stats, keep, candidates, min(H, W))
+            self._trace_prefilter(stats, keep | cut, np.r_[candidates, np.array(sorted(at_edge), np.intp)], min(H, W))
         level = _Level(g, binary, labels, stats, self._f, text_check)
         out: list[Detection] = []
-        for i in candidates:
-            judged = self._judge(level, int(i))
+        for i in [*candidates.tolist(), *sorted(at_edge)]:
+            judged = self._judge(level, int(i), at_edge=i in at_edge)
             stage = self._why
             wait: _Pending | None = None
             det: Detection | None = None
@@ -517,10 +534,16 @@ class MarkDetector:
         for i in np.flatnonzero(frame_dropped):
             self._trace.append(Traced(_up(stats[i], f), None, "frame ink", f))
 
-    def _judge(self, level: _Level, i: int) -> Detection | _Pending | None:
+    def _splits_edge(self) -> bool:
+        """Whether components cut by the frame edge are split at this level (never while harvesting)."""
+        cfg = self.config
+        return "edge" in cfg.split.split(",") and self._f in cfg.split_levels and self._seen is None
+
+    def _judge(self, level: _Level, i: int, at_edge: bool = False) -> Detection | _Pending | None:
         """Component `i`: a detection in the level's pixels if the shape tests read a mark and every
         context test passes (the verifier still to come); a pending loose candidate for the verifier
-        to name; or None (`_why` says where it stopped)."""
+        to name; or None (`_why` says where it stopped). A component cut by the frame edge
+        (`at_edge`) is never judged whole: only the parts `_split` cuts from it."""
         x, y, w, h = level.stats[i, :4].tolist()
         size = float(max(w, h))
         self._why, self._claimed = "shape", None
@@ -533,6 +556,11 @@ class MarkDetector:
             mask = cv2.inRange(level.labels[y : y + h, x : x + w], i, i)
             bordered = cv2.copyMakeBorder(mask, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
         own = bordered[1:-1, 1:-1]  # 255 where the label is i
+        if at_edge:
+            parts = self._split(level, i, own, (x, y, w, h))
+            if parts is None:
+                self._why, self._claimed = "shape", None
+            return parts
         blob = _blob(bordered, size)
         if blob is None:
             return None
@@ -665,6 +693,9 @@ class MarkDetector:
                 continue
             sx, sy, sw, sh, area = (int(v) for v in stats[j])
             if min(sw, sh) < cfg.min_size or max(sw, sh) > cfg.max_aspect * min(sw, sh):
+                continue
+            H, W = level.g.shape
+            if x + sx == 0 or y + sy == 0 or x + sx + sw == W or y + sy + sh == H:  # the finger's side
                 continue
             if max(sw, sh) < 0.3 * max(w, h):  # a crumb of the finger's outline
                 continue
