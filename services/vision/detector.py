@@ -117,7 +117,9 @@ class DetectorConfig:
     through the shape, card and verifier path like any other component; with "loose", a part the shape
     tests read nothing in may also be named by the verifier like a loose candidate. Only an X or a
     TRIANGLE is taken from a part (an O touched by a finger fails its clear margin anyway, and a false
-    O can lift a danger)."""
+    O can lift a danger). With "edge", a component cut by the frame edge (a mark joined to a finger that
+    runs on out of the frame: the hand holding the card is out of view) is split too; it is never
+    judged whole, and parts that touch the frame edge are not judged."""
     split_contrast: float = 30.0  # the two grey levels' means at least this far apart
     split_share: tuple[float, float] = (0.05, 0.03)
     """grey split: the dark and the light part must each be at least this share of the component (a

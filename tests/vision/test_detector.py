@@ -422,6 +422,38 @@ def test_a_mark_joined_to_a_finger_is_cut_free(detector: MarkDetector, name: str
     )  # the mark, not the finger
 
 
+def _held_from_above(draw: str, tip: tuple[int, int], skin: tuple[int, int, int]) -> np.ndarray:
+    """`_card(draw)` with the card running on out of the frame's top, and a finger from above the frame
+    down to `tip` (the hand holding the card is out of view)."""
+    img = _card(draw)
+    cv2.rectangle(img, (170, 0), (470, 90), (235, 235, 235), -1)
+    cv2.line(img, (tip[0] + 30, -60), tip, skin, 40, cv2.LINE_AA)
+    cv2.circle(img, tip, 20, skin, -1, cv2.LINE_AA)
+    return img
+
+
+@pytest.mark.parametrize("skin", [SKIN, DARK_SKIN])
+def test_a_mark_joined_to_a_finger_from_out_of_the_frame_is_cut_free(
+    detector: MarkDetector, skin: tuple[int, int, int]
+) -> None:
+    """A finger from above the frame over the end of an arm: X and finger are one component, cut by
+    the frame edge, which only `split` with "edge" judges (its parts); then the X is found."""
+    img = _held_from_above("cross", (380, 190), skin)
+    assert MarkDetector(dataclasses.replace(detector.config, split="grey,loose")).detect(img) == []
+    found = MarkDetector(dataclasses.replace(detector.config, split="grey,loose,edge")).detect(img)
+    assert [d.shape for d in found] == [Shape.X]
+    x, y, w, h = found[0].box
+    assert abs(x + w / 2 - 320) < 25 and abs(y + h / 2 - 240) < 25 and max(w, h) < 170
+
+
+@pytest.mark.parametrize("draw", ["blank", "word", "square", "disc"])
+def test_a_finger_from_out_of_the_frame_is_no_mark(detector: MarkDetector, draw: str) -> None:
+    det = MarkDetector(dataclasses.replace(detector.config, split="grey,loose,edge"))
+    for tip in [(440, 240), (380, 190), (320, 240), (250, 200)]:
+        for skin in (SKIN, DARK_SKIN):
+            assert det.detect(_held_from_above(draw, tip, skin)) == [], (tip, skin)
+
+
 @pytest.mark.parametrize("draw", ["blank", "word", "square", "disc"])
 def test_a_finger_on_a_card_or_touching_a_word_is_no_mark(detector: MarkDetector, draw: str) -> None:
     for centre in [(440, 240), (400, 300), (320, 240), (250, 200)]:
