@@ -110,7 +110,7 @@ class DetectorConfig:
     `min_contrast` a cross is a shadow or a crease; the network sees contrast-stretched crops and
     cannot tell) and not "letter" (a letter of a word; a rescued letter was the false X the tuning
     frames showed), nor a letter inside a line of text"""
-    split: str = "grey,loose"
+    split: str = "grey,loose,edge"
     """separate a mark from a finger it touches ("" turns it off): a big component in which the shape
     tests find no mark, dark on a light box, made of two clearly different grey levels (ink, and a
     lighter finger: skin), is cut into the parts of its darker level, and each of its largest parts goes

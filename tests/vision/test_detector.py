@@ -472,7 +472,7 @@ def test_detector_settings_are_parsed_by_type_and_bad_ones_named() -> None:
     assert (
         dataclasses.replace(
             cfg,
-            split="grey,loose",
+            split=DetectorConfig().split,
             card_rescue=0.95,
             card_rescue_from=DetectorConfig().card_rescue_from,
             loose=True,
@@ -492,7 +492,7 @@ def test_detector_settings_are_parsed_by_type_and_bad_ones_named() -> None:
         ("loose=maybe", "'maybe' is not a bool"),
         ("split_share=a,b", "'a,b' is not a tuple"),
         ("card_rescue_from=band,colour", "unknown card tests ['colour']"),  # DetectorConfig's own checks
-        ("split=yes", "split: 'yes' is not"),
+        ("split=yes", "split: 'yes': '' (off) or any of grey, loose, edge"),
     ]:
         with pytest.raises(ValueError, match=re.escape(says)):
             parse_settings(bad)
