@@ -454,45 +454,31 @@ class MarkDetector:
         x, y, w, h, area = (stats[:, i] for i in range(5))
         fill = area / np.maximum(w * h, 1)
         long_side, short_side = np.maximum(w, h), np.minimum(w, h)
-        keep = (
+        fits = (  # the size, aspect and fill of a mark
             (short_side >= cfg.min_size)
             & (long_side <= 0.98 * min(H, W))
             & (long_side <= cfg.max_aspect * short_side)
             & (fill >= 0.08)
             & (fill <= 0.62)  # a filled disc is 0.79, a filled square 1
-            & (x > 0)
-            & (y > 0)
-            & (x + w < W)
-            & (y + h < H)  # cut by the frame edge: not judged
         )
         if self._max_size:
-            keep &= long_side <= self._max_size
-        keep[0] = False  # background label
+            fits &= long_side <= self._max_size
+        fits[0] = False  # background label
+        in_frame = (x > 0) & (y > 0) & (x + w < W) & (y + h < H)
+        keep = fits & in_frame  # cut by the frame edge: not judged
         candidates = np.flatnonzero(keep)
         if len(candidates):
             candidates = candidates[
                 _clear_frames(binary, stats[candidates], cfg.frame_margin, cfg.frame_max_ink)
             ]
-        # a mark joined to a finger that runs on out of the frame (a hand holding the card) is cut by
-        # the frame edge as one component: it is only ever split (`DetectorConfig.split`, "edge")
-        cut = np.zeros_like(keep)
-        if self._splits_edge():
-            cut = (
-                (short_side >= cfg.min_size)
-                & (long_side >= cfg.split_min)
-                & (long_side <= 0.98 * min(H, W))
-                & (long_side <= cfg.max_aspect * short_side)
-                & (fill >= 0.08)
-                & (fill <= 0.62)
-                & ((x == 0) | (y == 0) | (x + w == W) | (y + h == H))
-            )
-            if self._max_size:
-                cut &= long_side <= self._max_size
-            cut[0] = False
+        # ... except a mark joined to a finger that runs on out of the frame (a hand holding the card):
+        # that component is only ever split (`DetectorConfig.split`, "edge")
+        cut = fits & ~in_frame & (long_side >= cfg.split_min) if self._splits_edge() else np.zeros_like(keep)
         at_edge = set(np.flatnonzero(cut).tolist())
         trace = self._trace
         if trace is not None:
-            self._trace_prefilter(stats, keep | cut, np.r_[candidates, np.array(sorted(at_edge), np.intp)], min(H, W))
+            passed = np.r_[candidates, np.array(sorted(at_edge), np.intp)]
+            self._trace_prefilter(stats, keep | cut, passed, min(H, W))
         level = _Level(g, binary, labels, stats, self._f, text_check)
         out: list[Detection] = []
         for i in [*candidates.tolist(), *sorted(at_edge)]:
