@@ -16,6 +16,10 @@ clips in the calibration either:
   engine's decision (`SpotterEngine.recognise`) and the reasoner's policy (`voice_bench.Policy`), without the
   words said at enrolment (the espeak anchors `enrol.ANCHOR_WORDS` and the prompted words).
 
+`--foreign N` (round 11): the same, with the `foreign` split (`corpus.FOREIGN_TRAIN`: Czech and Finnish recorded
+speakers saying the English words, N clips per command) added to the training rows of every rotation; those
+voices are never left out, calibrated on or scored.
+
 Features come from the training caches (`dataset.indexed_features`, `HRI_VOICE_CACHE`); nothing is rendered
 for the plain proxy. Fitting one rotation (three members) takes 4-18 min on two shared cores: `--members-dir`
 keeps them (`<speaker>-s<seed>.npz`, with the recipe they were fitted on; a file fitted on other data or
@@ -23,6 +27,7 @@ settings is refused). The held-out split is never read.
 
     nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy
     nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy --enrol --draws 0 --draws 1 --draws 2
+    nice -n 10 .venv/bin/python bench/voice_proxy.py --members-dir /tmp/voice-proxy-foreign --foreign 360
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ import hashlib
 import json
 import random
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Annotated
 
@@ -258,12 +263,15 @@ def main(
     enrol: Annotated[bool, typer.Option(help="The enrolment proxy (round 9) instead of the plain one")] = False,
     draws: Annotated[list[int] | None, typer.Option(help="Enrolment draws (--enrol; default: 0)")] = None,
     json_out: Annotated[Path | None, typer.Option("--json", help="Also write the figures here")] = None,
+    foreign: Annotated[int, typer.Option(
+        help="Round 11's variant: also fit on the `foreign` split (recorded speakers of other languages, "
+             "corpus.FOREIGN_TRAIN) with this many clips per command (0: the committed recipe)")] = 0,
 ) -> None:
     """The leave-one-recorded-speaker-out proxy of the committed recipe (see the module's docstring)."""
     speakers = speakers or list(SPEAKERS)
     seeds = seeds or [12, 13, 14]
     draws = draws or [0]
-    cfg = TrainConfig()
+    cfg = TrainConfig(sizes=replace(dataset.Sizes(), foreign_positives=foreign)) if foreign else TrainConfig()
     unknown = [s for s in speakers if s not in SPEAKERS]
     if unknown:
         raise typer.BadParameter(f"unknown speakers {unknown}: choose from {list(SPEAKERS)}")

@@ -112,3 +112,14 @@ def test_a_left_out_speakers_non_command_published_counts_as_accepted() -> None:
     assert (f["n_other_accepted"], f["n_other"], f["other_accepted"]) == (1, 2, 0.5)
     assert f["command_accuracy"] == 0.5
     assert (f["false_go_walk"], f["false_go_ask"]) == (1, 0)
+
+
+def test_foreign_voices_are_fitted_on_in_every_rotation_and_never_scored() -> None:
+    """Round 11's `--foreign`: the foreign split's rows stay in every rotation's training rows."""
+    data = rows(96, ("train",))
+    data.voice[:16] = "foreign:cs_dita"
+    data.split[:16] = "foreign"
+    for d in vp.SPEAKERS.values():
+        keep = vp.without(data, d)
+        assert keep[:16].all() and not (keep & (data.speakers() == d)).any()
+        assert not vp.left_out(data, d)[:16].any()

@@ -82,6 +82,12 @@ class Sizes:
     two_edit_repeats: int = 3
     """Per two-edit word in `neighbours` (any training voice), plus one by a recorded voice and one per
     round of `speakers`."""
+    foreign_positives: int = 0
+    """Per command, `foreign` split (round 11): the recorded speakers of other languages (`corpus.FOREIGN_TRAIN`)
+    saying it; 0 (the committed recipe): no `foreign` split is fitted on."""
+    foreign_neighbour_repeats: int = 1
+    """Per hand-picked neighbour and per foreign voice, and per train one-edit neighbour, two-edit word and
+    sampled dictionary word (by one foreign voice drawn at random), `foreign` split."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -131,13 +137,17 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     two-edit words (`two_edit`). `engines` adds clips of the recorded training voices
     (`corpus.RECORDED_TRAIN`: flite kal16 and awb, Festival ked): in `train` they are 3 of 178 voices,
     and espeak-ng alone does not teach what speech made from recordings sounds like. `recorded-tune`:
-    the recorded voices (not warped) saying the commands and the tune non-commands.
+    the recorded voices (not warped) saying the commands and the tune non-commands. `foreign` (only fitted on
+    when `Sizes.foreign_positives` > 0): recorded speakers of other languages (`corpus.FOREIGN_TRAIN`) saying
+    the commands and the training negatives.
 
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
     kind = split.partition(":")[0]  # speakers:1 is another round of speakers
-    voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
+    voices = corpus.voices({"engines": "train", "foreign": "train", "neighbours": "train", "positives": "train", "speakers": "train",
                             "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split))
+    if split == "foreign":
+        voices = list(corpus.FOREIGN_TRAIN)
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
@@ -177,6 +187,16 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
             add(word, OTHER, sizes.engines_repeats)
         for word in pool[: sizes.common_words]:
             add(word, OTHER, sizes.engines_repeats)
+        n_noise = 0
+    elif split == "foreign":
+        add_commands(sizes.foreign_positives)
+        for voice in corpus.FOREIGN_TRAIN:  # the hand-picked neighbours by every foreign voice
+            voices = [voice]
+            for word in [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]:
+                add(word, OTHER, sizes.foreign_neighbour_repeats)
+        voices = list(corpus.FOREIGN_TRAIN)
+        for word in list(neighbours(sizes, seed)["train"]) + two_edit(sizes) + pool[: sizes.common_words]:
+            add(word, OTHER, sizes.foreign_neighbour_repeats)
         n_noise = 0
     elif split == "positives":
         add_commands(sizes.more_positives)

@@ -87,7 +87,8 @@ def _sigmoid(z: float) -> float:
 
 def training_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
     """The splits the MLPs are fitted on."""
-    return ("train", "engines", "positives", "neighbours", *speaker_splits(sizes))
+    return ("train", "engines", "positives", "neighbours", *speaker_splits(sizes),
+            *(("foreign",) if sizes.foreign_positives else ()))
 
 
 def crop_rows(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray,

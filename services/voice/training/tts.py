@@ -19,10 +19,12 @@ many (vocal-tract-length perturbation; held-out speakers differ from the trainin
 from __future__ import annotations
 
 import io
+import select
 import shutil
 import subprocess
 import tempfile
 import wave
+from dataclasses import dataclass
 from math import gcd
 from pathlib import Path
 
@@ -97,7 +99,206 @@ def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
         return _wav_samples(out.read_bytes())
 
 
-ENGINES = {"espeak": espeak, "flite": flite, "festival": festival}
+# --- Recorded speakers of other languages saying English words (`foreign:<name>`, training only) -------------
+
+@dataclass(frozen=True)
+class ForeignVoice:
+    """A Festival voice of another language, made to say English words from their phonemes."""
+
+    function: str
+    """Festival's voice function `voice_<function>`."""
+    language: str
+    """The phone map (`FOREIGN_PHONES`) from ARPAbet to the voice's phone set."""
+    package: str
+    text_utterance: bool
+    """Synthesise as an utterance of type Text (Czech: its Words path needs its own token features) or Words."""
+    diphone: bool
+    """Its F0 targets can be scaled and the wave synthesised again (diphone voices; not the HTS voice)."""
+
+
+FOREIGN_VOICES: dict[str, ForeignVoice] = {
+    "cs_dita": ForeignVoice("czech_dita", "czech", "festvox-czech-dita", True, True),  # Czech, female
+    "cs_krb": ForeignVoice("czech_krb", "czech", "festvox-czech-krb", True, True),  # Czech, a child
+    "cs_machac": ForeignVoice("czech_machac", "czech", "festvox-czech-machac", True, True),  # Czech, male
+    "cs_ph": ForeignVoice("czech_ph", "czech", "festvox-czech-ph", True, True),  # Czech, male
+    "fi_lj": ForeignVoice("suo_fi_lj_diphone", "finnish", "festvox-suopuhe-lj", False, True),  # Finnish, female
+    "fi_mv": ForeignVoice("hy_fi_mv_diphone", "finnish", "festvox-suopuhe-mv", False, True),  # Finnish, male
+    "it_lp": ForeignVoice("lp_diphone", "italian", "festvox-italp16k", False, True),  # Italian, female
+    "it_pc": ForeignVoice("pc_diphone", "italian", "festvox-itapc16k", False, True),  # Italian, male
+    "ca_ona": ForeignVoice("upc_ca_ona_hts", "catalan", "festvox-ca-ona-hts", False, False),  # Catalan, female
+}
+"""`foreign:<name>`: each a recorded human speaker (diphones or HTS statistics of one person's recordings)."""
+
+_ARPA_VOWELS = ("AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW")
+
+
+def _phone_map(vowels: str, consonants: str) -> dict[str, tuple[str, ...]]:
+    """`"AA a: | AE e | ..."` -> {"AA": ("a:",), ...}; an empty right side drops the phone."""
+    out: dict[str, tuple[str, ...]] = {}
+    for part in (vowels + " | " + consonants).split("|"):
+        arpa, *phones = part.split()
+        out[arpa] = tuple(phones)
+    return out
+
+
+FOREIGN_PHONES: dict[str, dict[str, tuple[str, ...]]] = {
+    "czech": _phone_map(
+        "AA a: | AE e | AH a | AO o: | AW a u | AY a j | EH e | ER e r | EY e j | IH i | IY i: | OW o u | OY o j"
+        " | UH u | UW u:",
+        "B b | CH c~ | D d | DH d | F f | G g | HH h | JH dz~ | K k | L l | M m | N n | NG n | P p | R r | S s"
+        " | SH s~ | T t | TH t | V v | W u | Y j | Z z | ZH z~"),
+    "finnish": _phone_map(  # @ is the Finnish a-umlaut (as in "cat"), 7 the o-umlaut
+        "AA a: | AE @ | AH a | AO o: | AW a u | AY a i | EH e | ER 7 r | EY e i | IH i | IY i: | OW o u | OY o i"
+        " | UH u | UW u:",
+        "B b | CH t S | D d | DH d | F f | G g | HH h | JH d S | K k | L l | M m | N n | NG N | P p | R r | S s"
+        " | SH S | T t | TH T | V v | W v | Y j | Z s | ZH S"),
+    "italian": _phone_map(  # no /h/: dropped, as Italian speakers do
+        "AA a | AE E | AH a | AO O | AW a w | AY a j | EH E | ER E r | EY e j | IH i | IY i | OW o w | OY O j"
+        " | UH u | UW u",
+        "B b | CH tS | D d | DH d | F f | G g | HH | JH dZ | K k | L l | M m | N n | NG n | P p | R r | S s"
+        " | SH S | T t | TH t | V v | W w | Y j | Z z | ZH Z"),
+    "catalan": _phone_map(  # ax: the Catalan schwa; no /h/ and no /v/ in central Catalan
+        "AA a | AE E | AH ax | AO O | AW a w | AY a j | EH E | ER ax r | EY e j | IH i | IY i | OW o w | OY O j"
+        " | UH u | UW u",
+        "B b | CH t S | D d | DH d | F f | G g | HH | JH d Z | K k | L l | M m | N n | NG n | P p | R r | S s"
+        " | SH S | T t | TH t | V b | W w | Y j | Z z | ZH Z"),
+}
+"""ARPAbet (stress removed) -> the voice's phones. English vowels go to the nearest vowel of the language
+(long where English is long), diphthongs to vowel + glide, sounds the language lacks to its nearest sound."""
+
+_STRESSED = {"italian": {"i", "e", "E", "a", "o", "O", "u"}, "catalan": {"a", "e", "E", "i", "o", "O", "u"}}
+"""Languages whose phone set has stressed vowels (`a1`): the stressed syllable's first vowel gets one."""
+_UNSTRESSED = {"catalan": {("AH", "ax"): "a"}}
+"""A stressed ARPAbet vowel said otherwise than unstressed: Catalan schwa only when unstressed ("stun" -> a1)."""
+
+
+def foreign_syllables(arpabet: str, language: str) -> list[tuple[list[str], int]]:
+    """One CMU pronunciation (`"S T AA1 P"`) as Festival lexicon syllables of `language`'s phones:
+    [(phones, stress)], one syllable per English vowel, of the consonants between two vowels the last one
+    starts the next syllable, ARPAbet primary stress -> 1."""
+    table = FOREIGN_PHONES[language]
+    sylls: list[tuple[list[str], int]] = []
+    pending: list[str] = []  # consonants since the last vowel
+    for token in arpabet.split():
+        base = token.rstrip("012")
+        if base not in table:
+            raise TtsError(f"no {language} phone for ARPAbet {token!r}")
+        if base in _ARPA_VOWELS:
+            stress = 1 if token.endswith("1") else 0
+            phones = list(table[base])
+            if stress and (base, phones[0]) in _UNSTRESSED.get(language, {}):
+                phones[0] = _UNSTRESSED[language][(base, phones[0])]
+            if stress and phones[0] in _STRESSED.get(language, set()):
+                phones[0] += "1"
+            if sylls and len(pending) > 1:
+                sylls[-1][0].extend(pending[:-1])
+                pending = pending[-1:]
+            sylls.append((pending + phones, stress))
+            pending = []
+        else:
+            pending += table[base]
+    if not sylls:
+        raise TtsError(f"no vowel in {arpabet!r}")
+    sylls[-1][0].extend(pending)
+    if not any(stress for _, stress in sylls):
+        sylls[0] = (sylls[0][0], 1)
+    return sylls
+
+
+def _lisp_syllables(sylls: list[tuple[list[str], int]]) -> str:
+    return "(" + " ".join(f"(({' '.join(ph)}) {st})" for ph, st in sylls) + ")"
+
+
+def _token(i: int) -> str:
+    """A letters-only headword no language's text rules change: zqa, zqb, ..."""
+    return "zq" + "".join(chr(ord("a") + int(d)) for d in str(i))
+
+
+class _FestivalSession:
+    """One Festival process with one voice loaded, fed utterance after utterance (starting Festival and
+    loading a voice takes far longer than saying a word)."""
+
+    def __init__(self, voice: ForeignVoice) -> None:
+        if shutil.which("festival") is None or shutil.which("stdbuf") is None:
+            raise TtsError("festival is not installed (apt-get install festival)")
+        self.voice = voice
+        self.proc = subprocess.Popen(["stdbuf", "-oL", "festival", "--pipe"], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, bufsize=1)
+        self.tmp = tempfile.mkdtemp(prefix="festival-")
+        self.request(f"(voice_{voice.function})")
+        if voice.diphone:  # pitch: every F0 target the voice's intonation places, scaled by zq_pitch
+            self.request("(set! zq_pitch 1.0) (set! zq_int_targets Int_Targets)")
+            self.request("(define (Int_Targets utt) (zq_int_targets utt) (mapcar (lambda (x) (if (> (item.feat x \"f0\") 0)"
+                         " (item.set_feat x \"f0\" (* zq_pitch (item.feat x \"f0\"))))) (utt.relation.items utt 'Target)) utt)")
+
+    def request(self, body: str) -> None:
+        """Evaluate `body`; raises if Festival reports an error or does not answer in 30 s."""
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(f'(unwind-protect (begin {body} (print "@ok@")) (print "@error@"))\n')
+        self.proc.stdin.flush()
+        while True:
+            ready, _, _ = select.select([self.proc.stdout], [], [], 30)
+            line = self.proc.stdout.readline() if ready else ""
+            if not line:
+                self.close()
+                raise TtsError(f"Festival voice {self.voice.function} did not answer (is {self.voice.package} installed?)")
+            if "@ok@" in line:
+                return
+            if "@error@" in line:
+                raise TtsError(f"Festival voice {self.voice.function} failed on {body[:120]!r}")
+
+    def say(self, sylls: list[list[tuple[list[str], int]]], speed: float, pitch: float) -> np.ndarray:
+        tokens = [_token(i) for i in range(len(sylls))]
+        entries = " ".join(f"(lex.add.entry '(\"{t}\" nil {_lisp_syllables(s)}))" for t, s in zip(tokens, sylls, strict=True))
+        utt = (f'(Utterance Text "{" ".join(tokens)}")' if self.voice.text_utterance
+               else f"(Utterance Words ({' '.join(tokens)}))")
+        out = Path(self.tmp) / "x.wav"
+        scale = pitch if self.voice.diphone else 1.0
+        self.request(f"{entries} (Parameter.set 'Duration_Stretch {speed:.3f}) (set! zq_pitch {scale:.3f})"
+                     f' (set! zqu (utt.synth {utt})) (utt.save.wave zqu "{out}" \'riff)')
+        return _wav_samples(out.read_bytes())
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+_SESSIONS: dict[str, _FestivalSession] = {}
+
+
+def foreign_words(text: str, language: str) -> list[list[tuple[list[str], int]]]:
+    """`text`'s words (CMU dictionary, first pronunciation) as `language`'s lexicon syllables."""
+    from services.voice.training.corpus import _cmudict
+
+    prons = _cmudict()
+    words = text.lower().split()
+    missing = [w for w in words if w not in prons]
+    if missing:
+        raise TtsError(f"no CMU pronunciation for {missing}")
+    return [foreign_syllables(prons[w][0], language) for w in words]
+
+
+def foreign(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """`voice` (a key of `FOREIGN_VOICES`) says the English `text` from its CMU phonemes."""
+    if voice not in FOREIGN_VOICES:
+        raise TtsError(f"unknown foreign voice {voice!r}: one of {', '.join(FOREIGN_VOICES)}")
+    spec = FOREIGN_VOICES[voice]
+    sylls = foreign_words(text, spec.language)
+    session = _SESSIONS.get(voice)
+    if session is None or session.proc.poll() is not None:
+        session = _SESSIONS[voice] = _FestivalSession(spec)
+    return session.say(sylls, speed, pitch)
+
+
+def foreign_available(voice: str) -> bool:
+    """True if Festival and this foreign voice are installed."""
+    spec = FOREIGN_VOICES[voice]
+    return shutil.which("festival") is not None and any(Path("/usr/share/festival/voices").glob(f"*/{spec.function}"))
+
+
+ENGINES = {"espeak": espeak, "flite": flite, "festival": festival, "foreign": foreign}
 
 
 VTL_MARK = "@vtl"
