@@ -77,6 +77,9 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
+    letter_ink: float = 0.0
+    """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
+    (0: any shape as dark as `dark` counts, however much darker than the mark)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -846,7 +849,8 @@ def _on_card(
         return "faint"
     dark = ink + 0.3 * (paper - ink)
     cut = ink + 0.5 * (paper - ink)
-    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
+    same_ink = max(8.0, cfg.letter_ink * (paper - ink)) if cfg.letter_ink > 0 else math.inf
+    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink):
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
@@ -911,10 +915,13 @@ def _letter_beside(
     dark: float,
     paper_cut: float,
     gap: float,
+    mark_ink: float = 0.0,
+    same_ink: float = math.inf,
 ) -> bool:
     """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
-    within `gap` x the mark's extent, made of strokes (not a solid blob) and wholly in view of the
-    region looked at (the background beyond a card's edge runs on out of it)."""
+    within `gap` x the mark's extent, made of strokes (not a solid blob), wholly in view of the
+    region looked at (the background beyond a card's edge runs on out of it) and printed in the mark's
+    ink (its mean grey within `same_ink` of `mark_ink`'s)."""
     # as dark as `dark` (for whole grey levels, <= t is <= floor(t)), and not the mark itself
     ink = cv2.threshold(g_roi, math.floor(dark), 255, cv2.THRESH_BINARY_INV)[1]
     ink = cv2.bitwise_and(ink, cv2.bitwise_not(filled))
@@ -940,6 +947,10 @@ def _letter_beside(
         nearest = float(dist[y : y + ch, x : x + cw][mine].min())
         if not 1.5 < nearest <= gap * extent:  # touching: part of the mark
             continue
+        if same_ink < math.inf:
+            box = g_roi[y : y + ch, x : x + cw]
+            if abs(cv2.mean(box, mask=mine.view(np.uint8))[0] - mark_ink) > same_ink:
+                continue
         # printed on the same paper: light all round it (unlike the background beyond a card's edge)
         x0, y0, x1, y1 = max(0, x - 4), max(0, y - 4), min(w, x + cw + 4), min(h, y + ch + 4)
         sub = (labels[y0:y1, x0:x1] == j).astype(np.uint8)
