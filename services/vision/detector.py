@@ -850,7 +850,9 @@ def _on_card(
     dark = ink + 0.3 * (paper - ink)
     cut = ink + 0.5 * (paper - ink)
     same_ink = max(8.0, cfg.letter_ink * (paper - ink)) if cfg.letter_ink > 0 else math.inf
-    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink):
+    if cfg.letter_gap > 0 and _letter_beside(
+        g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink
+    ):
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
