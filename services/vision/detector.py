@@ -828,8 +828,9 @@ def _on_card(
     grey level, or the first test that refused it, in this order: "band" (no band), "faint" (less
     than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a letter-sized shape
     beside it: a word), "ratio" (the ink not dark enough next to the paper), "band" (the band not
-    paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may
-    overrule come after the two it may not.
+    paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
+    only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
+    the two it may not.
 
     The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
     `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
@@ -998,9 +999,10 @@ def _components(binary: np.ndarray, connectivity: int = 8) -> tuple[int, np.ndar
 def _labels(binary: np.ndarray, connectivity: int = 8) -> tuple[int, np.ndarray]:
     """`_components` without the stats (which can cost as much again)."""
     try:
-        return cv2.connectedComponentsWithAlgorithm(binary, connectivity, cv2.CV_16U, cv2.CCL_SPAGHETTI)  # type: ignore[no-any-return]
+        found = cv2.connectedComponentsWithAlgorithm(binary, connectivity, cv2.CV_16U, cv2.CCL_SPAGHETTI)
     except cv2.error:  # more than 65535 components
-        return cv2.connectedComponents(binary, connectivity=connectivity)  # type: ignore[no-any-return]
+        found = cv2.connectedComponents(binary, connectivity=connectivity)
+    return int(found[0]), found[1]
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:

@@ -549,6 +549,8 @@ def test_a_pale_mark_beside_a_black_letter_is_no_letter_of_its_word(
 
 
 @pytest.mark.parametrize("ink", [(30, 30, 30), (150, 150, 150)], ids=["black", "grey"])
-def test_an_x_in_a_word_of_its_own_ink_is_still_a_letter(detector: MarkDetector, ink: tuple[int, int, int]) -> None:
+def test_an_x_in_a_word_of_its_own_ink_is_still_a_letter(
+    detector: MarkDetector, ink: tuple[int, int, int]
+) -> None:
     same_ink = MarkDetector(dataclasses.replace(detector.config, letter_ink=0.25))
     assert same_ink.detect(_x_beside_a_letter(ink, ink)) == []
