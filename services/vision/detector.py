@@ -77,6 +77,9 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
+    letter_ink: float = 0.0
+    """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
+    (0: any shape as dark as `dark` counts, however much darker than the mark)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -825,8 +828,9 @@ def _on_card(
     grey level, or the first test that refused it, in this order: "band" (no band), "faint" (less
     than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a letter-sized shape
     beside it: a word), "ratio" (the ink not dark enough next to the paper), "band" (the band not
-    paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may
-    overrule come after the two it may not.
+    paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
+    only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
+    the two it may not.
 
     The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
     `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
@@ -846,7 +850,10 @@ def _on_card(
         return "faint"
     dark = ink + 0.3 * (paper - ink)
     cut = ink + 0.5 * (paper - ink)
-    if cfg.letter_gap > 0 and _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap):
+    same_ink = max(8.0, cfg.letter_ink * (paper - ink)) if cfg.letter_ink > 0 else math.inf
+    if cfg.letter_gap > 0 and _letter_beside(
+        g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink
+    ):
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
@@ -911,10 +918,13 @@ def _letter_beside(
     dark: float,
     paper_cut: float,
     gap: float,
+    mark_ink: float = 0.0,
+    same_ink: float = math.inf,
 ) -> bool:
     """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
-    within `gap` x the mark's extent, made of strokes (not a solid blob) and wholly in view of the
-    region looked at (the background beyond a card's edge runs on out of it)."""
+    within `gap` x the mark's extent, made of strokes (not a solid blob), wholly in view of the
+    region looked at (the background beyond a card's edge runs on out of it) and printed in the mark's
+    ink (its mean grey within `same_ink` of `mark_ink`'s)."""
     # as dark as `dark` (for whole grey levels, <= t is <= floor(t)), and not the mark itself
     ink = cv2.threshold(g_roi, math.floor(dark), 255, cv2.THRESH_BINARY_INV)[1]
     ink = cv2.bitwise_and(ink, cv2.bitwise_not(filled))
@@ -940,6 +950,10 @@ def _letter_beside(
         nearest = float(dist[y : y + ch, x : x + cw][mine].min())
         if not 1.5 < nearest <= gap * extent:  # touching: part of the mark
             continue
+        if same_ink < math.inf:
+            box = g_roi[y : y + ch, x : x + cw]
+            if abs(cv2.mean(box, mask=mine.view(np.uint8))[0] - mark_ink) > same_ink:
+                continue
         # printed on the same paper: light all round it (unlike the background beyond a card's edge)
         x0, y0, x1, y1 = max(0, x - 4), max(0, y - 4), min(w, x + cw + 4), min(h, y + ch + 4)
         sub = (labels[y0:y1, x0:x1] == j).astype(np.uint8)
@@ -985,9 +999,10 @@ def _components(binary: np.ndarray, connectivity: int = 8) -> tuple[int, np.ndar
 def _labels(binary: np.ndarray, connectivity: int = 8) -> tuple[int, np.ndarray]:
     """`_components` without the stats (which can cost as much again)."""
     try:
-        return cv2.connectedComponentsWithAlgorithm(binary, connectivity, cv2.CV_16U, cv2.CCL_SPAGHETTI)  # type: ignore[no-any-return]
+        found = cv2.connectedComponentsWithAlgorithm(binary, connectivity, cv2.CV_16U, cv2.CCL_SPAGHETTI)
     except cv2.error:  # more than 65535 components
-        return cv2.connectedComponents(binary, connectivity=connectivity)  # type: ignore[no-any-return]
+        found = cv2.connectedComponents(binary, connectivity=connectivity)
+    return int(found[0]), found[1]
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:

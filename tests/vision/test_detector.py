@@ -524,3 +524,33 @@ def test_the_distance_to_a_mark_is_exact_where_the_context_tests_look(seed: int)
     assert np.allclose(cut[finite], whole[finite], rtol=1e-6, atol=0)
     assert (whole[~finite] > reach).all()
     assert finite.sum() < filled.size or max(h, w) < 3 * reach  # it does leave something out
+
+
+def _x_beside_a_letter(mark_ink: tuple[int, int, int], letter_ink: tuple[int, int, int]) -> np.ndarray:
+    """An X and, just right of it on the same card, a K: "XK", a word if both are in one ink."""
+    img = np.full((480, 640, 3), 110, np.uint8)
+    cv2.rectangle(img, (120, 90), (520, 390), (235, 235, 235), -1)
+    cv2.line(img, (260, 180), (380, 300), mark_ink, 18, cv2.LINE_AA)
+    cv2.line(img, (380, 180), (260, 300), mark_ink, 18, cv2.LINE_AA)
+    cv2.putText(img, "K", (395, 300), cv2.FONT_HERSHEY_SIMPLEX, 4.2, letter_ink, 14, cv2.LINE_AA)
+    return img
+
+
+@pytest.mark.parametrize("mark_ink", [(150, 150, 150), (170, 120, 60)], ids=["grey", "blue"])
+def test_a_pale_mark_beside_a_black_letter_is_no_letter_of_its_word(
+    detector: MarkDetector, mark_ink: tuple[int, int, int]
+) -> None:
+    """`letter_ink`: a letter of the same word is printed in the same ink; a black letter beside a pale
+    X (another card's print, a stroke on the wall behind) does not make the X a letter."""
+    img = _x_beside_a_letter(mark_ink, (20, 20, 20))
+    assert MarkDetector(dataclasses.replace(detector.config, letter_ink=0.0)).detect(img) == []
+    found = MarkDetector(dataclasses.replace(detector.config, letter_ink=0.25)).detect(img)
+    assert [d.shape for d in found] == [Shape.X]
+
+
+@pytest.mark.parametrize("ink", [(30, 30, 30), (150, 150, 150)], ids=["black", "grey"])
+def test_an_x_in_a_word_of_its_own_ink_is_still_a_letter(
+    detector: MarkDetector, ink: tuple[int, int, int]
+) -> None:
+    same_ink = MarkDetector(dataclasses.replace(detector.config, letter_ink=0.25))
+    assert same_ink.detect(_x_beside_a_letter(ink, ink)) == []
