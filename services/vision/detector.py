@@ -477,15 +477,14 @@ class MarkDetector:
         # ... except a mark joined to a finger that runs on out of the frame (a hand holding the card):
         # that component is only ever split (`DetectorConfig.split`, "edge")
         cut = fits & ~in_frame & (long_side >= cfg.split_min) if self._splits_edge() else np.zeros_like(keep)
-        at_edge = set(np.flatnonzero(cut).tolist())
+        judged_here = np.r_[candidates, np.flatnonzero(cut)]
         trace = self._trace
         if trace is not None:
-            passed = np.r_[candidates, np.array(sorted(at_edge), np.intp)]
-            self._trace_prefilter(stats, keep | cut, passed, min(H, W))
+            self._trace_prefilter(stats, keep | cut, judged_here, min(H, W))
         level = _Level(g, binary, labels, stats, self._f, text_check)
         out: list[Detection] = []
-        for i in [*candidates.tolist(), *sorted(at_edge)]:
-            judged = self._judge(level, int(i), at_edge=i in at_edge)
+        for i in judged_here.tolist():
+            judged = self._judge(level, i, at_edge=bool(cut[i]))
             stage = self._why
             wait: _Pending | None = None
             det: Detection | None = None
@@ -679,13 +678,13 @@ class MarkDetector:
         keep = cv2.bitwise_and(own, cv2.inRange(g_box, 0, t))
         _, labels, stats = _components(keep)
         loose: _Pending | None = None
+        H, W = level.g.shape
         for j in np.argsort(-stats[:, 4])[: cfg.split_parts + 1]:
             if j == 0:
                 continue
             sx, sy, sw, sh, area = (int(v) for v in stats[j])
             if min(sw, sh) < cfg.min_size or max(sw, sh) > cfg.max_aspect * min(sw, sh):
                 continue
-            H, W = level.g.shape
             if x + sx == 0 or y + sy == 0 or x + sx + sw == W or y + sy + sh == H:  # the finger's side
                 continue
             if max(sw, sh) < 0.3 * max(w, h):  # a crumb of the finger's outline
