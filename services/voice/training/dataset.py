@@ -144,10 +144,11 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
     kind = split.partition(":")[0]  # speakers:1 is another round of speakers
-    voices = corpus.voices({"engines": "train", "foreign": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                            "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split))
     if split == "foreign":
         voices = list(corpus.FOREIGN_TRAIN)
+    else:
+        voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
+                                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split))
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
@@ -159,11 +160,12 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         + list(corpus.neighbour_split(frozenset(pool))["train"]) + list(corpus.neighbour_split(frozenset(pool))["tune"])
         + list(OOV_TUNE) + two_edit(sizes))
 
-    def add(text: str, label: int, n: int, strength_clean: float = 0.2) -> None:
+    def add(text: str, label: int, n: int, strength_clean: float = 0.2, among: list[str] | None = None) -> None:
+        """`n` clips of `text`, each by a voice drawn from `among` (default: the split's voices)."""
         if label == OTHER and text in said_as_command:
             return
         for _ in range(n):
-            v, s, p = draw(rng, voices)
+            v, s, p = draw(rng, among or voices)
             strength = 0.0 if rng.random() < strength_clean else 1.0
             out.append(Recipe(text, label, v, round(s, 3), round(p, 3), rng.randrange(2**31), strength))
 
@@ -191,10 +193,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     elif split == "foreign":
         add_commands(sizes.foreign_positives)
         for voice in corpus.FOREIGN_TRAIN:  # the hand-picked neighbours by every foreign voice
-            voices = [voice]
             for word in [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]:
-                add(word, OTHER, sizes.foreign_neighbour_repeats)
-        voices = list(corpus.FOREIGN_TRAIN)
+                add(word, OTHER, sizes.foreign_neighbour_repeats, among=[voice])
         for word in list(neighbours(sizes, seed)["train"]) + two_edit(sizes) + pool[: sizes.common_words]:
             add(word, OTHER, sizes.foreign_neighbour_repeats)
         n_noise = 0
