@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -108,3 +109,25 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
     assert f0(high) > 1.1 * f0(x)
     with pytest.raises(tts.TtsError, match="unknown foreign voice"):
         tts.synthesise("stop", "foreign:nobody")
+
+
+def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """`train --foreign N` fits the committed recipe with N foreign clips per command (round 12's candidate);
+    without it, `train` fits exactly `TrainConfig()`, the committed recipe (training itself is replaced here)."""
+    from typer.testing import CliRunner
+
+    from services.voice.__main__ import app
+    from services.voice.spotter.head import DEFAULT_HEAD
+
+    seen: list[tuple[train.TrainConfig, object]] = []
+    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append((cfg, out)) or {"head": str(out)})
+    runner = CliRunner()
+    out = tmp_path / "head.npz"
+    assert runner.invoke(app, ["train", "--out", str(out), "--foreign", "360", "--workers", "1"]).exit_code == 0
+    assert runner.invoke(app, ["train"]).exit_code == 0
+    assert runner.invoke(app, ["train", "--foreign", "-1"]).exit_code != 0  # refused before any training
+    assert len(seen) == 2
+    (variant, variant_out), (default, default_out) = seen
+    assert variant == replace(train.TrainConfig(), workers=1, sizes=replace(dataset.Sizes(), foreign_positives=360))
+    assert variant_out == out
+    assert default == train.TrainConfig() and default_out == DEFAULT_HEAD
