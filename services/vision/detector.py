@@ -77,6 +77,13 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
+    text_max_f: int = 2
+    """the text-line test runs on pyramid levels of downscale up to this (round vision13's candidate, 4,
+    with `text_paper` 0.7: a big printed O or X in a word, its letters too big for the finer levels,
+    passes at the quarter level; not landed: its rule's speed condition failed, see the README)"""
+    text_paper: float = 0.0
+    """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
+    half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
     (0: any shape as dark as `dark` counts, however much darker than the mark)"""
@@ -370,7 +377,7 @@ class MarkDetector:
             self._max_size = cap[0] if cap else 0
             if f == 1 and len(self.config.levels) > 1 and self.config.full_res_max:
                 self._max_size = self.config.full_res_max
-            found += self._detect_scale(g, block, text_check=f <= 2, pending=pending)
+            found += self._detect_scale(g, block, text_check=f <= self.config.text_max_f, pending=pending)
         if pending:
             found += self._verify(pending)
         return _merge(found, self.config.overlap)
@@ -437,7 +444,7 @@ class MarkDetector:
             and self._why == "card"
             and self._card_refusal in cfg.card_rescue_from
             and shape in (Shape.X, Shape.TRIANGLE)
-            and not (level.text_check and _in_text_line(level.stats, i, level.g, level.labels))
+            and not (level.text_check and _in_text_line(level.stats, i, level.g, level.labels, cfg.text_paper))
         )
 
     # ------------------------------------------------------------------ one pyramid level
@@ -637,7 +644,7 @@ class MarkDetector:
         if conf < cfg.min_confidence:
             self._why = "confidence"
             return None
-        if level.text_check and _in_text_line(level.stats, i, g, level.labels):
+        if level.text_check and _in_text_line(level.stats, i, g, level.labels, cfg.text_paper):
             self._why = "text line"
             return None
         self._why = "kept"
@@ -954,10 +961,7 @@ def _letter_beside(
             if abs(cv2.mean(box, mask=mine.view(np.uint8))[0] - mark_ink) > same_ink:
                 continue
         # printed on the same paper: light all round it (unlike the background beyond a card's edge)
-        x0, y0, x1, y1 = max(0, x - 4), max(0, y - 4), min(w, x + cw + 4), min(h, y + ch + 4)
-        sub = (labels[y0:y1, x0:x1] == j).astype(np.uint8)
-        ring = cv2.dilate(sub, np.ones((7, 7), np.uint8)) - cv2.dilate(sub, np.ones((3, 3), np.uint8))
-        if float(np.mean(g_roi[y0:y1, x0:x1][ring > 0] > paper_cut)) >= 0.8:
+        if _paper_round(g_roi, labels, stats, int(j), paper_cut) >= 0.8:
             return True
     return False
 
@@ -1176,7 +1180,9 @@ def _triangle_fill(c: np.ndarray, area: float) -> float:
     return float(area / tri_area) if tri_area > 0 else 0.0
 
 
-def _in_text_line(stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray) -> bool:
+def _in_text_line(
+    stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray, paper_share: float = 0.0
+) -> bool:
     """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
     two of them, the nearest less than half a letter height away and the other within two; or one
     close neighbour of the very same height beside it. (Any one neighbour is not enough: the fingers
@@ -1199,13 +1205,16 @@ def _in_text_line(stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray) 
     similar[0] = similar[i] = False
     if not (similar & (gap <= 0.5 * h)).any():
         return False
-    # keep only neighbours written in the same ink as the candidate
+    # keep only neighbours written in the same ink as the candidate (and, with `paper_share`, printed
+    # on paper: light all round them, unlike the dark background beyond a card's edge)
     box = g[y : y + h, x : x + w]
     ink = _component_mean(g, labels, stats, i)
     paper = float(np.percentile(box, 90))
     tolerance = max(8.0, 0.25 * (paper - ink))
     for j in np.flatnonzero(similar):
-        if abs(_component_mean(g, labels, stats, int(j)) - ink) > tolerance:
+        if abs(_component_mean(g, labels, stats, int(j)) - ink) > tolerance or (
+            paper_share > 0 and _paper_round(g, labels, stats, int(j), (ink + paper) / 2) < paper_share
+        ):
             similar[j] = False
     near = similar & (gap <= 0.5 * h)
     if not near.any():
@@ -1214,6 +1223,19 @@ def _in_text_line(stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray) 
         return True
     twin = near & (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
     return bool(twin.any())
+
+
+def _paper_round(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, cut: float) -> float:
+    """The share of a thin ring just outside component `j` that is lighter than `cut`."""
+    x, y, w, h = (int(v) for v in stats[j][:4])
+    x0, y0 = max(0, x - 4), max(0, y - 4)
+    x1, y1 = min(g.shape[1], x + w + 4), min(g.shape[0], y + h + 4)
+    own = cv2.inRange(labels[y0:y1, x0:x1], j, j)
+    ring = cv2.subtract(cv2.dilate(own, np.ones((7, 7), np.uint8)), cv2.dilate(own, np.ones((3, 3), np.uint8)))
+    n = cv2.countNonZero(ring)
+    if n == 0:
+        return 0.0
+    return float(np.count_nonzero(g[y0:y1, x0:x1][ring > 0] > cut)) / n
 
 
 def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
