@@ -444,8 +444,12 @@ class MarkDetector:
             and self._why == "card"
             and self._card_refusal in cfg.card_rescue_from
             and shape in (Shape.X, Shape.TRIANGLE)
-            and not (level.text_check and _in_text_line(level.stats, i, level.g, level.labels, cfg.text_paper))
+            and not self._text_line(level, i)
         )
+
+    def _text_line(self, level: _Level, i: int) -> bool:
+        """Component `i` is a letter in a line of text (on the levels the test runs on: `text_max_f`)."""
+        return level.text_check and _in_text_line(level.stats, i, level.g, level.labels, self.config.text_paper)
 
     # ------------------------------------------------------------------ one pyramid level
     def _detect_scale(
@@ -644,7 +648,7 @@ class MarkDetector:
         if conf < cfg.min_confidence:
             self._why = "confidence"
             return None
-        if level.text_check and _in_text_line(level.stats, i, g, level.labels, cfg.text_paper):
+        if self._text_line(level, i):
             self._why = "text line"
             return None
         self._why = "kept"
