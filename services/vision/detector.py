@@ -77,11 +77,11 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
-    text_max_f: int = 2
-    """the text-line test runs on pyramid levels of downscale up to this (round vision13's candidate, 4,
-    with `text_paper` 0.7: a big printed O or X in a word, its letters too big for the finer levels,
-    passes at the quarter level; not landed: its rule's speed condition failed, see the README)"""
-    text_paper: float = 0.0
+    text_max_f: int = 4
+    """the text-line test runs on pyramid levels of downscale up to this: every level since round
+    vision13 (2 before: a big printed O or X in a word, its letters too big for the finer levels, passed
+    at the quarter level)"""
+    text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
     letter_ink: float = 0.0
