@@ -3,11 +3,13 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
+                                           [--hand-variety SHARE]   (tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
 backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `--split tuning` uses
-`services/vision/synthetic.py`, the generator the detector was tuned on. Frames cycle X, O,
+`services/vision/synthetic.py`, the generator the detector was tuned on (`--hand-variety`: that share
+of its cards with fingers get people's variety of fingers, `Variation.hand_variety`). Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
 detected class's precision. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
@@ -62,9 +64,15 @@ def main(
             "loose_thresholds (thresholds=0.25,0.5,0.5): to compare variants on the tuning split",
         ),
     ] = None,
+    hand_variety: Annotated[
+        float,
+        typer.Option(help="tuning split only: share of cards with fingers given people's variety of fingers"),
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
-    frame_of = _generator(split, seed)
+    if hand_variety and split != "tuning":
+        raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
+    frame_of = _generator(split, seed, hand_variety)
     det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
@@ -119,6 +127,7 @@ def main(
         "split": split,
         "frames": frames,
         "seed": seed,
+        **({"hand_variety": hand_variety} if hand_variety else {}),
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),
@@ -163,7 +172,7 @@ Meta = dict[str, str]
 FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | None, Meta]]
 
 
-def _generator(split: str, seed: int) -> FrameFn:
+def _generator(split: str, seed: int, hand_variety: float = 0.0) -> FrameFn:
     if split == "heldout":
         from services.vision.heldout import HeldOutGenerator
 
@@ -185,9 +194,9 @@ def _generator(split: str, seed: int) -> FrameFn:
 
         return held
     if split == "tuning":
-        from services.vision.synthetic import SceneGenerator
+        from services.vision.synthetic import SceneGenerator, Variation
 
-        tgen = SceneGenerator(seed=seed)
+        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
 
         def tuning(shape: Shape | None) -> tuple[np.ndarray, Any, Meta]:
             scene = tgen.scene(shape)

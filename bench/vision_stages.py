@@ -31,7 +31,7 @@ import typer
 
 from schemas.messages import Shape
 from services.vision.detector import STAGES, DetectorConfig, MarkDetector, Traced
-from services.vision.synthetic import SceneGenerator
+from services.vision.synthetic import SceneGenerator, Variation
 from services.vision.training import IOU, iou
 
 ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
@@ -56,9 +56,12 @@ def main(
     seed: Annotated[int, typer.Option(help="tuning generator seed")] = 99,
     verify: Annotated[bool, typer.Option(help="run the learned verifier")] = True,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+    hand_variety: Annotated[
+        float, typer.Option(help="share of cards with fingers given people's variety of fingers")
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
-    gen = SceneGenerator(seed=seed)
+    gen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
     det = MarkDetector(DetectorConfig(verify=verify))
     by_class: dict[str, Counter[str]] = defaultdict(Counter)
     by_slice: dict[str, Counter[str]] = defaultdict(Counter)
@@ -76,6 +79,9 @@ def main(
             "size<80": size < 80,
             "blur>=8": scene.blur[0] >= 8,
             "fingers": scene.fingers > 0,
+            # people's fingers (--hand-variety): darker skin than the default's, or wider fingers
+            "dark fingers": scene.fingers > 0 and sum(scene.skin) / 3 < 110,
+            "wide fingers": scene.fingers > 0 and scene.finger_width > 0.3,
             "colour ink": max(scene.ink) - min(scene.ink) > 60,
             "filled triangle": scene.filled and scene.shape is Shape.TRIANGLE,
             "dim<0.7": float(np.median(scene.light)) < 0.7,
@@ -89,6 +95,7 @@ def main(
     result = {
         "frames": frames,
         "seed": seed,
+        "hand_variety": hand_variety,
         "verify": verify,
         "stages": list(STAGES),
         "by_class": {k: dict(v) for k, v in sorted(by_class.items())},

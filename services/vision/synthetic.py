@@ -84,6 +84,10 @@ class Variation:
     fingers: float = 0.4  # share of cards with fingers reaching towards the mark
     finger_over: float = 0.3  # share of those whose fingertips lie over the mark's edge
     pale_ink: float = 0.2  # share of marks in pale ink (mixed 15-45 % towards the paper)
+    hand_variety: float = 0.0
+    """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
+    as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
+    over any of the card's four edges (0: light skin, 0.2 wide, over the bottom edge)"""
 
     def only(self, **changes: object) -> Variation:
         return replace(self, **changes)  # type: ignore[arg-type]
@@ -132,6 +136,9 @@ class Scene:
     filled: bool = False  # a filled triangle
     fingers: int = 0  # fingers reaching from a card edge towards the mark
     finger_gap: float = 0.2  # how far short of the mark they stop, fraction of its width (< 0: over it)
+    finger_width: float = 0.2  # fraction of the mark's width
+    skin: tuple[int, int, int] = (95, 125, 175)  # BGR; the lit middle of a finger is 25 levels lighter
+    finger_edge: int = 0  # the card edge they come over: quarter turns from the bottom
 
 
 class SceneGenerator:
@@ -199,6 +206,11 @@ class SceneGenerator:
             scene.ink = tuple(  # type: ignore[assignment]
                 int(i + mix * (p - i)) for i, p in zip(scene.ink, scene.paper, strict=True)
             )
+        # no draw at all when hand_variety is 0, so that older seeds' scenes stay as they were
+        if scene.fingers and v.hand_variety and rng.random() < v.hand_variety:
+            scene.finger_width = float(rng.uniform(0.12, 0.45))
+            scene.skin = _skin(rng)
+            scene.finger_edge = int(rng.integers(0, 4))
         return scene
 
     def _place(
@@ -405,36 +417,23 @@ class SceneGenerator:
             scene.filled,
         )
         if scene.fingers:
-            # fingers over the card's bottom edge, their tips stopping short of the mark
-            fw = 0.2 * s * k
-            tip = ch / 2 + s * k / 2 + scene.finger_gap * s * k
-            length = max(ch - tip, 0.0) + fw
+            # fingers over the card's bottom edge (or another: the card turned, drawn on, turned back),
+            # their tips stopping short of the mark
+            turned = np.ascontiguousarray(np.rot90(card, scene.finger_edge))
+            th, tw = turned.shape[:2]
+            fw = scene.finger_width * s * k
+            tip = th / 2 + s * k / 2 + scene.finger_gap * s * k
+            length = max(th - tip, 0.0) + fw
+            lit = tuple(min(255, c + 25) for c in scene.skin)
             for f in range(scene.fingers):
-                fx = cw / 2 + (f - (scene.fingers - 1) / 2) * 1.1 * fw + self.rng.uniform(-0.3, 0.3) * s * k
+                fx = tw / 2 + (f - (scene.fingers - 1) / 2) * 1.1 * fw + self.rng.uniform(-0.3, 0.3) * s * k
                 centre = (int(fx), int(tip + length / 2))
                 axes = (int(fw / 2), int(length / 2 + fw / 2))
-                cv2.ellipse(
-                    card,
-                    centre,
-                    axes,
-                    float(self.rng.uniform(-12, 12)),
-                    0,
-                    360,
-                    (95, 125, 175),
-                    -1,
-                    cv2.LINE_AA,
-                )
-                cv2.ellipse(
-                    card,
-                    centre,
-                    (max(1, axes[0] - 2), max(1, axes[1] - 2)),
-                    0,
-                    0,
-                    360,
-                    (120, 150, 200),
-                    -1,
-                    cv2.LINE_AA,
-                )
+                angle = float(self.rng.uniform(-12, 12))
+                cv2.ellipse(turned, centre, axes, angle, 0, 360, scene.skin, -1, cv2.LINE_AA)
+                inner = (max(1, axes[0] - 2), max(1, axes[1] - 2))
+                cv2.ellipse(turned, centre, inner, 0, 0, 360, lit, -1, cv2.LINE_AA)
+            card = np.ascontiguousarray(np.rot90(turned, -scene.finger_edge))
         if scene.hand:
             # fingers holding a bottom corner of the card
             hc = (int(cw * self.rng.choice([0.0, 1.0])), int(ch))
@@ -690,6 +689,14 @@ def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) 
         )
     patch = np.repeat(pat.astype(np.uint8)[..., None], 3, axis=2)
     _paste(img, patch, int(cx - s / 2), int(cy - s / 2))
+
+
+def _skin(rng: Rng) -> tuple[int, int, int]:
+    """A skin tone (BGR) from dark brown to pale, lit or in shade."""
+    t = float(rng.uniform(0.0, 1.0))  # 0: dark brown, 1: pale
+    dark, pale = np.array([45.0, 65.0, 100.0]), np.array([165.0, 185.0, 225.0])
+    tone = (dark + t * (pale - dark)) * float(rng.uniform(0.8, 1.1))
+    return tuple(int(c) for c in np.clip(tone, 0, 230))  # type: ignore[return-value]
 
 
 def _mark_ink(rng: Rng, colour_share: float) -> tuple[int, int, int]:

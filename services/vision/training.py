@@ -31,6 +31,7 @@ import typer
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
+from services.vision.printed import print_words, typefaces
 from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 from services.vision.verifier import CLASSES, INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, SHAPES, Verifier
 
@@ -54,6 +55,7 @@ CLUTTERED = DEFAULT.only(
 )
 IOU = 0.4
 CHUNK = 250
+PRINTED_STREAM = 7  # the printed words' random stream, apart from the generator's (same chunk seed)
 # the harvest's detector: geometric tests only, with the service's loose gate (35 grey levels, spread
 # 0.7) and pyramid (full, half and quarter resolution), so that the network learns from the candidates
 # it is shown in service - pinned, so that the command keeps reproducing the committed model when the
@@ -71,21 +73,34 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
     return inter / union if union > 0 else 0.0
 
 
-def harvest(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def harvest(
+    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
-    (even seeds: default variation; odd: cluttered)."""
+    (even seeds: default variation; odd: cluttered), a share `printed` of them with printed words
+    (`printed.print_words`) on the scene's background, clear of the mark, before the card is drawn
+    over it and the camera's light, blur, noise and JPEG act on all of it; a share `hands` of the cards
+    with fingers have people's variety of fingers (`Variation.hand_variety`)."""
     import cv2
 
     cv2.setNumThreads(1)
-    gen = SceneGenerator(seed=seed, variation=CLUTTERED if seed % 2 else DEFAULT)
+    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands)
+    gen = SceneGenerator(seed=seed, variation=variation)
     det = MarkDetector(HARVEST)
+    words_rng = np.random.default_rng([seed, PRINTED_STREAM])
+    faces = typefaces() if printed > 0 else []
     images: list[np.ndarray] = []
     claims: list[int] = []
     labels: list[int] = []
     kept: list[bool] = []
     for i in range(frames):
-        img, truth = gen.frame(ORDER[i % len(ORDER)])
+        scene = gen.scene(ORDER[i % len(ORDER)])
+        if printed > 0 and words_rng.random() < printed:
+            (cx, cy), half = scene.center, scene.size / 2
+            mark = (int(cx - half), int(cy - half), int(scene.size), int(scene.size))
+            scene.background = print_words(scene.background, words_rng, faces, avoid=[mark], blur=False)
+        img, truth = gen.render(scene)
         for c in det.candidates(img):
             label: Shape | None = None
             for t in truth:
@@ -103,19 +118,28 @@ def harvest(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     )
 
 
-def harvest_all(frames: int, seed: int, jobs: int, cache: Path | None) -> list[tuple[np.ndarray, ...]]:
-    """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`."""
+def harvest_all(
+    frames: int, seed: int, jobs: int, cache: Path | None, printed: float = 0.0, hands: float = 0.0
+) -> list[tuple[np.ndarray, ...]]:
+    """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
+    (a cache made with other seeds or another `printed` or `hands` share is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
-            if z["seeds"].tolist() == seeds:
+            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands")}
+            if z["seeds"].tolist() == seeds and shares == {"printed": printed, "hands": hands}:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
+    n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        parts: list[tuple[np.ndarray, ...]] = list(pool.map(harvest, seeds, [CHUNK] * len(seeds)))
+        parts: list[tuple[np.ndarray, ...]] = list(
+            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n)
+        )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{k}_{j}": a for k, p in enumerate(parts) for j, a in enumerate(p)}
-        np.savez(cache, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
+        np.savez(  # type: ignore[arg-type]
+            cache, seeds=np.array(seeds), printed=np.array(printed), hands=np.array(hands), **arrays
+        )
     return parts
 
 
@@ -295,6 +319,12 @@ def main(
     cache: Annotated[
         Path | None, typer.Option(help="keep the harvested candidates here (never commit)")
     ] = None,
+    printed: Annotated[
+        float, typer.Option(help="share of frames with printed words over them (printed.py)")
+    ] = 0.0,
+    hands: Annotated[
+        float, typer.Option(help="share of cards with fingers given people's variety (Variation.hand_variety)")
+    ] = 0.0,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -304,7 +334,7 @@ def main(
     loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.9,
 ) -> None:
     t0 = time.monotonic()
-    parts = harvest_all(frames, seed, jobs, cache)
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])

@@ -37,3 +37,37 @@ def test_pale_ink_is_lighter_but_keeps_the_scene() -> None:
         assert a.size == b.size and a.paper == b.paper  # the draws before the ink are unchanged
         assert sum(a.ink) > sum(b.ink)
         assert all(i <= p for i, p in zip(a.ink, a.paper, strict=True))
+
+
+def _skin_side(img: np.ndarray, box: tuple[int, int, int, int], skin: tuple[int, int, int]) -> str:
+    """Which side of the mark's box the pixels of this skin tone lie on, mostly."""
+    ys, xs = np.nonzero(np.abs(img.astype(np.int32) - np.array(skin) - 25).max(axis=2) < 20)
+    x, y, w, h = box
+    dx, dy = float(np.median(xs)) - (x + w / 2), float(np.median(ys)) - (y + h / 2)
+    return ("right" if dx > 0 else "left") if abs(dx) > abs(dy) else ("below" if dy > 0 else "above")
+
+
+def test_varied_hands_have_any_skin_width_and_edge_and_leave_the_rest_of_the_scene() -> None:
+    """`hand_variety`: people's fingers - dark to pale, narrow to wide, over any edge of the card."""
+    varied = SceneGenerator(seed=7, variation=MILD.only(fingers=1.0, hand_variety=1.0))
+    plain = SceneGenerator(seed=7, variation=MILD.only(fingers=1.0))
+    scenes = [varied.scene(Shape.X) for _ in range(40)]
+    first = plain.scene(Shape.X)
+    assert (scenes[0].size, scenes[0].fingers, scenes[0].finger_gap) == (first.size, first.fingers, first.finger_gap)
+    assert (first.skin, first.finger_width, first.finger_edge) == ((95, 125, 175), 0.2, 0)
+    assert {s.finger_edge for s in scenes} == {0, 1, 2, 3}
+    tones = [sum(s.skin) / 3 for s in scenes]
+    assert min(tones) < 90 and max(tones) > 160
+    assert all(0.12 <= s.finger_width <= 0.45 for s in scenes)
+
+
+def test_fingers_come_over_the_edge_they_are_given() -> None:
+    gen = SceneGenerator(seed=3, variation=MILD.only(fingers=1.0))
+    scene = gen.scene(Shape.O)
+    scene.skin, scene.finger_width, scene.finger_gap = (60, 80, 120), 0.3, 0.1
+    sides = []
+    for edge in range(4):  # quarter turns from the bottom, counter-clockwise: bottom, right, top, left
+        scene.finger_edge = edge
+        img, labels = gen.render(scene)
+        sides.append(_skin_side(img, labels[0].box, scene.skin))
+    assert len(set(sides)) == 4 and sides[0] == "below"

@@ -194,6 +194,33 @@ def test_the_harvest_is_deterministic_and_labelled() -> None:
     assert not kept[claims == 3].any()  # a loose candidate is never kept without the verifier
 
 
+def test_a_printed_harvest_adds_words_and_keeps_its_marks() -> None:
+    """`training --printed`: words over a share of the frames, reproducibly; the marks' candidates are
+    still labelled with their class (the words keep clear of them), and the words add candidates."""
+    from services.vision.training import harvest
+
+    plain = harvest(3, 8)
+    a = harvest(3, 8, printed=1.0)
+    assert all(np.array_equal(p, q) for p, q in zip(a, harvest(3, 8, printed=1.0), strict=True))
+    assert len(a[2]) > len(plain[2])  # the words' letters are candidates too
+    marks = lambda labels: sorted(int(v) for v in labels if v < len(CLASSES) - 1)  # noqa: E731
+    assert marks(a[2]) and len(marks(a[2])) >= len(marks(plain[2])) - 1
+
+
+def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
+    from services.vision.printed import print_words, typefaces
+
+    rng = np.random.default_rng(5)
+    box = (200, 150, 120, 120)
+    for _ in range(20):
+        frame = np.full((480, 640, 3), 128, np.uint8)
+        out = print_words(frame, rng, typefaces(), avoid=[box])
+        x, y, w, h = box
+        near = out[y - h // 2 + 1 : y + h + h // 2 - 1, x - w // 2 + 1 : x + w + w // 2 - 1]
+        # a blurred frame's edges bleed a few px: look at the inner part of the zone kept clear
+        assert np.all(np.abs(near[8:-8, 8:-8].astype(int) - 128) <= 1)
+
+
 def _filled_triangle(half: int, r: int) -> np.ndarray:
     """A dark filled triangle of radius `r` on a light surface reaching `half` px from it on a darker
     wall: a card when `half` is small, a poster or painted wall when it fills the frame."""
