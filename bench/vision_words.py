@@ -47,8 +47,12 @@ def main(
         raise typer.BadParameter(f"--set: {exc}") from None
     faces = typefaces()
     gen, rng = SceneGenerator(seed=seed), np.random.default_rng(seed)
-    result: dict[str, Any] = {"frames": frames, "seed": seed, "settings": settings,
-                              "typefaces": [Path(f).name if f else "Pillow's bundled font" for f in faces]}
+    result: dict[str, Any] = {
+        "frames": frames,
+        "seed": seed,
+        "settings": settings,
+        "typefaces": [Path(f).name if f else "Pillow's bundled font" for f in faces],
+    }
     tallies = {"without words": Counter[str](), "with words": Counter[str]()}
     for _ in range(frames):
         frame, _ = gen.frame(None)
@@ -65,8 +69,10 @@ def main(
     print(f"{frames} mark-free tuning frames, seed {seed}, typefaces: {', '.join(result['typefaces'])}")
     for key in tallies:
         r = result[key]
-        print(f"  {key:14s} false-mark frames {r['frames with a false mark']:4d} ({100 * r['false-mark frame rate']:.1f} %)"
-              f"   X {r['X']}  O {r['O']}  TRIANGLE {r['TRIANGLE']}")
+        print(
+            f"  {key:14s} false-mark frames {r['frames with a false mark']:4d} ({100 * r['false-mark frame rate']:.1f} %)"
+            f"   X {r['X']}  O {r['O']}  TRIANGLE {r['TRIANGLE']}"
+        )
 
 
 if __name__ == "__main__":

@@ -16,10 +16,44 @@ import cv2
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-WORDS = ("NO", "GO", "OK", "ON", "ZOO", "BOOK", "FOOD", "LOOK", "STOP", "OPEN", "100", "2020", "COOL",
-         "DOOR", "MOON", "O2", "OXO", "BOX", "XO", "TOXIC", "EXIT", "SALE", "A4", "VOX", "40%", "ROOM 10", "OO")
-MPL_FACES = ("STIXGeneralBol.ttf", "STIXGeneral.ttf", "STIXGeneralBolIta.ttf", "cmb10.ttf", "cmss10.ttf",
-             "cmr10.ttf", "cmtt10.ttf")
+WORDS = (
+    "NO",
+    "GO",
+    "OK",
+    "ON",
+    "ZOO",
+    "BOOK",
+    "FOOD",
+    "LOOK",
+    "STOP",
+    "OPEN",
+    "100",
+    "2020",
+    "COOL",
+    "DOOR",
+    "MOON",
+    "O2",
+    "OXO",
+    "BOX",
+    "XO",
+    "TOXIC",
+    "EXIT",
+    "SALE",
+    "A4",
+    "VOX",
+    "40%",
+    "ROOM 10",
+    "OO",
+)
+MPL_FACES = (
+    "STIXGeneralBol.ttf",
+    "STIXGeneral.ttf",
+    "STIXGeneralBolIta.ttf",
+    "cmb10.ttf",
+    "cmss10.ttf",
+    "cmr10.ttf",
+    "cmtt10.ttf",
+)
 Box = tuple[int, int, int, int]  # x, y, w, h
 PLACEMENTS = 10  # tries to place a word clear of the boxes to avoid before it is left out
 
@@ -74,7 +108,9 @@ def print_words(
             continue
         if rng.random() < 0.6:  # a poster or label behind the word
             grey = int(rng.integers(190, 250))
-            draw.rectangle((px + x0 - pad, py + y0 - pad, px + x1 + pad, py + y1 + pad), fill=(grey, grey, grey - 5))
+            draw.rectangle(
+                (px + x0 - pad, py + y0 - pad, px + x1 + pad, py + y1 + pad), fill=(grey, grey, grey - 5)
+            )
         dark = rng.random() < 0.7
         ink = tuple(int(v) for v in rng.integers(0, 90 if dark else 256, 3))
         draw.text((px, py), word, font=font, fill=ink)

@@ -323,7 +323,8 @@ def main(
         float, typer.Option(help="share of frames with printed words over them (printed.py)")
     ] = 0.0,
     hands: Annotated[
-        float, typer.Option(help="share of cards with fingers given people's variety (Variation.hand_variety)")
+        float,
+        typer.Option(help="share of cards with fingers given people's variety (Variation.hand_variety)"),
     ] = 0.0,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,

@@ -53,7 +53,11 @@ def test_varied_hands_have_any_skin_width_and_edge_and_leave_the_rest_of_the_sce
     plain = SceneGenerator(seed=7, variation=MILD.only(fingers=1.0))
     scenes = [varied.scene(Shape.X) for _ in range(40)]
     first = plain.scene(Shape.X)
-    assert (scenes[0].size, scenes[0].fingers, scenes[0].finger_gap) == (first.size, first.fingers, first.finger_gap)
+    assert (scenes[0].size, scenes[0].fingers, scenes[0].finger_gap) == (
+        first.size,
+        first.fingers,
+        first.finger_gap,
+    )
     assert (first.skin, first.finger_width, first.finger_edge) == ((95, 125, 175), 0.2, 0)
     assert {s.finger_edge for s in scenes} == {0, 1, 2, 3}
     tones = [sum(s.skin) / 3 for s in scenes]
