@@ -2,6 +2,7 @@
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
+                                       [--printed SHARE] [--hands SHARE]   (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
