@@ -127,7 +127,7 @@ def main(
         "split": split,
         "frames": frames,
         "seed": seed,
-        **({"hand_variety": hand_variety} if hand_variety else {}),
+        "hand_variety": hand_variety,
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),

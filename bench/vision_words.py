@@ -7,7 +7,7 @@ thick ring and their X a bar cross, exactly a mark's shape. The tuning generator
 stroke fonts, and the held-out generator's is DejaVu. This bench prints one or two words (NO, OK, OPEN,
 TOXIC, BOX, ZOO, 100, ...; never a single letter, which is indistinguishable from a mark) on each of
 `--frames` mark-free tuning frames, in typefaces neither generator uses: matplotlib's STIX and Computer
-Modern fonts when matplotlib is importable (it comes with the `dev` extra's zenoh-cli), else Pillow's
+Modern fonts when matplotlib is importable (it comes with the `test` extra's zenoh-cli), else Pillow's
 bundled font; 24 to 200 px high, on a light poster 60 % of the time, dark or any ink, half the frames
 blurred. It reports the frames with a false mark, by shape, with and without the words on the same
 frames (the words are the only difference). The words are drawn by `services/vision/printed.py`, which

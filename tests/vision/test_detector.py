@@ -590,7 +590,7 @@ def _row(neighbours_on_paper: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         cv2.rectangle(g, (x, 80), (x + 55, 150), 30, -1)
         cv2.rectangle(g, (x + 15, 95), (x + 40, 135), 220 if x == 100 or neighbours_on_paper else 60, -1)
     binary = cv2.inRange(g, 0, 45)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
     return g, labels, stats
 
 
