@@ -54,13 +54,19 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class DetectorConfig:
-    levels: tuple[tuple[int, ...], ...] = ((1, 31), (2, 31, 50), (4, 31))
+    levels: tuple[tuple[int, ...], ...] = ((1, 31), (2, 31), (4, 31), (6, 31))
     """(downscale factor, adaptive-threshold window in pixels at that scale[, largest component judged
-    there, pixels at that scale]): full resolution for small marks, a quarter for large ones (whose
-    strokes are wider than the full-resolution window), and between them half resolution for
-    components up to 50 px there: a small mark smeared by motion blur or broken by noise into pieces
-    at full resolution is often one component at half (tuning seeds 555, 1234, 99, 31337: recall +1.6
-    X, +1.8 O, +1.3 TRIANGLE points, one more false triangle in 4,000 frames, 16 % slower)."""
+    there, pixels at that scale]): full resolution for small marks, coarser levels for larger ones
+    (whose strokes are wider than the full-resolution window, and whose motion blur shrinks with the
+    scale). Half resolution: a small mark smeared by motion blur or broken by noise into pieces at full
+    resolution is often one component at half (tuning seeds 555, 1234, 99, 31337: recall +1.6 X, +1.8
+    O, +1.3 TRIANGLE points, one more false triangle in 4,000 frames, 16 % slower); it judged only
+    components up to 50 px until round vision16. A sixth (107x80 for a 640x480 frame: marks from about
+    70 px) since round vision16: a big mark smeared by 15-20 px of motion blur, or with strokes wider
+    than the quarter level's window, is whole and crisp there. The two together, on the same four seeds
+    with varied hands (`--hand-variety 0.5`): 567 -> 517 missed marks of 3,000, one more false X,
+    about 17 % slower (the vision README, round vision16). An eighth instead of a sixth found as many,
+    but there a letter beside the mark is too coarse a blob for the word test."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     full_res_max: int = 0
@@ -77,10 +83,12 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
-    text_max_f: int = 4
+    text_max_f: int = 8
     """the text-line test runs on pyramid levels of downscale up to this: every level since round
     vision13 (2 before: a big printed O or X in a word, its letters too big for the finer levels, passed
-    at the quarter level)"""
+    at the quarter level; 4 until round vision16's sixth level: at 4 with that level,
+    bench/vision_words.py seed 555 gave 28 frames with a false mark among 300 with words, against 5
+    before the level and 6 with it and the test there)"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""

@@ -378,6 +378,7 @@ def test_big_components_are_judged_at_the_quarter_scale_only() -> None:
 
 
 # ---------------------------------------------------------------- marks joined to a finger (`_split`)
+VISION15_LEVELS = ((1, 31), (2, 31, 50), (4, 31))  # the pyramid until round vision16
 SKIN = (120, 140, 175)  # BGR, grey about 150: lighter than the ink, darker than the card
 DARK_SKIN = (60, 80, 110)
 
@@ -415,7 +416,10 @@ def test_a_mark_joined_to_a_finger_is_cut_free(detector: MarkDetector, name: str
         ),
         "triangle outline, a finger across its base": lambda: _finger(_outline_triangle(), (400, 300), SKIN),
     }[name]()
-    assert MarkDetector(dataclasses.replace(detector.config, split="")).detect(img) == []  # one joined shape
+    # one joined shape that no test reads as a mark: on the pyramid before round vision16, whose coarser
+    # levels (half resolution uncapped, a sixth) can read the X whole, finger and all, in a wider box
+    premise = dataclasses.replace(detector.config, split="", levels=VISION15_LEVELS)
+    assert MarkDetector(premise).detect(img) == []
     found = detector.detect(img)
     assert [d.shape for d in found] == [shape]
     x, y, w, h = found[0].box
