@@ -270,29 +270,48 @@ def changed_settings(config: DetectorConfig) -> str:
     for f in fields(DetectorConfig):
         value = getattr(config, f.name)
         if value != getattr(defaults, f.name):
-            text = ",".join(str(v) for v in value) if isinstance(value, tuple) else str(value)
+            if f.name == "levels":
+                text = ",".join(":".join(str(v) for v in level) for level in value)
+            elif isinstance(value, tuple):
+                text = ",".join(str(v) for v in value)
+            else:
+                text = str(value)
             out.append(f"{f.name}={text}")
     return " ".join(out)
+
+
+def _levels(text: str) -> tuple[tuple[int, ...], ...]:
+    """`levels=...`'s value: "1:31,2:31:50,4:31" -> ((1, 31), (2, 31, 50), (4, 31))."""
+    levels = tuple(tuple(int(v) for v in level.split(":")) for level in text.split(",") if level)
+    if not levels or any(len(level) not in (2, 3) for level in levels):
+        raise ValueError(text)
+    return levels
 
 
 def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
     """The default `DetectorConfig` with some settings changed: `KEY=VALUE` items (a string is split at
     spaces and semicolons: `--detector` / `HRI_VISION_DETECTOR`, e.g. "split= card_rescue=0.97"; the
     benches' `--set`). Booleans are 1/0, true/false, yes/no or on/off; a tuple's items are comma-separated
-    (`card_rescue_from=band,texture`); `split=` is the empty string (off). `levels` is not settable here.
-    ValueError names the item that is no setting or whose value is not of the setting's type."""
+    (`card_rescue_from=band,texture`); `split=` is the empty string (off); `levels` is the pyramid, its
+    levels comma-separated and each level's numbers colon-separated (`levels=1:31,2:31:50,4:31`, the
+    pyramid before round vision16). ValueError names the item that is no setting or whose value is not
+    of the setting's type."""
     if isinstance(items, str):
         items = [t for t in re.split(r"[;\s]+", items) if t]
     defaults = DetectorConfig()
-    names = {f.name for f in fields(DetectorConfig)} - {"levels"}
+    names = {f.name for f in fields(DetectorConfig)}
     changed: dict[str, object] = {}
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or key not in names:
-            raise ValueError(f"detector setting {item!r}: expected KEY=VALUE, KEY one of {', '.join(sorted(names))}")
+            raise ValueError(
+                f"detector setting {item!r}: expected KEY=VALUE, KEY one of {', '.join(sorted(names))}"
+            )
         old = getattr(defaults, key)
         try:
-            if isinstance(old, bool):
+            if key == "levels":
+                changed[key] = _levels(value)
+            elif isinstance(old, bool):
                 if value.lower() not in _TRUE + _FALSE:
                     raise ValueError(value)
                 changed[key] = value.lower() in _TRUE
@@ -302,7 +321,8 @@ def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
             else:
                 changed[key] = type(old)(value)
         except ValueError:
-            raise ValueError(f"detector setting {item!r}: {value!r} is not a {type(old).__name__}") from None
+            kind = "pyramid (FACTOR:WINDOW[:LARGEST],...)" if key == "levels" else type(old).__name__
+            raise ValueError(f"detector setting {item!r}: {value!r} is not a {kind}") from None
     return replace(defaults, **changed)  # type: ignore[arg-type]  # DetectorConfig checks the values
 
 
@@ -457,7 +477,9 @@ class MarkDetector:
 
     def _text_line(self, level: _Level, i: int) -> bool:
         """Component `i` is a letter in a line of text (on the levels the test runs on: `text_max_f`)."""
-        return level.text_check and _in_text_line(level.stats, i, level.g, level.labels, self.config.text_paper)
+        return level.text_check and _in_text_line(
+            level.stats, i, level.g, level.labels, self.config.text_paper
+        )
 
     # ------------------------------------------------------------------ one pyramid level
     def _detect_scale(
@@ -1243,7 +1265,9 @@ def _paper_round(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, c
     x0, y0 = max(0, x - 4), max(0, y - 4)
     x1, y1 = min(g.shape[1], x + w + 4), min(g.shape[0], y + h + 4)
     own = cv2.inRange(labels[y0:y1, x0:x1], j, j)
-    ring = cv2.subtract(cv2.dilate(own, np.ones((7, 7), np.uint8)), cv2.dilate(own, np.ones((3, 3), np.uint8)))
+    ring = cv2.subtract(
+        cv2.dilate(own, np.ones((7, 7), np.uint8)), cv2.dilate(own, np.ones((3, 3), np.uint8))
+    )
     n = cv2.countNonZero(ring)
     if n == 0:
         return 0.0
