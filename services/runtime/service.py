@@ -25,9 +25,9 @@ from pydantic import BaseModel
 
 from schemas.keys import Keys
 from schemas.messages import Header, Health, HealthStatus
+from services.runtime import logs
 from services.runtime.codec import DecodeError, decode, encode, encoding_for
 from services.runtime.config import BusSettings, ConfigError
-from services.runtime import logs
 from services.runtime.logs import get_logger
 
 M = TypeVar("M", bound=BaseModel)

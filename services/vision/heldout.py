@@ -347,7 +347,7 @@ class HeldOutGenerator:
                         cx + (w / 2 - stroke / 2) * wb * math.cos(a),
                         cy + (h / 2 - stroke / 2) * wb * math.sin(a),
                     )
-                    for a, wb in zip(t, wob)
+                    for a, wb in zip(t, wob, strict=True)
                 ]
                 d.line(pts, fill=255, width=stroke, joint="curve")
             else:

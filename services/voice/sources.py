@@ -258,7 +258,7 @@ def mic_chunks(device: str, stop: Stop) -> Iterator[bytes]:
                 yield chunks.get(timeout=0.2)
             except queue.Empty:
                 if not stream.active:
-                    raise SourceError(f"microphone {device or 'default'!r} stopped delivering audio")
+                    raise SourceError(f"microphone {device or 'default'!r} stopped delivering audio") from None
     finally:
         stream.stop()
         stream.close()

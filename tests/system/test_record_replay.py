@@ -83,7 +83,7 @@ def test_the_recording_reads_back_with_valid_schemas_and_messages(session: Sessi
             validators[schema.id] = jsonschema.Draft202012Validator(doc)
         assert all(c.message_encoding == "json" for c in summary.channels.values())
         n = 0
-        for schema, channel, message in reader.iter_messages():
+        for schema, _channel, message in reader.iter_messages():
             payload = json.loads(message.data)
             validators[schema.id].validate(payload)
             msg = MODELS[schema.name].model_validate(payload)
