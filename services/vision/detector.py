@@ -280,8 +280,9 @@ def changed_settings(config: DetectorConfig) -> str:
     return " ".join(out)
 
 
-def _levels(text: str) -> tuple[tuple[int, ...], ...]:
-    """`levels=...`'s value: "1:31,2:31:50,4:31" -> ((1, 31), (2, 31, 50), (4, 31))."""
+def parse_levels(text: str) -> tuple[tuple[int, ...], ...]:
+    """A pyramid written as text (`levels=...`'s value): "1:31,2:31:50,4:31" -> ((1, 31), (2, 31, 50), (4, 31)).
+    ValueError if a level is not two or three whole numbers."""
     levels = tuple(tuple(int(v) for v in level.split(":")) for level in text.split(",") if level)
     if not levels or any(len(level) not in (2, 3) for level in levels):
         raise ValueError(text)
@@ -310,7 +311,7 @@ def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
         old = getattr(defaults, key)
         try:
             if key == "levels":
-                changed[key] = _levels(value)
+                changed[key] = parse_levels(value)
             elif isinstance(old, bool):
                 if value.lower() not in _TRUE + _FALSE:
                     raise ValueError(value)

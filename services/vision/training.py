@@ -2,7 +2,8 @@
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
-                                       [--printed SHARE] [--hands SHARE]   (recipe variants, off by default)
+                                       [--printed SHARE] [--hands SHARE] [--levels PYRAMID]
+                                       (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
@@ -24,6 +25,7 @@ import itertools
 import json
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -31,7 +33,7 @@ import numpy as np
 import typer
 
 from schemas.messages import Shape
-from services.vision.detector import DetectorConfig, MarkDetector
+from services.vision.detector import DetectorConfig, MarkDetector, parse_levels
 from services.vision.printed import print_words, typefaces
 from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 from services.vision.verifier import CLASSES, INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, SHAPES, Verifier
@@ -75,20 +77,21 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 
 def harvest(
-    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0
+    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = ""
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
     (even seeds: default variation; odd: cluttered), a share `printed` of them with printed words
     (`printed.print_words`) on the scene's background, clear of the mark, before the card is drawn
     over it and the camera's light, blur, noise and JPEG act on all of it; a share `hands` of the cards
-    with fingers have people's variety of fingers (`Variation.hand_variety`)."""
+    with fingers have people's variety of fingers (`Variation.hand_variety`); `levels` is the pyramid
+    the candidates come from ("1:31,2:31,4:31,6:31", `detector.parse_levels`; "": `HARVEST`'s)."""
     import cv2
 
     cv2.setNumThreads(1)
     variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands)
     gen = SceneGenerator(seed=seed, variation=variation)
-    det = MarkDetector(HARVEST)
+    det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
     words_rng = np.random.default_rng([seed, PRINTED_STREAM])
     faces = typefaces() if printed > 0 else []
     images: list[np.ndarray] = []
@@ -120,26 +123,39 @@ def harvest(
 
 
 def harvest_all(
-    frames: int, seed: int, jobs: int, cache: Path | None, printed: float = 0.0, hands: float = 0.0
+    frames: int,
+    seed: int,
+    jobs: int,
+    cache: Path | None,
+    printed: float = 0.0,
+    hands: float = 0.0,
+    levels: str = "",
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds or another `printed` or `hands` share is not used)."""
+    (a cache made with other seeds, another `printed` or `hands` share or another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
             shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands")}
-            if z["seeds"].tolist() == seeds and shares == {"printed": printed, "hands": hands}:
+            pyramid = str(z["levels"]) if "levels" in z else ""
+            same = shares == {"printed": printed, "hands": hands} and pyramid == levels
+            if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
     n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
-            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n)
+            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{k}_{j}": a for k, p in enumerate(parts) for j, a in enumerate(p)}
         np.savez(  # type: ignore[arg-type]
-            cache, seeds=np.array(seeds), printed=np.array(printed), hands=np.array(hands), **arrays
+            cache,
+            seeds=np.array(seeds),
+            printed=np.array(printed),
+            hands=np.array(hands),
+            levels=np.array(levels),
+            **arrays,
         )
     return parts
 
@@ -327,6 +343,12 @@ def main(
         float,
         typer.Option(help="share of cards with fingers given people's variety (Variation.hand_variety)"),
     ] = 0.0,
+    levels: Annotated[
+        str,
+        typer.Option(
+            help="the pyramid the candidates come from, as --detector levels= writes it (default: HARVEST's)"
+        ),
+    ] = "",
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -336,7 +358,14 @@ def main(
     loose_triangle: Annotated[float, typer.Option(help="... to be named TRIANGLE")] = 0.9,
 ) -> None:
     t0 = time.monotonic()
-    parts = harvest_all(frames, seed, jobs, cache, printed, hands)
+    if levels:
+        try:
+            parse_levels(levels)
+        except ValueError:
+            raise typer.BadParameter(
+                f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
+            ) from None
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])

@@ -207,6 +207,19 @@ def test_a_printed_harvest_adds_words_and_keeps_its_marks() -> None:
     assert marks > 0 and marks >= before - 1
 
 
+def test_a_harvest_from_another_pyramid_has_that_pyramids_candidates() -> None:
+    """`training --levels`: the candidates come from the pyramid given (a level added, the half level's
+    cap lifted: more candidates of the same frames), not from `HARVEST`'s."""
+    from services.vision.training import harvest
+
+    plain = harvest(3, 8)
+    assert all(
+        np.array_equal(p, q) for p, q in zip(plain, harvest(3, 8, levels="1:31,2:31:50,4:31"), strict=True)
+    )
+    coarser = harvest(3, 8, levels="1:31,2:31,4:31,6:31")
+    assert len(coarser[2]) > len(plain[2])
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 
