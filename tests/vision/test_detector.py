@@ -469,10 +469,10 @@ def test_a_finger_on_a_card_or_touching_a_word_is_no_mark(detector: MarkDetector
 
 
 # ---------------------------------------------------------------- the pyramid (`levels`)
-def test_the_coarser_pyramid_finds_big_blurred_marks_the_old_one_missed(detector: MarkDetector) -> None:
+def test_the_coarser_pyramid_finds_marks_the_old_one_missed_and_loses_none(detector: MarkDetector) -> None:
     """Round vision16: half resolution judges components of any size and a sixth-resolution level is
-    added. On tuning frames with varied hands it finds marks the old pyramid missed (big, blurred, held
-    in fingers), loses none the old one found, and adds no false mark."""
+    added. On 200 tuning frames with varied hands it finds marks the old pyramid missed (four when it
+    landed, three of them 140-240 px), loses none the old one found, and adds no false mark."""
     old = MarkDetector(
         dataclasses.replace(detector.config, levels=VISION15_LEVELS), verifier=detector.verifier
     )
