@@ -3,13 +3,14 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE]   (tuning split only)
+                                           [--hand-variety SHARE] [--lens K]   (tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
 backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `--split tuning` uses
 `services/vision/synthetic.py`, the generator the detector was tuned on (`--hand-variety`: that share
-of its cards with fingers get people's variety of fingers, `Variation.hand_variety`). Frames cycle X, O,
+of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--lens K`: every
+frame through a lens with barrel distortion K, `Variation.lens`). Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
 detected class's precision. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
@@ -68,11 +69,17 @@ def main(
         float,
         typer.Option(help="tuning split only: share of cards with fingers given people's variety of fingers"),
     ] = 0.0,
+    lens: Annotated[
+        float,
+        typer.Option(
+            help="tuning split only: the lens's barrel distortion k for every frame (Variation.lens)"
+        ),
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
-    if hand_variety and split != "tuning":
-        raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
-    frame_of = _generator(split, seed, hand_variety)
+    if (hand_variety or lens) and split != "tuning":
+        raise typer.BadParameter("--hand-variety and --lens are tuning-generator settings (--split tuning)")
+    frame_of = _generator(split, seed, hand_variety, lens)
     det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
@@ -128,6 +135,7 @@ def main(
         "frames": frames,
         "seed": seed,
         "hand_variety": hand_variety,
+        "lens": lens,
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),
@@ -172,7 +180,7 @@ Meta = dict[str, str]
 FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | None, Meta]]
 
 
-def _generator(split: str, seed: int, hand_variety: float = 0.0) -> FrameFn:
+def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0) -> FrameFn:
     if split == "heldout":
         from services.vision.heldout import HeldOutGenerator
 
@@ -196,7 +204,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0) -> FrameFn:
     if split == "tuning":
         from services.vision.synthetic import SceneGenerator, Variation
 
-        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
+        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, lens=lens))
 
         def tuning(shape: Shape | None) -> tuple[np.ndarray, Any, Meta]:
             scene = tgen.scene(shape)

@@ -88,6 +88,12 @@ class Variation:
     """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
     as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
     over any of the card's four edges (0: light skin, 0.2 wide, over the bottom edge)"""
+    lens: float = 0.0
+    """the camera lens's barrel distortion, the same for every frame (0: a pinhole camera). It draws
+    nothing, so the scenes are those of the same seed without it, only seen through the lens. It is k
+    in r_scene = r (1 + k r^2) / (1 + k r_corner^2), r measured from the frame's centre in half-widths:
+    the corners stay the corners, the middle is magnified and straight lines near the edges bow.
+    Webcams show about 0.05-0.15, wide-angle action cameras 0.3 and more."""
 
     def only(self, **changes: object) -> Variation:
         return replace(self, **changes)  # type: ignore[arg-type]
@@ -139,6 +145,7 @@ class Scene:
     finger_width: float = 0.2  # fraction of the mark's width
     skin: tuple[int, int, int] = (95, 125, 175)  # BGR; the lit middle of a finger is 25 levels lighter
     finger_edge: int = 0  # the card edge they come over: quarter turns from the bottom
+    lens: float = 0.0  # barrel distortion k (`Variation.lens`), applied before light, blur, noise and JPEG
 
 
 class SceneGenerator:
@@ -211,6 +218,7 @@ class SceneGenerator:
             scene.finger_width = float(rng.uniform(0.12, 0.45))
             scene.skin = _skin(rng)
             scene.finger_edge = int(rng.integers(0, 4))
+        scene.lens = v.lens  # the camera's, not drawn
         return scene
 
     def _place(
@@ -244,6 +252,8 @@ class SceneGenerator:
             box = self._draw_card(img, scene, scene.center)
             if box is not None:
                 labels.append(Label(scene.shape, box))
+        if scene.lens:
+            img, labels = _through_lens(img, labels, scene.lens)
         out = cv2.multiply(img.astype(np.float32), cv2.merge([scene.light] * 3))
         out = _motion_blur(out, *scene.blur)
         if scene.noise > 0:
@@ -589,6 +599,38 @@ def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int) -> None:
     x0, y0, x1, y1 = max(0, x), max(0, y), min(img.shape[1], x + w), min(img.shape[0], y + h)
     if x1 > x0 and y1 > y0:
         img[y0:y1, x0:x1] = patch[y0 - y : y1 - y, x0 - x : x1 - x]
+
+
+def _through_lens(img: np.ndarray, labels: list[Label], k: float) -> tuple[np.ndarray, list[Label]]:
+    """The scene as a lens with barrel distortion `k` (`Variation.lens`) shows it, and the labels' boxes
+    where the marks end up (the box around nine points of each: corners and edge midpoints)."""
+    h, w = img.shape[:2]
+    cx, cy, f = w / 2, h / 2, w / 2
+    corner = 1 + k * ((cx / f) ** 2 + (cy / f) ** 2)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    xd, yd = (xx - cx) / f, (yy - cy) / f
+    gain = (1 + k * (xd * xd + yd * yd)) / corner  # frame pixel -> the scene pixel it shows
+    out = cv2.remap(
+        img, xd * gain * f + cx, yd * gain * f + cy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+    )
+
+    def shown_at(x: float, y: float) -> tuple[float, float]:
+        """Where the scene's point (x, y) appears in the frame (fixed-point inversion of `gain`)."""
+        xs, ys = (x - cx) / f, (y - cy) / f
+        xf, yf = xs, ys
+        for _ in range(30):
+            g = (1 + k * (xf * xf + yf * yf)) / corner
+            xf, yf = xs / g, ys / g
+        return xf * f + cx, yf * f + cy
+
+    moved = []
+    for lab in labels:
+        x, y, bw, bh = lab.box
+        pts = [shown_at(x + bw * a, y + bh * b) for a in (0, 0.5, 1) for b in (0, 0.5, 1)]
+        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+        x0, y0 = int(math.floor(min(xs))), int(math.floor(min(ys)))
+        moved.append(Label(lab.shape, (x0, y0, int(math.ceil(max(xs))) - x0, int(math.ceil(max(ys))) - y0)))
+    return out, moved
 
 
 def _motion_blur(img: np.ndarray, length: float, angle_deg: float) -> np.ndarray:

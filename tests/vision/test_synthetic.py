@@ -75,3 +75,39 @@ def test_fingers_come_over_the_edge_they_are_given() -> None:
         img, labels = gen.render(scene)
         sides.append(_skin_side(img, labels[0].box, scene.skin))
     assert len(set(sides)) == 4 and sides[0] == "below"
+
+
+def _ink_box(img: np.ndarray, near: tuple[int, int, int, int], pad: int = 12) -> tuple[int, int, int, int]:
+    """The box round the darkest pixels (the mark's ink) within `pad` of the box `near`."""
+    x, y, w, h = near
+    x0, y0 = max(0, x - pad), max(0, y - pad)
+    grey = img[y0 : y + h + pad, x0 : x + w + pad].astype(np.int32).mean(axis=2)
+    ys, xs = np.nonzero(grey < grey.min() + 0.4 * (np.median(grey) - grey.min()))
+    return (x0 + int(xs.min()), y0 + int(ys.min()), int(xs.max() - xs.min()), int(ys.max() - ys.min()))
+
+
+def test_a_wide_angle_lens_moves_the_mark_and_its_label_with_it() -> None:
+    """`lens`: barrel distortion (corners fixed, the middle magnified); the label's box is where the
+    mark's ink ends up. The lens draws nothing: the scenes are those of the same seed without it."""
+    plain = SceneGenerator(seed=5, variation=MILD.only(fingers=0.0))
+    lensed = SceneGenerator(seed=5, variation=MILD.only(fingers=0.0, lens=0.4))
+    for _ in range(3):
+        a, b = plain.scene(Shape.X), lensed.scene(Shape.X)
+        assert (a.size, a.center, a.ink, a.lens) == (b.size, b.center, b.ink, 0.0) and b.lens == 0.4
+    a.blur, a.noise, a.jpeg, a.center = (0.0, 0.0), 0.0, 0, (500.0, 140.0)  # sharp, off-centre
+    boxes = []
+    for k in (0.0, 0.4):
+        a.lens = k
+        img, labels = plain.render(a)
+        ink = _ink_box(img, labels[0].box)
+        slack = max(
+            4, 0.04 * max(labels[0].box[2:])
+        )  # the nine points' box is a little generous on a bent mark
+        assert all(abs(p - q) <= slack for p, q in zip(ink, labels[0].box, strict=True)), (
+            k,
+            ink,
+            labels[0].box,
+        )
+        boxes.append(labels[0].box)
+    (x0, y0, _, _), (x1, y1, _, _) = boxes
+    assert x1 > x0 + 5 and y1 < y0 - 5  # pushed out towards the top-right corner it lies towards
