@@ -15,6 +15,7 @@ from schemas.messages import MarkObservation
 from services.runtime import run_service
 from services.runtime.cli import ConnectOption, RobotOption
 from services.vision.annotate import annotate
+from services.vision.calibration import Calibration, Undistorter
 from services.vision.debounce import Confirmation, DebounceConfig
 from services.vision.detector import MarkDetector, parse_settings
 from services.vision.service import NAME, VisionSettings, serve
@@ -72,6 +73,21 @@ DetectorOption = Annotated[
 ]
 
 
+CalibrationOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--calibration",
+        envvar="HRI_VISION_CALIBRATION",
+        help="the camera's lens calibration (OpenCV FileStorage YAML/JSON: camera_matrix, "
+        "distortion_coefficients): frames are undistorted before detection",
+    ),
+]
+
+
+def _calibration(path: Path | None) -> Calibration | None:
+    return Calibration.load(path) if path is not None else None
+
+
 @app.callback(invoke_without_command=True)
 def main(
     ctx: typer.Context,
@@ -84,6 +100,7 @@ def main(
     loop: LoopOption = False,
     seed: SeedOption = 0,
     detector: DetectorOption = "",
+    calibration: CalibrationOption = None,
 ) -> None:
     """Run the vision service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
@@ -94,6 +111,7 @@ def main(
             safe=DebounceConfig.parse(debounce), danger=DebounceConfig.parse(danger_debounce)
         )
         config = parse_settings(detector)
+        lens = _calibration(calibration)
         open_source(source, loop=loop, seed=seed)  # builds (does not open) the source: checks the spec
     except (ValueError, SourceConfigError) as exc:
         typer.echo(f"vision: invalid configuration: {exc}", err=True)
@@ -107,6 +125,7 @@ def main(
         loop=loop,
         seed=seed,
         detector=config,
+        calibration=lens,
     )
     raise typer.Exit(run_service(NAME, partial(serve, settings=settings), robot=robot, connect=connect))
 
@@ -118,6 +137,7 @@ def detect(
         Path | None, typer.Option("--annotate", help="write annotated copies here")
     ] = None,
     settings: DetectorOption = "",
+    calibration: CalibrationOption = None,
 ) -> None:
     """Print one MarkObservation JSON line per image (no debounce; `frame` is the image's position).
 
@@ -125,9 +145,11 @@ def detect(
     """
     try:
         detector = MarkDetector(parse_settings(settings))
+        lens = _calibration(calibration)
     except ValueError as exc:
         typer.echo(f"vision: invalid configuration: {exc}", err=True)
         raise typer.Exit(2) from None
+    undistort = Undistorter(lens) if lens is not None else None
     failed = 0
     if annotate_dir is not None:
         annotate_dir.mkdir(parents=True, exist_ok=True)
@@ -137,6 +159,8 @@ def detect(
             failed += 1
             typer.echo(f"error: {path}: not a readable image", err=True)
             continue
+        if undistort is not None:
+            image = undistort(image)
         found = detector.detect(image)
         obs = MarkObservation(stamp=os.path.getmtime(path), frame=i, marks=[d.to_mark() for d in found])
         sys.stdout.write(obs.model_dump_json() + "\n")

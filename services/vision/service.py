@@ -17,6 +17,7 @@ import zenoh
 from schemas.access import INPUT_PRIORITIES
 from schemas.messages import HealthStatus, MarkObservation, SceneCommand
 from services.runtime import ServiceContext, TypedPublisher
+from services.vision.calibration import Calibration, Undistorter
 from services.vision.debounce import Confirmation, Debouncer
 from services.vision.detector import DetectorConfig, MarkDetector, changed_settings
 from services.vision.preview import PreviewPublisher
@@ -43,6 +44,7 @@ class VisionSettings:
     stall_s: float = 2.0  # a camera silent this long is reported
     seed: int = 0  # synthetic scenes
     detector: DetectorConfig = field(default_factory=DetectorConfig)
+    calibration: Calibration | None = None  # the lens's: frames are undistorted before detection
 
 
 @dataclass
@@ -77,6 +79,7 @@ def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
         debounce=str(settings.debounce),
         fps_cap=settings.fps,
         detector=changed_settings(settings.detector) or "defaults",
+        calibration=settings.calibration.path if settings.calibration is not None else None,
     )
 
     holder = _SourceHolder(settings)
@@ -129,6 +132,7 @@ def _run(
     stats: _Stats,
     preview: PreviewPublisher | None = None,
 ) -> None:
+    undistort = Undistorter(settings.calibration) if settings.calibration is not None else None
     opened = False
     retry = _Backoff(settings.retry_s, settings.max_retry_s)
     source: FrameSource | None = None
@@ -198,7 +202,8 @@ def _run(
         last_frame = now
         t0 = time.perf_counter()
         try:
-            found = detector.detect(frame.image)
+            image = undistort(frame.image) if undistort is not None else frame.image
+            found = detector.detect(image)
         except ValueError as exc:
             ctx.log.warning("frame skipped", frame=frame.index, error=str(exc))
             continue
@@ -209,7 +214,7 @@ def _run(
             MarkObservation(stamp=frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
         )
         if preview is not None:
-            preview.offer(frame.image, obs.frame, obs.marks, obs.stamp)
+            preview.offer(image, obs.frame, obs.marks, obs.stamp)
         if stats.frames % 15 == 0:
             ctx.update_detail(
                 frames=stats.frames,

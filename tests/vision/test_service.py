@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import cast
 
 import cv2
+import numpy as np
 import pytest
 
 from schemas.keys import Keys
@@ -115,6 +116,32 @@ def test_synthetic_scene_follows_scene_commands(
     assert proc.poll() is None
     h = bus.query_health("vision")
     assert h is not None and h.rejected >= 2 and h.detail["debounce"] == "danger 1/3, safe 3/4"
+    assert _stop(proc) == 0
+
+
+def test_a_calibrated_camera_s_frames_are_undistorted_and_still_seen(
+    bus: ServiceContext,
+    keys: Keys,
+    start_service: Callable[..., subprocess.Popen[bytes]],
+    tmp_path: Path,
+) -> None:
+    """`HRI_VISION_CALIBRATION`: every frame goes through the undistortion (here a lens without
+    distortion, so the marks must come through unchanged); health names the file."""
+    cal = tmp_path / "camera.yaml"
+    fs = cv2.FileStorage(str(cal), cv2.FILE_STORAGE_WRITE)
+    fs.write("camera_matrix", np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]]))
+    fs.write("distortion_coefficients", np.zeros((1, 5)))
+    fs.release()
+    got = Collector()
+    bus.subscribe(keys.vision_marks, MarkObservation, got)
+    scene = bus.publisher(keys.vision_scene, SceneCommand)
+    env = {"HRI_VISION_SOURCE": "synthetic:none", "HRI_VISION_FPS": "20", "HRI_VISION_CALIBRATION": str(cal)}
+    proc = start_service("vision", env=env)
+    wait_for(lambda: len(got.snapshot()) >= 5, timeout=30)
+    scene.put(SceneCommand(shape=Shape.X))
+    wait_for(lambda: got.shapes()[-1] == {Shape.X}, timeout=10)
+    h = bus.query_health("vision")
+    assert h is not None and h.detail["calibration"] == str(cal)
     assert _stop(proc) == 0
 
 
