@@ -10,6 +10,7 @@ scikit-image is importable, otherwise they are procedural.
 
 from __future__ import annotations
 
+import functools
 import math
 import string
 from dataclasses import dataclass, replace
@@ -602,18 +603,25 @@ def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int) -> None:
         img[y0:y1, x0:x1] = patch[y0 - y : y1 - y, x0 - x : x1 - x]
 
 
+@functools.lru_cache(maxsize=4)
+def _lens_maps(h: int, w: int, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """`_through_lens`'s remap: for every frame pixel, the scene pixel it shows (one lens, every frame:
+    made once per frame size)."""
+    cx, cy, f = w / 2, h / 2, w / 2
+    corner = 1 + k * ((cx / f) ** 2 + (cy / f) ** 2)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    xd, yd = (xx - cx) / f, (yy - cy) / f
+    gain = (1 + k * (xd * xd + yd * yd)) / corner
+    return xd * gain * f + cx, yd * gain * f + cy
+
+
 def _through_lens(img: np.ndarray, labels: list[Label], k: float) -> tuple[np.ndarray, list[Label]]:
     """The scene as a lens with barrel distortion `k` (`Variation.lens`) shows it, and the labels' boxes
     where the marks end up (the box around nine points of each: corners and edge midpoints)."""
     h, w = img.shape[:2]
     cx, cy, f = w / 2, h / 2, w / 2
     corner = 1 + k * ((cx / f) ** 2 + (cy / f) ** 2)
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-    xd, yd = (xx - cx) / f, (yy - cy) / f
-    gain = (1 + k * (xd * xd + yd * yd)) / corner  # frame pixel -> the scene pixel it shows
-    out = cv2.remap(
-        img, xd * gain * f + cx, yd * gain * f + cy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
-    )
+    out = cv2.remap(img, *_lens_maps(h, w, k), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
     def shown_at(x: float, y: float) -> tuple[float, float]:
         """Where the scene's point (x, y) appears in the frame (fixed-point inversion of `gain`)."""

@@ -22,6 +22,7 @@ from services.vision.detector import (
     parse_settings,
 )
 from services.vision.synthetic import MILD, SceneGenerator, Variation
+from services.vision.verifier import CLASSES
 
 SHAPES = (Shape.X, Shape.O, Shape.TRIANGLE)
 PER_SHAPE = 8
@@ -479,7 +480,7 @@ def test_the_coarser_pyramid_finds_marks_the_old_one_missed_and_loses_none(detec
     gen = SceneGenerator(seed=555, variation=Variation(hand_variety=0.5))
     gained, lost, false_old, false_new = [], [], 0, 0
     for i in range(200):
-        img, labels = gen.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
+        img, labels = gen.frame(CLASSES[i % len(CLASSES)])
         hits = []
         for det in (old, detector):
             found = det.detect(img)
