@@ -48,6 +48,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
 from services.voice.spotter.head import Head
 from services.voice.training import corpus, dataset, train
 from services.voice.training.train import TrainConfig
@@ -86,7 +87,7 @@ def load(splits: tuple[str, ...], cfg: TrainConfig) -> Rows:
     xs, ys, voices, names, texts = [], [], [], [], []
     for sp in splits:
         rec = dataset.recipes(sp, cfg.sizes, cfg.seed)
-        x, y, idx = dataset.indexed_features(rec, cfg.workers, progress=False)
+        x, y, idx = dataset.indexed_features(rec, cfg.workers, progress=False, embedding=cfg.embedding)
         xs.append(x)
         ys.append(y)
         voices += [rec[i].voice for i in idx]
@@ -113,7 +114,7 @@ def calibration_rows(rows: Rows, d: str, cfg: TrainConfig) -> np.ndarray:
 def recipe_key(rows: Rows, d: str, seed: int, cfg: TrainConfig) -> str:
     """What a member is fitted on and how, to refuse a cached member of another recipe or other data."""
     keep = without(rows, d)
-    return json.dumps({"left_out": d, "seed": seed, "hidden": cfg.hidden, "alpha": cfg.alpha, "balance": cfg.balance,
+    return json.dumps({"left_out": d, "seed": seed, "embedding": cfg.embedding, "hidden": cfg.hidden, "alpha": cfg.alpha, "balance": cfg.balance,
                        "crop_width": cfg.crop_width, "crop_starts": list(cfg.crop_starts), "rows": int(keep.sum()),
                        "data": hashlib.sha1(rows.x[keep].tobytes() + rows.y[keep].tobytes()).hexdigest()[:16],
                        "splits": sorted(set(rows.split.tolist()))}, sort_keys=True)
@@ -266,12 +267,18 @@ def main(
     foreign: Annotated[int, typer.Option(
         help="Round 11's variant: also fit on the `foreign` split (recorded speakers of other languages, "
              "corpus.FOREIGN_TRAIN) with this many clips per command (0: the committed recipe)")] = 0,
+    embedding: Annotated[str | None, typer.Option(
+        help="Round 13's variant: the speech embedding (whisper-tiny.en: no crops) [default: the committed recipe's]")] = None,
 ) -> None:
     """The leave-one-recorded-speaker-out proxy of the committed recipe (see the module's docstring)."""
     speakers = speakers or list(SPEAKERS)
     seeds = seeds or [12, 13, 14]
     draws = draws or [0]
     cfg = TrainConfig(sizes=replace(dataset.Sizes(), foreign_positives=foreign)) if foreign else TrainConfig()
+    if embedding is not None and embedding != cfg.embedding:
+        if embedding not in EMBEDDINGS:
+            raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
+        cfg = replace(cfg, embedding=embedding, crop_width=0 if embedding != SPEECH_EMBEDDING else 8)
     unknown = [s for s in speakers if s not in SPEAKERS]
     if unknown:
         raise typer.BadParameter(f"unknown speakers {unknown}: choose from {list(SPEAKERS)}")

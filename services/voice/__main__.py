@@ -127,18 +127,26 @@ def train(
         "--foreign", min=0,
         help="clips per command of the `foreign` split (recorded Czech and Finnish speakers; 0: not fitted on) "
              "[default: the committed recipe's, Sizes.foreign_positives]")] = None,
+    embedding: Annotated[str, typer.Option(
+        help="the speech embedding the head reads: speech-embedding or whisper-tiny.en (no crops)")] = "speech-embedding",
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
+    from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
     from services.voice.spotter.head import DEFAULT_HEAD
     from services.voice.training.dataset import Sizes
     from services.voice.training.train import TrainConfig
     from services.voice.training.train import train as run_training
 
+    if embedding not in EMBEDDINGS:
+        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    report = run_training(TrainConfig(seed=seed, workers=workers, sizes=sizes), out or DEFAULT_HEAD)
+    cfg = TrainConfig(seed=seed, workers=workers, sizes=sizes, embedding=embedding)
+    if embedding != SPEECH_EMBEDDING:
+        cfg = replace(cfg, crop_width=0)
+    report = run_training(cfg, out or DEFAULT_HEAD)
     typer.echo(json.dumps(report, indent=2))
 
 

@@ -1,7 +1,7 @@
 """The default engine: a command spotter (pretrained speech embedding + a small trained head).
 
 One utterance (a trimmed WAV file or a VAD-cut stretch of a stream) is centred in a 2 s window,
-embedded (`spotter.features`) and classified over the vocabulary plus "other" (`spotter.head`). The
+embedded (the head's speech embedding: `spotter.embedders`) and classified over the vocabulary plus "other" (`spotter.head`). The
 most probable class is published if it is a command and its raw probability reaches the command's
 `accept` threshold; the published confidence is calibrated so that 0.5 is `accept` and 0.85 is
 `sure` (for "go": walk without asking). An utterance longer than `MAX_SPEECH_S` is not one command
@@ -21,19 +21,20 @@ from pathlib import Path
 
 from schemas.messages import Command
 from services.voice.engine import EngineError, Recognition
-from services.voice.spotter.features import MAX_SPEECH_S, Embedder, FeatureError, speech_seconds
+from services.voice.spotter.embedders import UtteranceEmbedder, embedder_for
+from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, speech_seconds
 from services.voice.spotter.head import DEFAULT_HEAD, SURE_CONFIDENCE, Head, HeadError
 
 
 class SpotterEngine:
     name = "spotter"
 
-    def __init__(self, head: Head, embedder: Embedder | None = None) -> None:
+    def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
         self.head = head
-        self.embedder = embedder or Embedder()
+        self.embedder = embedder or embedder_for(head.embedding)
 
     @classmethod
     def from_path(cls, path: Path | str | None = None) -> SpotterEngine:

@@ -31,7 +31,7 @@ import numpy as np
 from services.runtime import default_state_dir
 from services.voice.audio import AudioError, read_wav, to_pcm
 from services.voice.sources import trim_to_speech
-from services.voice.spotter.features import Embedder
+from services.voice.spotter.embedders import UtteranceEmbedder, embedder_for
 from services.voice.spotter.head import Head
 
 HEAD_FILE = "voice-head.npz"
@@ -131,9 +131,9 @@ def _anchor_audio() -> list[bytes]:
 
 
 def adapt(head: Head, samples: Sequence[tuple[str, bytes]], cfg: EnrolConfig = EnrolConfig(),
-          embedder: Embedder | None = None) -> Head:
+          embedder: UtteranceEmbedder | None = None) -> Head:
     """A copy of `head` whose last layer is refitted to `samples` (label, trimmed PCM)."""
-    embedder = embedder or Embedder()
+    embedder = embedder or embedder_for(head.embedding)
     rng = np.random.default_rng(cfg.seed)
     classes = head.classes
     feats: list[np.ndarray] = []

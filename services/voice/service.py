@@ -160,7 +160,10 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
         try:
             engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon,
                                  head_path=settings.head or _enrolled_head(ctx))
-            ctx.log.info("engine ready", engine=engine.name)
+            head = getattr(engine, "head", None)  # the spotter: which speech embedding its head reads
+            if head is not None:
+                ctx.update_detail(spotter_embedding=head.embedding)
+            ctx.log.info("engine ready", engine=engine.name, **({"embedding": head.embedding} if head else {}))
             return engine
         except EngineError as exc:
             ctx.set_status(HealthStatus.DEGRADED, engine_error=str(exc))

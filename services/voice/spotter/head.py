@@ -51,6 +51,8 @@ class Head:
     crop_width: int = 0
     """Embedding frames per crop; 0: the whole window is one input."""
     crop_starts: tuple[int, ...] = ()
+    embedding: str = "speech-embedding"
+    """The speech embedding the head reads (`embedders.EMBEDDINGS`); heads that record none read this one."""
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -89,7 +91,7 @@ class Head:
         arrays: dict[str, np.ndarray] = {
             "vocabulary": np.array(self.vocabulary), "mean": self.mean.astype(np.float32),
             "scale": self.scale.astype(np.float32), "accept": self.accept, "sure": self.sure,
-            "meta": np.array(repr(self.meta)),
+            "meta": np.array(repr(self.meta)), "embedding": np.array(self.embedding),
         }
         if self.crop_width:
             arrays["crop"] = np.array([self.crop_width, *self.crop_starts], dtype=np.int32)
@@ -114,6 +116,7 @@ class Head:
                 biases=[data[f"b{i}"] for i in range(n)],
                 accept=data["accept"].astype(np.float64), sure=data["sure"].astype(np.float64),
                 meta={"source": str(path)}, base_last=base, crop_width=crop[0], crop_starts=tuple(crop[1:]),
+                embedding=str(data["embedding"]) if "embedding" in data.files else "speech-embedding",
             )
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # truncated, not a zip, ...
             raise HeadError(f"{path}: not a spotter head ({exc})") from None

@@ -9,6 +9,7 @@ second `train` run only fits the head; the mel spectrograms they were computed f
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import multiprocessing
@@ -21,6 +22,7 @@ import numpy as np
 from services.runtime import get_logger
 from services.voice.audio import SAMPLE_RATE, to_pcm
 from services.voice.sources import trim_to_speech
+from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
 from services.voice.spotter.features import FRAMES, MAX_SPEECH_S, Embedder, speech_seconds
 from services.voice.synth import OOV_TUNE, cache_dir, noise
 from services.voice.training import augment, corpus, tts
@@ -254,14 +256,14 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     return out
 
 
-_EMBEDDER: Embedder | None = None
+_EMBEDDERS: dict[str, UtteranceEmbedder] = {}
 
 
-def _embedder() -> Embedder:
-    global _EMBEDDER
-    if _EMBEDDER is None:
-        _EMBEDDER = Embedder()
-    return _EMBEDDER
+def _embedder(name: str = SPEECH_EMBEDDING) -> UtteranceEmbedder:
+    """This process's embedder `name` (one per rendering process)."""
+    if name not in _EMBEDDERS:
+        _EMBEDDERS[name] = embedder_for(name)
+    return _EMBEDDERS[name]
 
 
 def render(r: Recipe) -> bytes | None:
@@ -288,17 +290,22 @@ def render_utterance(r: Recipe) -> bytes:
     return trim_to_speech(to_pcm(x))
 
 
-def _features(r: Recipe) -> tuple[np.ndarray, np.ndarray] | None:
-    """The recipe's (FRAMES, 96) embeddings and the mel spectrogram they were computed from (both
-    float16; the embeddings are computed from the float32 spectrogram), or None if it does not render."""
+def _features(r: Recipe, embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """The recipe's embeddings (float16; for the speech embedding (FRAMES, 96), with the mel spectrogram
+    they were computed from, float16, the embeddings computed from the float32 spectrogram; for another
+    embedding, no spectrogram), or None if it does not render."""
     try:
         pcm = render(r)
     except tts.TtsError:
         return None
     if pcm is None:
         return None
-    spec = _embedder().utterance_mel(pcm, seed=r.seed)
-    return _embedder().embed_mel(spec)[:FRAMES].astype(np.float16), spec.astype(np.float16)
+    if embedding != SPEECH_EMBEDDING:
+        return _embedder(embedding).utterance(pcm, seed=r.seed).astype(np.float16), None
+    emb = _embedder()
+    assert isinstance(emb, Embedder)
+    spec = emb.utterance_mel(pcm, seed=r.seed)
+    return emb.embed_mel(spec)[:FRAMES].astype(np.float16), spec.astype(np.float16)
 
 
 def _key(items: list[Recipe]) -> str:
@@ -306,16 +313,20 @@ def _key(items: list[Recipe]) -> str:
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
-def _cache_path(kind: str, items: list[Recipe]) -> Path:
-    """Where the `kind` ("features" or "mels") of these recipes are cached."""
+def _cache_path(kind: str, items: list[Recipe], embedding: str = SPEECH_EMBEDDING) -> Path:
+    """Where the `kind` ("features" or "mels") of these recipes are cached (another embedding's features:
+    `features-<embedding>`)."""
+    if embedding != SPEECH_EMBEDDING:
+        kind = f"{kind}-{embedding}"
     return cache_dir() / f"spotter-{kind}-{_key(items)}.npz"
 
 
-def _cached(kind: str, items: list[Recipe], workers: int, progress: bool) -> np.lib.npyio.NpzFile:
+def _cached(kind: str, items: list[Recipe], workers: int, progress: bool,
+            embedding: str = SPEECH_EMBEDDING) -> np.lib.npyio.NpzFile:
     """The cached `kind` of these recipes, rendering them all first if it is not cached yet."""
-    path = _cache_path(kind, items)
+    path = _cache_path(kind, items, embedding)
     if not path.exists():
-        _render_all(items, workers, progress)
+        _render_all(items, workers, progress, embedding)
     return np.load(path)
 
 
@@ -325,40 +336,45 @@ def _save(path: Path, **arrays: np.ndarray) -> None:
     tmp.replace(path)
 
 
-def _render_all(items: list[Recipe], workers: int, progress: bool) -> None:
-    """Render and embed every recipe once; cache the features and (float16) the mel spectrograms."""
+def _render_all(items: list[Recipe], workers: int, progress: bool, embedding: str = SPEECH_EMBEDDING) -> None:
+    """Render and embed every recipe once; cache the features and (speech embedding, float16) the mel
+    spectrograms."""
     xs: list[np.ndarray] = []
     mels: list[np.ndarray] = []
     ys: list[int] = []
     kept: list[int] = []
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(workers) as pool:
-        for i, (r, f) in enumerate(zip(items, pool.imap(_features, items, chunksize=16), strict=True)):
+        work = functools.partial(_features, embedding=embedding)
+        for i, (r, f) in enumerate(zip(items, pool.imap(work, items, chunksize=16), strict=True)):
             if f is not None:
                 xs.append(f[0])
-                mels.append(f[1])
+                if f[1] is not None:
+                    mels.append(f[1])
                 ys.append(r.label)
                 kept.append(i)
             if progress and (i + 1) % 500 == 0:
                 get_logger("voice.train").info("features", done=i + 1, clips=len(items))
     y, idx = np.asarray(ys, dtype=np.int16), np.asarray(kept, dtype=np.int32)
-    features_path = _cache_path("features", items)
+    features_path = _cache_path("features", items, embedding)
     if not features_path.exists():  # rendering is deterministic: an existing file holds the same numbers
         _save(features_path, x=np.stack(xs), y=y, idx=idx)
-    _save(_cache_path("mels", items), mel=np.stack(mels), y=y, idx=idx)
+    if mels:
+        _save(_cache_path("mels", items), mel=np.stack(mels), y=y, idx=idx)
 
 
-def features(items: list[Recipe], workers: int = 2, progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """(X: n x FRAMES x 96 float16, y: n) for the recipes that render; cached."""
-    x, y, _ = indexed_features(items, workers, progress)
+def features(items: list[Recipe], workers: int = 2, progress: bool = True,
+             embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray, np.ndarray]:
+    """(X: n x FRAMES x 96 float16, or the other embedding's shape, y: n) for the recipes that render; cached."""
+    x, y, _ = indexed_features(items, workers, progress, embedding)
     return x, y
 
 
-def indexed_features(items: list[Recipe], workers: int = 2,
-                     progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`features` and, for each row, the index of its recipe in `items`. Rendering them also caches
-    their mel spectrograms (`indexed_mels`)."""
-    data = _cached("features", items, workers, progress)
+def indexed_features(items: list[Recipe], workers: int = 2, progress: bool = True,
+                     embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`features` and, for each row, the index of its recipe in `items`. Rendering them with the speech
+    embedding also caches their mel spectrograms (`indexed_mels`)."""
+    data = _cached("features", items, workers, progress, embedding)
     return data["x"], data["y"], data["idx"]
 
 

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from services.voice.spotter.embedders import SPEECH_EMBEDDING
 from services.voice.spotter.head import DEFAULT_HEAD, Head
 from services.voice.training import corpus, dataset
 
@@ -62,6 +63,9 @@ class TrainConfig:
     thread instead of two stopped after 24 epochs instead of 52 and moved a leave-one-speaker-out rotation
     by about 4 points). The committed head was fitted on two."""
     sizes: dataset.Sizes = field(default_factory=dataset.Sizes)
+    embedding: str = SPEECH_EMBEDDING
+    """The speech embedding the head reads (`embedders.EMBEDDINGS`); crops are for the speech embedding's
+    16 frames only (`whisper_config` sets `crop_width` 0)."""
     tune_splits: tuple[str, ...] = ("tune", "neighbours-tune", "speakers-tune")
     """The splits the temperature and the knots are chosen on. Not `recorded-tune` (the recorded training
     speakers alone; rendered for per-speaker figures): calibrated with it, "go" walked unasked on 2 % of
@@ -140,7 +144,8 @@ def ensemble(members: list[Member], mean: np.ndarray, scale: np.ndarray, cfg: Tr
     b1 = np.mean([m[1][1] for m in members], axis=0)
     return Head(corpus.VOCABULARY, mean, scale, [w0.astype(np.float32), w1.astype(np.float32)],
                 [b0.astype(np.float32), b1.astype(np.float32)], np.full(n, 0.5), np.full(n, 0.9),
-                crop_width=cfg.crop_width, crop_starts=cfg.crop_starts if cfg.crop_width else ())
+                crop_width=cfg.crop_width, crop_starts=cfg.crop_starts if cfg.crop_width else (),
+                embedding=cfg.embedding)
 
 
 def fit(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> Head:
@@ -208,10 +213,12 @@ def tune_figures(head: Head, x: np.ndarray, y: np.ndarray) -> dict[str, float]:
 
 def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
     t0 = time.time()
-    tune_parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers)
+    if cfg.crop_width and cfg.embedding != SPEECH_EMBEDDING:
+        raise ValueError(f"crops are for the {SPEECH_EMBEDDING}'s frames, not {cfg.embedding}: set crop_width 0")
+    tune_parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers, embedding=cfg.embedding)
                   for split in TUNE_SPLITS if split in cfg.tune_splits]
     tune = (np.concatenate([p[0] for p in tune_parts]), np.concatenate([p[1] for p in tune_parts]))
-    parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers)
+    parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers, embedding=cfg.embedding)
              for split in training_splits(cfg.sizes)]
     train_xy = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
     t1 = time.time()

