@@ -114,8 +114,8 @@ def calibration_rows(rows: Rows, d: str, cfg: TrainConfig) -> np.ndarray:
 def recipe_key(rows: Rows, d: str, seed: int, cfg: TrainConfig) -> str:
     """What a member is fitted on and how, to refuse a cached member of another recipe or other data."""
     keep = without(rows, d)
-    return json.dumps({"left_out": d, "seed": seed, "embedding": cfg.embedding, "hidden": cfg.hidden, "alpha": cfg.alpha, "balance": cfg.balance,
-                       "crop_width": cfg.crop_width, "crop_starts": list(cfg.crop_starts), "rows": int(keep.sum()),
+    return json.dumps({"left_out": d, "seed": seed, "embedding": cfg.embedding, "hidden": cfg.hidden,
+                       "alpha": cfg.alpha, "balance": cfg.balance, "crop_width": cfg.crop_width, "crop_starts": list(cfg.crop_starts), "rows": int(keep.sum()),
                        "data": hashlib.sha1(rows.x[keep].tobytes() + rows.y[keep].tobytes()).hexdigest()[:16],
                        "splits": sorted(set(rows.split.tolist()))}, sort_keys=True)
 

@@ -18,7 +18,7 @@ from services.voice.engine_spotter import SpotterEngine
 from services.voice.spotter import whisper
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, embedder_for
 from services.voice.spotter.features import Embedder, FeatureError
-from services.voice.spotter.head import DEFAULT_HEAD, Head
+from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
 from services.voice.training import dataset, tts
 from services.voice.training.dataset import OTHER, Recipe
 from tests.conftest import ROOT
@@ -97,6 +97,13 @@ def test_a_head_records_its_embedding_and_the_engine_uses_it(tmp_path: Path,
     head.save(path)
     loaded = Head.load(path)
     assert loaded.embedding == whisper.NAME
+    bad = tmp_path / "bad.npz"  # an unknown embedding, or an input size its embedding does not give
+    np.savez(bad, **{**dict(np.load(path)), "embedding": np.array("mfcc")})
+    with pytest.raises(HeadError, match="unknown speech embedding 'mfcc'"):
+        Head.load(bad)
+    np.savez(bad, **{**dict(np.load(path)), "embedding": np.array(SPEECH_EMBEDDING)})
+    with pytest.raises(HeadError, match="is not 16 x 96"):
+        Head.load(bad)
     engine = SpotterEngine(loaded)
     assert isinstance(engine.embedder, whisper.WhisperEmbedder)
     pcm = to_pcm(np.random.default_rng(4).normal(0, 0.05, 8000))

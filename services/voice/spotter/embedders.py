@@ -12,10 +12,12 @@ from typing import Protocol
 import numpy as np
 
 from services.voice.spotter import whisper
-from services.voice.spotter.features import Embedder, FeatureError
+from services.voice.spotter.features import EMBED_DIM, FRAMES, Embedder, FeatureError
 
 SPEECH_EMBEDDING = "speech-embedding"
 EMBEDDINGS = (SPEECH_EMBEDDING, whisper.NAME)
+SHAPES = {SPEECH_EMBEDDING: (FRAMES, EMBED_DIM), whisper.NAME: (whisper.FRAMES, whisper.DIM)}
+"""What each embedding gives per utterance."""
 
 
 class UtteranceEmbedder(Protocol):

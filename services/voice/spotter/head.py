@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from services.voice.spotter.embedders import SHAPES, SPEECH_EMBEDDING
 from services.voice.spotter.features import EMBED_DIM, FRAMES
 
 DEFAULT_HEAD = Path(__file__).with_name("head.npz")
@@ -51,7 +52,7 @@ class Head:
     crop_width: int = 0
     """Embedding frames per crop; 0: the whole window is one input."""
     crop_starts: tuple[int, ...] = ()
-    embedding: str = "speech-embedding"
+    embedding: str = SPEECH_EMBEDDING
     """The speech embedding the head reads (`embedders.EMBEDDINGS`); heads that record none read this one."""
 
     @property
@@ -116,13 +117,18 @@ class Head:
                 biases=[data[f"b{i}"] for i in range(n)],
                 accept=data["accept"].astype(np.float64), sure=data["sure"].astype(np.float64),
                 meta={"source": str(path)}, base_last=base, crop_width=crop[0], crop_starts=tuple(crop[1:]),
-                embedding=str(data["embedding"]) if "embedding" in data.files else "speech-embedding",
+                embedding=str(data["embedding"]) if "embedding" in data.files else SPEECH_EMBEDDING,
             )
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # truncated, not a zip, ...
             raise HeadError(f"{path}: not a spotter head ({exc})") from None
         if n == 0 or head.weights[-1].shape[1] != len(head.classes):
             raise HeadError(f"{path}: output size does not match its vocabulary of {len(head.vocabulary)} words")
-        if head.crop_width and (not head.crop_starts or min(head.crop_starts) < 0
+        if head.embedding not in SHAPES:
+            raise HeadError(f"{path}: trained on an unknown speech embedding {head.embedding!r}")
+        frames, dim = SHAPES[head.embedding]
+        if not head.crop_width and head.mean.size != frames * dim:
+            raise HeadError(f"{path}: input size {head.mean.size} is not {frames} x {dim}, what {head.embedding} gives")
+        if head.crop_width and (head.embedding != SPEECH_EMBEDDING or not head.crop_starts or min(head.crop_starts) < 0
                                 or max(head.crop_starts) + head.crop_width > FRAMES
                                 or head.mean.size != head.crop_width * EMBED_DIM):
             raise HeadError(f"{path}: crops {crop} do not fit {FRAMES} frames of {EMBED_DIM} or the input size")

@@ -16,6 +16,7 @@ import multiprocessing
 import random
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -302,8 +303,7 @@ def _features(r: Recipe, embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray,
         return None
     if embedding != SPEECH_EMBEDDING:
         return _embedder(embedding).utterance(pcm, seed=r.seed).astype(np.float16), None
-    emb = _embedder()
-    assert isinstance(emb, Embedder)
+    emb = cast(Embedder, _embedder())
     spec = emb.utterance_mel(pcm, seed=r.seed)
     return emb.embed_mel(spec)[:FRAMES].astype(np.float16), spec.astype(np.float16)
 
