@@ -73,6 +73,7 @@ class WhisperEmbedder:
     path: Path = field(init=False)
     _model: Any = field(init=False, repr=False)
     _mel: Any = field(init=False, repr=False)
+    _view: Any = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         try:
@@ -82,7 +83,7 @@ class WhisperEmbedder:
             raise FeatureError("the Whisper embedding needs ctranslate2 and faster-whisper: "
                                "pip install ctranslate2 faster-whisper") from None
         self.path = resolve_model(self.model or self.env.get(ENV, "") or DEFAULT_MODEL)
-        try:
+        try:  # the whole model (CTranslate2 loads no encoder alone); only its encoder is run
             self._model = ctranslate2.models.Whisper(str(self.path), device="cpu", compute_type="int8",
                                                      intra_threads=self.threads, inter_threads=1)
         except (RuntimeError, ValueError) as exc:
@@ -90,16 +91,15 @@ class WhisperEmbedder:
         if self._model.n_mels != 80:
             raise FeatureError(f"{self.path}: a Whisper model with {self._model.n_mels} mel bands, not tiny.en's 80")
         self._mel = FeatureExtractor(feature_size=80)
+        self._view = ctranslate2.StorageView.from_array
         width = self.encode(np.zeros(MEL_FRAMES * 160, dtype=np.float32)).shape[-1]
         if width != DIM:
             raise FeatureError(f"{self.path}: encoder width {width}, not tiny.en's {DIM}: another Whisper size")
 
     def encode(self, samples: np.ndarray) -> np.ndarray:
         """Samples in int16 units (float32, the 2.0 s window) -> (100, 384) encoder frames."""
-        import ctranslate2
-
         mel = self._mel(samples / 32768.0, padding=0)[:, :MEL_FRAMES]
-        view = ctranslate2.StorageView.from_array(np.ascontiguousarray(mel[None], dtype=np.float32))
+        view = self._view(np.ascontiguousarray(mel[None], dtype=np.float32))
         return np.asarray(self._model.encode(view, to_cpu=True))[0]
 
     def utterance(self, pcm: bytes, seed: int = 0) -> np.ndarray:
