@@ -3,14 +3,18 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE] [--lens K]   (tuning split only)
+                                           [--hand-variety SHARE] [--lens K [--calibrated [--keep-matrix]]]
+                                           (the last three: tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
 backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `--split tuning` uses
 `services/vision/synthetic.py`, the generator the detector was tuned on (`--hand-variety`: that share
 of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--lens K`: every
-frame through a lens with barrel distortion K, `Variation.lens`). Frames cycle X, O,
+frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
+with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
+and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
+undistorted with the calibration's own camera matrix, which cuts the edges). Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
 detected class's precision. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
@@ -75,11 +79,24 @@ def main(
             help="tuning split only: the lens's barrel distortion k for every frame (Variation.lens)"
         ),
     ] = 0.0,
+    calibrated: Annotated[
+        bool,
+        typer.Option(
+            help="with --lens: undistort every frame with the lens's calibration in OpenCV's model "
+            "(synthetic.lens_calibration), as --calibration does in the service, before detection"
+        ),
+    ] = False,
+    keep_matrix: Annotated[
+        bool,
+        typer.Option(help="with --calibrated: undistort with the calibration's own camera matrix (edges cut)"),
+    ] = False,
 ) -> None:
     cv2.setNumThreads(1)
     if (hand_variety or lens) and split != "tuning":
         raise typer.BadParameter("--hand-variety and --lens are tuning-generator settings (--split tuning)")
-    frame_of = _generator(split, seed, hand_variety, lens)
+    if calibrated and not lens:
+        raise typer.BadParameter("--calibrated needs --lens K")
+    frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix)
     det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
@@ -136,6 +153,8 @@ def main(
         "seed": seed,
         "hand_variety": hand_variety,
         "lens": lens,
+        "calibrated": calibrated,
+        "keep_matrix": keep_matrix,
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),
@@ -180,7 +199,8 @@ Meta = dict[str, str]
 FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | None, Meta]]
 
 
-def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0) -> FrameFn:
+def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
+               calibrated: bool = False, keep_matrix: bool = False) -> FrameFn:
     if split == "heldout":
         from services.vision.heldout import HeldOutGenerator
 
@@ -205,10 +225,29 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
         from services.vision.synthetic import SceneGenerator, Variation
 
         tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, lens=lens))
+        if calibrated:  # the same scenes without the lens (the lens draws nothing): where the marks are
+            from services.vision.calibration import Undistorter
+            from services.vision.synthetic import lens_calibration
+
+            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
+            undistort = Undistorter(lens_calibration(lens, pinhole.width, pinhole.height),
+                                    None if keep_matrix else 1.0)
+            new = undistort.new_matrix(pinhole.width, pinhole.height)
+            # a pinhole point x shows at new_f (x - centre) / f + new_centre in the undistorted frame
+            view = (new[0, 0] / (pinhole.width / 2), new[1, 1] / (pinhole.width / 2), new[0, 2], new[1, 2])
 
         def tuning(shape: Shape | None) -> tuple[np.ndarray, Any, Meta]:
             scene = tgen.scene(shape)
             img, labels = tgen.render(scene)
+            inside: dict[str, str] = {}
+            if calibrated:  # the frame undistorted; the marks where it shows them: zoomed about the centre
+                _, labels = pinhole.render(pinhole.scene(shape))
+                img = undistort(img)
+                labels = [_viewed(lab, view, img.shape[1], img.shape[0]) for lab in labels]
+                if labels:
+                    x, y, w, h = labels[0].box
+                    whole = x >= 0 and y >= 0 and x + w <= img.shape[1] and y + h <= img.shape[0]
+                    inside = {"whole_in_undistorted_frame": str(whole).lower()}
             if not labels:
                 return img, None, {}
             tilt = float(np.hypot(*scene.tilt))
@@ -218,11 +257,21 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
                 "blur_px": _bin(scene.blur[0], BLUR_BINS),
                 # fingers reaching from the card's edge towards the mark (over its edge for some)
                 "finger_near_mark": str(scene.fingers > 0).lower(),
+                **inside,
             }
             return img, (labels[0].shape, labels[0].box), meta
 
         return tuning
     raise typer.BadParameter(f"split must be heldout or tuning, got {split!r}")
+
+
+def _viewed(label: Any, view: tuple[float, float, float, float], width: int, height: int) -> Any:
+    """`label`'s box (pinhole scene) where an undistorted frame shows it: `view` is (x scale, y scale, new
+    centre x, new centre y), the scene's centre being the frame's."""
+    sx, sy, ncx, ncy = view
+    x, y, w, h = label.box
+    x0, y0 = (x - width / 2) * sx + ncx, (y - height / 2) * sy + ncy
+    return dataclasses.replace(label, box=(round(x0), round(y0), round(w * sx), round(h * sy)))
 
 
 def _tables(r: dict[str, Any]) -> str:

@@ -10,9 +10,9 @@ format (YAML or JSON), as OpenCV's calibration sample and ROS's `camera_calibrat
     image_width: 640        (optional: the resolution it was made at; other frame sizes are scaled)
     image_height: 480
 
-Each frame is then remapped to what a distortion-free camera with the same camera matrix would see
-(`cv2.initUndistortRectifyMap` once per frame size, `cv2.remap` per frame: about a millisecond at
-640x480).
+Each frame is then remapped to what a distortion-free camera with the same field of view would see
+(`Undistorter`; `cv2.initUndistortRectifyMap` once per frame size, `cv2.remap` per frame: about a
+millisecond at 640x480).
 """
 
 from __future__ import annotations
@@ -76,10 +76,28 @@ class Calibration:
 
 @dataclass
 class Undistorter:
-    """Frames remapped to a distortion-free camera with the calibration's camera matrix."""
+    """Frames remapped to a distortion-free camera that keeps the whole field of view.
+
+    `keep_all` 1.0 (the default): the new camera matrix is `cv2.getOptimalNewCameraMatrix(..., alpha=1)`,
+    which keeps every pixel the camera saw (the corners of a barrel lens's frame stay in the frame; the
+    middle is shown a little smaller). 0.0 keeps only pixels that are valid everywhere; None keeps the
+    calibration's own camera matrix, which shows the middle at the lens's magnification and cuts the
+    edges: through a strong wide-angle lens that cut most of the tuning generator's marks out of view
+    (the vision README, "A wide-angle lens")."""
 
     calibration: Calibration
+    keep_all: float | None = 1.0
     _maps: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    _matrices: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+
+    def new_matrix(self, width: int, height: int) -> np.ndarray:
+        """The camera matrix of the undistorted frames of this size."""
+        if (width, height) not in self._matrices:
+            k = self.calibration.matrix_for(width, height)
+            if self.keep_all is not None:
+                k, _ = cv2.getOptimalNewCameraMatrix(k, self.calibration.distortion, (width, height), self.keep_all)
+            self._matrices[(width, height)] = k
+        return self._matrices[(width, height)]
 
     def __call__(self, image: np.ndarray) -> np.ndarray:
         """`image` undistorted; ValueError for something that is not an image."""
@@ -89,6 +107,7 @@ class Undistorter:
         maps = self._maps.get((w, h))
         if maps is None:
             k = self.calibration.matrix_for(w, h)
-            maps = cv2.initUndistortRectifyMap(k, self.calibration.distortion, None, k, (w, h), cv2.CV_16SC2)
+            maps = cv2.initUndistortRectifyMap(k, self.calibration.distortion, None, self.new_matrix(w, h), (w, h),
+                                               cv2.CV_16SC2)
             self._maps[(w, h)] = maps
         return cv2.remap(image, maps[0], maps[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)

@@ -14,12 +14,16 @@ import functools
 import math
 import string
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from schemas.messages import Shape
 from services.runtime import get_logger
+
+if TYPE_CHECKING:
+    from services.vision.calibration import Calibration
 
 log = get_logger("vision.synthetic")
 
@@ -640,6 +644,27 @@ def _through_lens(img: np.ndarray, labels: list[Label], k: float) -> tuple[np.nd
         x0, y0 = int(math.floor(min(xs))), int(math.floor(min(ys)))
         moved.append(Label(lab.shape, (x0, y0, int(math.ceil(max(xs))) - x0, int(math.ceil(max(ys))) - y0)))
     return out, moved
+
+
+def lens_calibration(k: float, width: int, height: int) -> Calibration:
+    """The calibration a user would make of `Variation.lens` k's camera, in OpenCV's model (radial k1,
+    k2, k3), fitted by least squares over the frame's radii. The pinhole scene has focal length f =
+    width / 2; a ray at tan(angle) = r lands in the frame at F r (1 + k1 r^2 + k2 r^4 + k3 r^6), and the
+    fit gives F (the lens's paraxial focal length: larger than f, the middle is magnified) and the k's.
+    An undistorted frame shows the pinhole scene scaled about a point (`Undistorter.new_matrix` against f
+    and the frame's centre)."""
+    from services.vision.calibration import Calibration
+
+    cx, cy, f = width / 2, height / 2, width / 2
+    r_corner = math.hypot(cx / f, cy / f)
+    r_frame = np.linspace(1e-3, r_corner * 1.02, 400)
+    r_scene = r_frame * (1 + k * r_frame**2) / (1 + k * r_corner**2)
+    basis = np.stack([np.ones_like(r_scene), r_scene**2, r_scene**4, r_scene**6], axis=1)
+    a0, b1, b2, b3 = np.linalg.lstsq(basis, r_frame / r_scene, rcond=None)[0]
+    matrix = np.array([[f * a0, 0, cx], [0, f * a0, cy], [0, 0, 1]], dtype=np.float64)
+    distortion = np.array([[b1 / a0, b2 / a0, 0.0, 0.0, b3 / a0]])  # k1 k2 p1 p2 k3
+    return Calibration(matrix, distortion, (width, height), f"lens k={k}")
+
 
 
 def _motion_blur(img: np.ndarray, length: float, angle_deg: float) -> np.ndarray:

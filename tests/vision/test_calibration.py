@@ -81,20 +81,44 @@ def test_a_text_file_is_not_a_calibration(tmp_path: Path) -> None:
         Calibration.load(path)
 
 
-def test_undistortion_straightens_what_the_lens_bent_and_the_x_is_found_again() -> None:
+def _as_seen_by(scene: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """The pinhole scene (camera matrix K) as a distortion-free camera with matrix `new` shows it."""
+    sx, sy = new[0, 0] / K[0, 0], new[1, 1] / K[1, 1]
+    affine = np.array([[sx, 0, new[0, 2] - sx * K[0, 2]], [0, sy, new[1, 2] - sy * K[1, 2]]])
+    return cv2.warpAffine(scene, affine, (scene.shape[1], scene.shape[0]), borderMode=cv2.BORDER_REPLICATE)
+
+
+@pytest.mark.parametrize("keep_all", [1.0, None])
+def test_undistortion_straightens_what_the_lens_bent_and_the_x_is_found_again(keep_all: float | None) -> None:
     scene = _x_card_near_the_corner()
     seen = _through_the_lens(scene)
-    undistort = Undistorter(Calibration(K, D))
+    undistort = Undistorter(Calibration(K, D), keep_all)
     restored = undistort(seen)
-    inner = (slice(60, 420), slice(60, 580))  # away from the frame's edge, which the lens pushed out of view
-    before = np.abs(seen[inner].astype(int) - scene[inner]).mean()
-    after = np.abs(restored[inner].astype(int) - scene[inner]).mean()
+    new = undistort.new_matrix(640, 480)
+    if keep_all is None:
+        np.testing.assert_array_equal(new, K)
+    else:  # the whole field of view kept: the straightened scene is shown smaller
+        assert new[0, 0] < K[0, 0]
+    expected = _as_seen_by(scene, new)
+    inner = (slice(60, 420), slice(60, 580))  # away from the frame's edge
+    before = np.abs(seen[inner].astype(int) - expected[inner]).mean()
+    after = np.abs(restored[inner].astype(int) - expected[inner]).mean()
     assert after < 0.25 * before
     detector = MarkDetector()
     assert [d.shape.value for d in detector.detect(scene)] == ["X"]
     assert [d.shape.value for d in detector.detect(restored)] == ["X"]
     with pytest.raises(ValueError, match="not an image"):
         undistort(np.zeros((0,), np.uint8))
+
+
+def test_keeping_the_whole_view_keeps_a_mark_in_the_corner_of_the_frame() -> None:
+    """A strong lens's calibration used with its own camera matrix shows the middle enlarged and cuts the
+    frame's edges away, with whatever was there; the default keeps every pixel the camera saw."""
+    seen = np.full((480, 640), 200, np.uint8)
+    cv2.rectangle(seen, (4, 4), (40, 40), 0, -1)  # something dark in the very corner of the frame
+    for keep_all, kept in ((1.0, True), (None, False)):
+        restored = Undistorter(Calibration(K, D), keep_all)(seen)
+        assert (restored < 100).any() == kept, keep_all
 
 
 def test_the_service_refuses_a_bad_calibration_in_one_line(tmp_path: Path) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from schemas.messages import Shape
@@ -111,3 +112,26 @@ def test_a_wide_angle_lens_moves_the_mark_and_its_label_with_it() -> None:
         boxes.append(labels[0].box)
     (x0, y0, _, _), (x1, y1, _, _) = boxes
     assert x1 > x0 + 5 and y1 < y0 - 5  # pushed out towards the top-right corner it lies towards
+
+
+def test_the_lens_has_a_calibration_in_opencvs_model_that_straightens_it() -> None:
+    """`lens_calibration`: OpenCV's radial model fitted to the lens; undistorting a lensed frame with it
+    gives the lens-free frame as the undistorted camera sees it (`vision_bench.py --lens K --calibrated`)."""
+    from services.vision.calibration import Undistorter
+    from services.vision.synthetic import lens_calibration
+
+    plain = SceneGenerator(seed=5, variation=MILD.only(fingers=0.0))
+    scene = plain.scene(Shape.X)
+    scene.blur, scene.noise, scene.jpeg, scene.center = (0.0, 0.0), 0.0, 0, (420.0, 200.0)
+    pinhole, _ = plain.render(scene)
+    scene.lens = 0.3
+    seen, _ = plain.render(scene)
+    undistort = Undistorter(lens_calibration(0.3, 640, 480))
+    new = undistort.new_matrix(640, 480)
+    f = 320.0  # the pinhole scene's focal length (half the width)
+    affine = np.array([[new[0, 0] / f, 0, new[0, 2] - new[0, 0] / f * 320], [0, new[1, 1] / f, new[1, 2] - new[1, 1] / f * 240]])
+    expected = cv2.warpAffine(pinhole, affine, (640, 480), borderMode=cv2.BORDER_REPLICATE)
+    inner = (slice(40, 440), slice(40, 600))
+    before = np.abs(seen[inner].astype(int) - expected[inner]).mean()
+    after = np.abs(undistort(seen)[inner].astype(int) - expected[inner]).mean()
+    assert after < 0.2 * before, (before, after)
