@@ -240,7 +240,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
             scene = tgen.scene(shape)
             img, labels = tgen.render(scene)
             inside: dict[str, str] = {}
-            if calibrated:  # the frame undistorted; the marks where it shows them: zoomed about the centre
+            if calibrated:  # the frame undistorted; the marks where the undistorted frame shows them
                 _, labels = pinhole.render(pinhole.scene(shape))
                 img = undistort(img)
                 labels = [_viewed(lab, view, img.shape[1], img.shape[0]) for lab in labels]
