@@ -28,7 +28,7 @@ for k, words in enumerate(folds):
     members = [train.fit_member(flat, y, w, cfg, cfg.seed + i) for i in range(cfg.ensemble)]
     head = train.ensemble(members, mean, scale, cfg)
     train.fit_temperature(head, tune.x[tmask], tune.y[tmask])
-    train.calibrate(head, tune.x[tmask], tune.y[tmask], cfg)
+    report = train.calibrate(head, tune.x[tmask], tune.y[tmask], cfg)
     p = head.probabilities(rows.x[out])
     best = p.argmax(1)
     conf = np.array([head.confidence(int(b), float(p[i, b])) if b < OTHER else 0 for i, b in enumerate(best)])
@@ -38,7 +38,10 @@ for k, words in enumerate(folds):
     texts = rows.text[out]
     r = {"fold": k, "clips": int(out.sum()), "accepted": int(acc.sum()), "go_ask": int((go & ~walk).sum()),
          "go_walk": int(walk.sum()), "walk_words": sorted(set(texts[walk].tolist())),
-         "go_sure": round(float(head.sure[GO]), 4), "max_go_p": round(float(p[:, GO].max()), 4)}
+         "go_sure": round(float(head.sure[GO]), 4), "max_go_p": round(float(p[:, GO].max()), 4),
+         # the "go" sure margin (log-odds above the worst tune non-go) that no unseen word here would reach
+         "margin_needed": round(float(np.log(p[:, GO].max() / (1 - p[:, GO].max()))
+                                      - np.log(report["go"]["worst_other"] / (1 - report["go"]["worst_other"]))), 2)}
     print(json.dumps(r), flush=True)
     for key in tot:
         tot[key] += r[key]
