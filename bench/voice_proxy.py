@@ -48,7 +48,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
 from services.voice.spotter.head import Head
 from services.voice.training import corpus, dataset, train
 from services.voice.training.train import TrainConfig
@@ -115,7 +114,8 @@ def recipe_key(rows: Rows, d: str, seed: int, cfg: TrainConfig) -> str:
     """What a member is fitted on and how, to refuse a cached member of another recipe or other data."""
     keep = without(rows, d)
     return json.dumps({"left_out": d, "seed": seed, "embedding": cfg.embedding, "hidden": cfg.hidden,
-                       "alpha": cfg.alpha, "balance": cfg.balance, "crop_width": cfg.crop_width, "crop_starts": list(cfg.crop_starts), "rows": int(keep.sum()),
+                       "alpha": cfg.alpha, "balance": cfg.balance, "crop_width": cfg.crop_width,
+                       "crop_starts": list(cfg.crop_starts), "rows": int(keep.sum()),
                        "data": hashlib.sha1(rows.x[keep].tobytes() + rows.y[keep].tobytes()).hexdigest()[:16],
                        "splits": sorted(set(rows.split.tolist()))}, sort_keys=True)
 
@@ -276,9 +276,10 @@ def main(
     draws = draws or [0]
     cfg = TrainConfig(sizes=replace(dataset.Sizes(), foreign_positives=foreign)) if foreign else TrainConfig()
     if embedding is not None and embedding != cfg.embedding:
-        if embedding not in EMBEDDINGS:
-            raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
-        cfg = replace(cfg, embedding=embedding, crop_width=0 if embedding != SPEECH_EMBEDDING else 8)
+        try:
+            cfg = train.on_embedding(cfg, embedding)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--embedding") from None
     unknown = [s for s in speakers if s not in SPEAKERS]
     if unknown:
         raise typer.BadParameter(f"unknown speakers {unknown}: choose from {list(SPEAKERS)}")

@@ -134,18 +134,17 @@ def train(
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
-    from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
     from services.voice.spotter.head import DEFAULT_HEAD
     from services.voice.training.dataset import Sizes
-    from services.voice.training.train import TrainConfig
+    from services.voice.training.train import TrainConfig, on_embedding
     from services.voice.training.train import train as run_training
 
-    if embedding not in EMBEDDINGS:
-        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    cfg = TrainConfig(seed=seed, workers=workers, sizes=sizes, embedding=embedding)
-    if embedding != SPEECH_EMBEDDING:
-        cfg = replace(cfg, crop_width=0)
+    cfg = TrainConfig(seed=seed, workers=workers, sizes=sizes)
+    try:
+        cfg = on_embedding(cfg, embedding)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--embedding") from None
     report = run_training(cfg, out or DEFAULT_HEAD)
     typer.echo(json.dumps(report, indent=2))
 

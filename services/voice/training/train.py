@@ -24,12 +24,12 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from services.voice.spotter.embedders import SPEECH_EMBEDDING
+from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
 from services.voice.spotter.head import DEFAULT_HEAD, Head
 from services.voice.training import corpus, dataset
 
@@ -65,7 +65,7 @@ class TrainConfig:
     sizes: dataset.Sizes = field(default_factory=dataset.Sizes)
     embedding: str = SPEECH_EMBEDDING
     """The speech embedding the head reads (`embedders.EMBEDDINGS`); crops are for the speech embedding's
-    16 frames only (`whisper_config` sets `crop_width` 0)."""
+    16 frames only (`on_embedding` sets `crop_width` 0 for another)."""
     tune_splits: tuple[str, ...] = ("tune", "neighbours-tune", "speakers-tune")
     """The splits the temperature and the knots are chosen on. Not `recorded-tune` (the recorded training
     speakers alone; rendered for per-speaker figures): calibrated with it, "go" walked unasked on 2 % of
@@ -74,6 +74,15 @@ class TrainConfig:
 
 
 TUNE_SPLITS = ("tune", "neighbours-tune", "speakers-tune", "recorded-tune")
+
+
+def on_embedding(cfg: TrainConfig, embedding: str) -> TrainConfig:
+    """`cfg`'s recipe fitted on `embedding`: crops (the default's) for the speech embedding, none for another
+    (its frames are not the speech embedding's 16). ValueError naming the choices for an unknown one."""
+    if embedding not in EMBEDDINGS:
+        raise ValueError(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}")
+    crop_width = TrainConfig.crop_width if embedding == SPEECH_EMBEDDING else 0
+    return replace(cfg, embedding=embedding, crop_width=crop_width)
 
 
 def speaker_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
