@@ -129,6 +129,10 @@ def train(
              "[default: the committed recipe's, Sizes.foreign_positives]")] = None,
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: speech-embedding or whisper-tiny.en (no crops)")] = "speech-embedding",
+    word_folds: Annotated[int, typer.Option(
+        "--word-folds", min=0,
+        help="folds of the near-command training words; the knots move to where words the head never heard "
+             "need them (training/folds.py; 0: the tune split's knots only)")] = 0,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
@@ -140,7 +144,7 @@ def train(
     from services.voice.training.train import train as run_training
 
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    cfg = TrainConfig(seed=seed, workers=workers, sizes=sizes)
+    cfg = TrainConfig(seed=seed, workers=workers, sizes=sizes, word_folds=word_folds)
     try:
         cfg = on_embedding(cfg, embedding)
     except ValueError as exc:
