@@ -33,6 +33,12 @@ HeadOption = Annotated[
     typer.Option("--head", envvar="HRI_VOICE_HEAD",
                  help="spotter head file [default: the enrolled head in the state folder, else the committed one]"),
 ]
+WalkGateOption = Annotated[
+    str | None,
+    typer.Option("--walk-gate", envvar="HRI_VOICE_WALK_GATE",
+                 help="spotter: a head on another embedding that must be sure of 'go' too before the robot walks "
+                      "unasked, or 'none' [default: the shipped speech-embedding head, for a head on another embedding]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -47,12 +53,13 @@ LexiconOption = Annotated[
 @app.callback(invoke_without_command=True)
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
-         vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None) -> None:
+         vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
+         walk_gate: WalkGateOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head)
+                             head=head, walk_gate=walk_gate)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -68,10 +75,11 @@ def transcribe(
     vosk_model: VoskModelOption = None,
     lexicon: LexiconOption = None,
     head: HeadOption = None,
+    walk_gate: WalkGateOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
-        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head)
+        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

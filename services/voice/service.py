@@ -34,6 +34,8 @@ class VoiceSettings:
     lexicon: str | None = None
     head: str | None = None
     """Spotter head file; None: the enrolled head in the state folder if there is one, else the committed one."""
+    walk_gate: str | None = None
+    """Spotter walk gate (`engine_spotter.walk_gate_for`): a head file, `none`, or None for the default."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -45,6 +47,7 @@ class VoiceSettings:
             vosk_model=os.environ.get("HRI_VOSK_MODEL") or None,
             lexicon=os.environ.get("HRI_VOICE_LEXICON") or None,
             head=os.environ.get("HRI_VOICE_HEAD") or None,
+            walk_gate=os.environ.get("HRI_VOICE_WALK_GATE") or None,
         )
 
 
@@ -66,6 +69,13 @@ def check_settings(settings: VoiceSettings) -> None:
             Head.load(settings.head)
         except HeadError as exc:
             raise EngineError(f"HRI_VOICE_HEAD: {exc}") from None
+    if settings.engine == "spotter" and settings.walk_gate and settings.walk_gate != "none":
+        from services.voice.spotter.head import Head, HeadError
+
+        try:
+            Head.load(settings.walk_gate)
+        except HeadError as exc:
+            raise EngineError(f"HRI_VOICE_WALK_GATE: {exc}") from None
 
 
 @dataclass
@@ -159,10 +169,12 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
     while not ctx.stopping.is_set():
         try:
             engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon,
-                                 head_path=settings.head or _enrolled_head(ctx))
+                                 head_path=settings.head or _enrolled_head(ctx), walk_gate=settings.walk_gate)
             head = getattr(engine, "head", None)  # the spotter: which speech embedding its head reads
             if head is not None:
-                ctx.update_detail(spotter_embedding=head.embedding)
+                gate = getattr(engine, "gate", None)
+                ctx.update_detail(spotter_embedding=head.embedding,
+                                  spotter_walk_gate=gate.head.embedding if gate is not None else "none")
             ctx.log.info("engine ready", engine=engine.name, **({"embedding": head.embedding} if head else {}))
             return engine
         except EngineError as exc:
