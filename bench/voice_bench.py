@@ -309,7 +309,7 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
     prompted words (the recipe before round 9), on the same samples."""
     from services.voice.engine_spotter import SpotterEngine
     from services.voice.enrol import PROMPT_OTHERS, PROMPT_REPEATS, adapt
-    from services.voice.spotter.head import Head
+    from services.voice.spotter.head import SPEECH_EMBEDDING_HEAD, Head
 
     rng = random.Random(3)
     samples = []
@@ -326,7 +326,7 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
     scored = {it.text for it in items if it.family != "noise"}  # a noise clip's text is its kind ("white")
     if scored & set(PROMPT_OTHERS):  # by construction (corpus rule, tested): enrolment words are never scored
         raise RuntimeError(f"prompted enrolment words among the scored clips: {sorted(scored & set(PROMPT_OTHERS))}")
-    base = Head.load(head_path) if head_path else Head.load()
+    base = Head.load(head_path or SPEECH_EMBEDDING_HEAD)  # as `enroll` does
     t0 = time.perf_counter()
     enrolled = adapt(base, samples + mine_others)
     adapt_s = time.perf_counter() - t0
@@ -354,7 +354,8 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--enrol", action="store_true", help="also measure enrolment on one unseen voice")
     ap.add_argument("--json", type=Path, help="also write the rows here")
-    ap.add_argument("--head", help="spotter head file (default: the committed head)")
+    ap.add_argument("--head", help="spotter head file (default: the committed default head)")
+    ap.add_argument("--enrol-head", help="the head --enrol adapts (default: as `enroll`, the speech-embedding head)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     print(f"reasoner policy: {policy}", flush=True)
@@ -371,7 +372,7 @@ def main() -> int:
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:
-        enrol = enrol_figure(items, args.head)
+        enrol = enrol_figure(items, args.enrol_head)
         rows.append({"enrolment": enrol})
         print(json.dumps({"enrolment": enrol}), flush=True)
     print()

@@ -96,6 +96,8 @@ def summary(results: list[StepResult], title: str) -> Table:
     for r in results:
         heard = (r.heard.command.value if r.heard and r.heard.command else ("-" if r.heard is None else "?"))
         dec = f"{r.decision.verdict.value} {r.decision.reason.value}" if r.decision else "-"
+        if r.asked is not None:  # the robot asked back and the step's answer was said
+            dec = f"ask {r.asked.reason.value}, answered: {dec}"
         goals = " ".join(g.action.value for g in r.goals) or "-"
         said = " ".join(f'"{t}"' for t in r.said) or "-"
         check = "[green]pass[/]" if r.ok else "[red]FAIL[/]"

@@ -42,7 +42,7 @@ def describe(event: Event) -> tuple[str, str]:
             what = m.command.value if m.command else "(nothing)"
             if m.engine == SENT_ENGINE:
                 return "voice", f"sent {what}  (published directly: the recogniser was bypassed)"
-            return "voice", f'heard "{m.text}" -> {what}  confidence {m.confidence:.2f}  [{m.engine}]'
+            return "voice", f'heard "{m.text}" -> {what}  confidence {m.confidence:.4f}  [{m.engine}]'
         case "seen":
             shapes = ", ".join(f"{k.shape.value} {k.confidence:.2f}" for k in m.marks) or "no mark"
             return "vision", f"sees {shapes}  (frame {m.frame})"

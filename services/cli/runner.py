@@ -14,6 +14,7 @@ from schemas.messages import (
     MotionState,
     Posture,
     SceneCommand,
+    Verdict,
     VoiceCommand,
 )
 from services.cli.recorder import SENT_ENGINE, Recorder
@@ -32,6 +33,8 @@ class StepResult:
     problems: list[str] = field(default_factory=list)
     heard: VoiceCommand | None = None
     decision: Decision | None = None
+    asked: Decision | None = None
+    """The robot's question, when it asked back and the step's `confirm` answered it (`decision` is the answer's)."""
     goals: list[MotionGoal] = field(default_factory=list)
     posture: Posture | None = None
     said: list[str] = field(default_factory=list)
@@ -121,6 +124,8 @@ class ScenarioRunner:
                 res.problems.append("the voice service published nothing")
             else:
                 res.decision = self.rec.wait(lambda: self._decision_for(t0, res.heard), step.timeout)
+                if res.decision is not None and res.decision.verdict == Verdict.ASK and step.confirm is not None:
+                    self._answer(res, step.confirm)
                 if res.decision is None and exp is not None and (exp.verdict or exp.reason or exp.situation):
                     res.problems.append("the reasoner made no decision")
         elif step.show is not None:
@@ -136,11 +141,14 @@ class ScenarioRunner:
             if not seen:
                 res.problems.append(f"vision never reported {sorted(want) or 'no mark'}")
             elif exp is not None and (exp.situation or exp.verdict or exp.action):
-                res.decision = self.rec.wait(
-                    lambda: next((d for d in self.rec.since(t0, "decision") if d.command is None), None),
+                res.decision = self.rec.wait(  # the mark's own decision, or the question it made the robot ask
+                    lambda: next((d for d in self.rec.since(t0, "decision")
+                                  if d.command is None or d.verdict == Verdict.ASK), None),
                     step.timeout)
                 if res.decision is None:
                     res.problems.append("the reasoner made no decision on the mark")
+                elif res.decision.verdict == Verdict.ASK and step.confirm is not None:
+                    self._answer(res, step.confirm)
         else:
             time.sleep(step.wait or 0.0)
         if exp is not None:
@@ -152,6 +160,18 @@ class ScenarioRunner:
         res.seconds = time.monotonic() - t0
         time.sleep(GAP_S)
         return res
+
+    def _answer(self, res: StepResult, words: str) -> None:
+        """The robot asked back: say `words`; the answer's decision becomes the step's decision."""
+        res.asked = res.decision
+        t1 = time.monotonic()
+        self.speak(words)
+        answer = self.rec.wait(lambda: next(iter(self.rec.since(t1, "heard")), None), res.step.timeout)
+        if answer is None:
+            res.problems.append(f'the voice service published nothing for the answer "{words}"')
+            res.decision = None
+            return
+        res.decision = self.rec.wait(lambda: self._decision_for(t1, answer), res.step.timeout)
 
     def _decision_for(self, t0: float, heard: VoiceCommand) -> Decision | None:
         for d in self.rec.since(t0, "decision"):

@@ -5,6 +5,9 @@
     steps:
       - say: stand                      # spoken to the voice service as synthesised audio
         expect: {heard: stand, verdict: obey, action: stand_up, posture: standing}
+      - say: go                         # an unsure "go" makes the robot ask; the person then says "yes"
+        confirm: "yes"
+        expect: {heard: go, action: walk_forward, posture: walking}
       - show: X                         # held up in front of the (synthetic) camera
         expect: {situation: danger}
       - wait: 1.0                       # a pause, in seconds
@@ -52,6 +55,10 @@ class Step(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     say: str | None = Field(default=None, description="words spoken to the robot")
+    confirm: str | None = Field(
+        default=None, description="with say or show: the answer spoken if the robot asks back (verdict ask: an "
+                                  "unsure \"go\", or the O after an unsure \"go\" was refused); the verdict, reason "
+                                  "and motion are then checked on the answer's decision")
     send: Command | None = Field(
         default=None, description="a command published as a VoiceCommand, bypassing the recogniser"
     )
@@ -70,6 +77,8 @@ class Step(BaseModel):
             raise ValueError(f"show must be X, O, TRIANGLE or none, not {self.show!r}")
         if self.say is not None and not self.say.strip():
             raise ValueError("say needs words")
+        if self.confirm is not None and ((self.say is None and self.show is None) or not self.confirm.strip()):
+            raise ValueError("confirm needs words, and a say or show step to answer")
         if self.wait is not None and self.expect is not None and self.expect.model_dump(exclude_defaults=True):
             keys = set(self.expect.model_dump(exclude_defaults=True))
             if keys - {"posture", "situation"}:
@@ -82,11 +91,12 @@ class Step(BaseModel):
 
     def label(self) -> str:
         if self.say is not None:
-            return f'say "{self.say}"'
+            return f'say "{self.say}"' + (f' (if asked: "{self.confirm}")' if self.confirm else "")
         if self.send is not None:
             return f"send {self.send.value}"
         if self.show is not None:
-            return f"show {self.show.upper() if self.shape else 'nothing'}"
+            return f"show {self.show.upper() if self.shape else 'nothing'}" + (
+                f' (if asked: "{self.confirm}")' if self.confirm else "")
         return f"wait {self.wait:g} s"
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -22,7 +23,9 @@ class Recognition:
     """Engine-specific evidence: raw scores and the rule that accepted or rejected."""
 
     def message(self, stamp: float | None = None) -> VoiceCommand:
-        msg = VoiceCommand(command=self.command, text=self.text, confidence=round(self.confidence, 4),
+        # Four decimals, rounded DOWN: rounding to nearest published a "go" the engine held just below 0.85
+        # (0.84996: ask) as 0.85, and the reasoner walked without asking (nor asking the walk gate).
+        msg = VoiceCommand(command=self.command, text=self.text, confidence=math.floor(self.confidence * 1e4) / 1e4,
                            engine=self.engine)
         if stamp is not None:
             msg.stamp = stamp

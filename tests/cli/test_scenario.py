@@ -48,6 +48,8 @@ def test_a_scenario_file_by_path(tmp_path: Path) -> None:
         ("name: x\nsteps:\n  - say: go\n    expect: {colour: red}\n", "colour"),
         ("name: x\nsteps:\n  - wait: 1\n    expect: {verdict: obey}\n", "a wait step can only expect"),
         ("name: [unclosed\n", "not valid YAML"),
+        ("name: x\nsteps:\n  - wait: 1\n    confirm: \"yes\"\n", "confirm needs words, and a say or show step"),
+        ("name: x\nsteps:\n  - say: go\n    confirm: \" \"\n", "confirm needs words"),
     ],
 )
 def test_bad_scenarios_are_refused_clearly(tmp_path: Path, text: str, message: str) -> None:
@@ -82,7 +84,8 @@ def _module_example(tmp_path: Path) -> Path:
 
 def test_the_module_example_is_a_valid_scenario(tmp_path: Path) -> None:
     example = load(_module_example(tmp_path))
-    assert [s.label() for s in example.steps] == ['say "stand"', "show X", "wait 1 s", "send go"]
+    assert [s.label() for s in example.steps] == ['say "stand"', 'say "go" (if asked: "yes")', "show X", "wait 1 s",
+                                                  "send go"]
     assert example.name not in builtin_names()
 
 
@@ -92,6 +95,6 @@ def test_the_module_example_passes_on_the_simulated_robot(tmp_path: Path) -> Non
     code = run_demo(load(_module_example(tmp_path)), out, console=Console(file=io.StringIO(), width=120))
     timeline = (out / "timeline.txt").read_text()
     assert code == 0, timeline
-    assert "step 1: say" in timeline and "step 4: send go" in timeline  # counted from 1, as errors are
+    assert "step 1: say" in timeline and "step 5: send go" in timeline  # counted from 1, as errors are
     assert (out / MARKER).is_file() and (out / "state").is_dir()  # the demo's own state folder
     assert list((out / "speech").glob("*.wav"))  # "Sorry, I cannot do it." was spoken

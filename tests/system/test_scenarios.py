@@ -84,3 +84,28 @@ def test_already_done_and_rapid_bursts(robot: Robot) -> None:
     assert all(d.reason.value in ("ok", "busy") for d in decisions)
     assert robot.rec.wait(lambda: (s := robot.rec.latest_state) and s.action is None, timeout=15)
     assert robot.rec.latest_state.posture is Posture.STANDING
+
+
+def test_an_unsure_spoken_go_is_asked_about_and_a_spoken_yes_walks(tmp_path, robot_id: str) -> None:
+    """The confirmation dialogue end to end through the real recogniser: a walk gate that is never sure (a head
+    that hears no command) turns every sure "go" into a question; the scenario's `confirm` answers it aloud."""
+    from services.cli.simrobot import simulated_robot
+    from services.voice.spotter.embedders import SPEECH_EMBEDDING
+    from tests.voice.test_walk_gate import N, _head
+
+    gate = tmp_path / "never-sure.npz"
+    _head(SPEECH_EMBEDDING, N).save(gate)
+    with simulated_robot(tmp_path / "robot", robot=robot_id, participant="systest",
+                         env={"HRI_VOICE_WALK_GATE": str(gate)}) as sim:
+        assert not sim.runner.wait_ready(timeout=90), sim.log_path
+        robot = Robot(sim.out, sim.launcher, sim.ctx, sim.rec, sim.runner)
+        results = robot.play([
+            {"say": "stand", "expect": {"verdict": "obey", "posture": "standing"}},
+            {"say": "go", "confirm": "yes",
+             "expect": {"heard": "go", "verdict": "obey", "action": "walk_forward", "posture": "walking"}},
+        ])
+        asked = results[1].asked
+        assert asked is not None and (asked.verdict.value, asked.reason.value) == ("ask", "confirm")
+        assert "Shall I walk forward?" in results[1].said
+        assert results[1].decision is not None and results[1].decision.command.value == "yes"
+        assert robot.health("voice").detail["spotter_walk_gate"] == SPEECH_EMBEDDING

@@ -112,12 +112,14 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
 
 
 def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    """`train --foreign N` fits the committed recipe with N foreign clips per command (round 12's candidate);
-    without it, `train` fits exactly `TrainConfig()`, the committed recipe (training itself is replaced here)."""
+    """`train --foreign N` fits the default head's recipe with N foreign clips per command (round 12's candidate);
+    without it, `train` fits exactly the default head's recipe (`shipped_recipe()`: `TrainConfig()` on Whisper's
+    encoder with five word folds) into the default head, and `--embedding speech-embedding` the walk gate's
+    (`TrainConfig()` itself) into its file (training itself is replaced here)."""
     from typer.testing import CliRunner
 
     from services.voice.__main__ import app
-    from services.voice.spotter.head import DEFAULT_HEAD
+    from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD
 
     seen: list[tuple[train.TrainConfig, object]] = []
     monkeypatch.setattr(train, "train", lambda cfg, out: seen.append((cfg, out)) or {"head": str(out)})
@@ -125,9 +127,13 @@ def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.Mo
     out = tmp_path / "head.npz"
     assert runner.invoke(app, ["train", "--out", str(out), "--foreign", "360", "--workers", "1"]).exit_code == 0
     assert runner.invoke(app, ["train"]).exit_code == 0
+    assert runner.invoke(app, ["train", "--embedding", "speech-embedding"]).exit_code == 0
     assert runner.invoke(app, ["train", "--foreign", "-1"]).exit_code != 0  # refused before any training
-    assert len(seen) == 2
-    (variant, variant_out), (default, default_out) = seen
-    assert variant == replace(train.TrainConfig(), workers=1, sizes=replace(dataset.Sizes(), foreign_positives=360))
+    assert runner.invoke(app, ["train", "--embedding", "mfcc"]).exit_code == 2
+    assert len(seen) == 3
+    (variant, variant_out), (default, default_out), (gate, gate_out) = seen
+    assert variant == replace(train.shipped_recipe(), workers=1, sizes=replace(dataset.Sizes(), foreign_positives=360))
     assert variant_out == out
-    assert default == train.TrainConfig() and default_out == DEFAULT_HEAD
+    assert default == train.shipped_recipe() and default_out == DEFAULT_HEAD
+    assert (default.embedding, default.crop_width, default.word_folds) == ("whisper-tiny.en", 0, 5)
+    assert gate == train.TrainConfig() and gate_out == SPEECH_EMBEDDING_HEAD

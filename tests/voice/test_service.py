@@ -67,8 +67,8 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert h.detail["utterances"] == 2
     assert h.status == HealthStatus.OK
     assert "enrolled head unusable" in h.detail["head_warning"]
-    assert h.detail["spotter_embedding"] == "speech-embedding"  # the committed head's
-    assert h.detail["spotter_walk_gate"] == "none"  # a speech-embedding head has no second opinion
+    assert h.detail["spotter_embedding"] == "whisper-tiny.en"  # the committed default head's
+    assert h.detail["spotter_walk_gate"] == "speech-embedding"  # its walk gate: the shipped speech-embedding head
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(15) == 0
 

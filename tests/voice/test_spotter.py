@@ -20,7 +20,7 @@ from services.voice import synth
 from services.voice.audio import to_pcm, write_wav
 from services.voice.engine_spotter import SpotterEngine
 from services.voice.sources import stream_utterances, trim_to_speech
-from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
+from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, Head, HeadError
 from services.voice.training import corpus, tts
 from tests.conftest import ROOT
 
@@ -36,6 +36,12 @@ def spotter() -> SpotterEngine:
     return SpotterEngine.from_path()
 
 
+@pytest.fixture(scope="module")
+def enrol_base() -> SpotterEngine:
+    """The head `enroll` adapts: the shipped speech-embedding head."""
+    return SpotterEngine.from_path(SPEECH_EMBEDDING_HEAD)
+
+
 def _utterance(word: str, voice: str, speed: float = 1.0) -> bytes:
     x = tts.synthesise(word, voice, speed, 1.0)
     pad = np.zeros(6400)
@@ -46,7 +52,8 @@ def _utterance(word: str, voice: str, speed: float = 1.0) -> bytes:
 def test_vocabulary_is_the_command_list_with_why(spotter: SpotterEngine) -> None:
     assert spotter.head.vocabulary == tuple(c.value for c in Command)
     assert "why" in spotter.head.vocabulary
-    assert (ROOT / "services/voice/spotter/head.npz").stat().st_size < 1_000_000
+    assert (ROOT / "services/voice/spotter/head.npz").stat().st_size < 4_000_000  # Whisper: 3.4 MB
+    assert (ROOT / "services/voice/spotter/head-speech-embedding.npz").stat().st_size < 1_000_000
 
 
 def test_commands_of_heldout_voices(spotter: SpotterEngine) -> None:
@@ -97,9 +104,9 @@ def test_stream_of_commands(spotter: SpotterEngine) -> None:
     assert heard[1] is None
 
 
-def test_paper_demo_words_are_published_and_its_go_walks(spotter: SpotterEngine, tmp_path: Path) -> None:
-    """`./run demo` speaks every command with espeak-ng en-us+f1 into the spool (`services.cli.utterance`);
-    its scenario expects "go" to walk at once, so the committed head must publish it at >= 0.85."""
+def test_paper_demo_words_are_published_and_a_yes_confirms(spotter: SpotterEngine, tmp_path: Path) -> None:
+    """`./run demo` speaks every command with espeak-ng en-us+f1 into the spool (`services.cli.utterance`); its
+    "go" may walk at once or be asked about (the scenario then answers "yes", which must be confident enough)."""
     from services.cli.utterance import synthesise, write_wav
     from services.voice.audio import read_wav
 
@@ -108,15 +115,14 @@ def test_paper_demo_words_are_published_and_its_go_walks(spotter: SpotterEngine,
         write_wav(path, synthesise(word))
         rec = spotter.recognise(trim_to_speech(read_wav(path)))
         assert rec.command is not None and rec.command.value == word, (word, rec.text, rec.confidence)
-        if word == "go":
-            assert rec.confidence >= 0.85, rec.confidence
         if word == "yes":
             assert rec.confidence >= 0.7, rec.confidence  # it confirms an asked go
 
 
-def test_enrolment_improves_an_unseen_voice(spotter: SpotterEngine) -> None:
+def test_enrolment_improves_an_unseen_voice(enrol_base: SpotterEngine) -> None:
     from services.voice.enrol import EnrolConfig, adapt
 
+    spotter = enrol_base
     voice = "flite:slt"
     rng = np.random.default_rng(1)
     enrol = [(w, _utterance(w, voice, s)) for w in corpus.VOCABULARY for s in (0.85, 0.95, 1.05, 1.15, 1.25)]
@@ -213,7 +219,9 @@ def test_enroll_command_writes_state_head(tmp_path: Path) -> None:
     (folder / "banana-1.wav").unlink()
     out = _cli("enroll", str(folder), env={"HRI_STATE_DIR": str(tmp_path / "state")})
     assert out.returncode == 0, out.stderr
-    assert Head.load(tmp_path / "state" / "voice-head.npz").vocabulary == corpus.VOCABULARY
+    enrolled = Head.load(tmp_path / "state" / "voice-head.npz")
+    assert enrolled.vocabulary == corpus.VOCABULARY
+    assert enrolled.embedding == "speech-embedding" and enrolled.base_last is not None  # the enrolment base adapted
     assert "other-<word>" in out.stdout and "stock" in out.stdout  # no "other" recordings: the hint names them
 
 

@@ -116,3 +116,15 @@ def test_spool_watcher_delete_mode(tmp_path: Path) -> None:
     watcher.done(path)
     assert not path.exists()
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize(("raw", "published"), [(0.84996, 0.8499), (0.85, 0.85), (0.69999, 0.6999), (0.49999, 0.4999),
+                                                (1.0, 1.0), (0.0, 0.0), (0.123456, 0.1234)])
+def test_a_published_confidence_never_rounds_up_across_a_threshold(raw: float, published: float) -> None:
+    """The reasoner's thresholds (0.5 accept, 0.7 a confirming yes, 0.85 walk unasked) must see what the engine
+    decided: a "go" held just below 0.85 (ask) was published as 0.85 and walked."""
+    from services.voice.engine import Recognition
+
+    msg = Recognition(Command.GO, "go", raw, "spotter").message()
+    assert msg.confidence == published
+    assert msg.confidence <= raw

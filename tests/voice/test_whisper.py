@@ -18,7 +18,7 @@ from services.voice.engine_spotter import SpotterEngine
 from services.voice.spotter import whisper
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, embedder_for
 from services.voice.spotter.features import Embedder, FeatureError
-from services.voice.spotter.head import DEFAULT_HEAD, Head, HeadError
+from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, Head, HeadError
 from services.voice.training import dataset, tts
 from services.voice.training.dataset import OTHER, Recipe
 from tests.conftest import ROOT
@@ -79,9 +79,10 @@ def test_model_folder_from_the_environment(tmp_path: Path, embedder: whisper.Whi
 
 def test_a_head_records_its_embedding_and_the_engine_uses_it(tmp_path: Path,
                                                             embedder: whisper.WhisperEmbedder) -> None:
-    committed = Head.load(DEFAULT_HEAD)
+    assert Head.load(DEFAULT_HEAD).embedding == whisper.NAME  # the default head since round 14b
+    committed = Head.load(SPEECH_EMBEDDING_HEAD)
     legacy = tmp_path / "legacy.npz"  # a head saved before heads recorded their embedding
-    data = dict(np.load(DEFAULT_HEAD))
+    data = dict(np.load(SPEECH_EMBEDDING_HEAD))
     data.pop("embedding", None)
     np.savez(legacy, **data)
     assert Head.load(legacy).embedding == SPEECH_EMBEDDING

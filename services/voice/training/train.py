@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
-from services.voice.spotter.head import DEFAULT_HEAD, Head
+from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, Head
+from services.voice.spotter.whisper import NAME as WHISPER
 from services.voice.training import corpus, dataset
 
 
@@ -95,6 +96,20 @@ def on_embedding(cfg: TrainConfig, embedding: str) -> TrainConfig:
         raise ValueError(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}")
     crop_width = TrainConfig.crop_width if embedding == SPEECH_EMBEDDING else 0
     return replace(cfg, embedding=embedding, crop_width=crop_width)
+
+
+SHIPPED_WORD_FOLDS = {WHISPER: 5, SPEECH_EMBEDDING: 0}
+"""Word folds of each shipped head's recipe: the default head (Whisper, round 14) places its knots with them; the
+speech-embedding head (the walk gate and enrolment base) was fitted without."""
+SHIPPED_HEADS = {WHISPER: DEFAULT_HEAD, SPEECH_EMBEDDING: SPEECH_EMBEDDING_HEAD}
+
+
+def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, **changes: object) -> TrainConfig:
+    """The recipe of the head shipped for `embedding` (`TrainConfig()` is the speech-embedding head's; the default
+    head is `TrainConfig()` on Whisper's encoder with five word folds), with `changes`. ValueError for an unknown
+    embedding."""
+    cfg = on_embedding(replace(TrainConfig(), **changes), embedding)  # type: ignore[arg-type]
+    return replace(cfg, word_folds=SHIPPED_WORD_FOLDS[embedding] if word_folds is None else word_folds)
 
 
 def speaker_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
