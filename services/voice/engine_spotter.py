@@ -12,10 +12,11 @@ A head made by enrolment keeps the calibrated head's last layer: its "go" is cap
 
 A walk gate (`WalkGate`, round 14b) does the same with a second head on another speech embedding: a "go" the
 head is sure of is capped just below 0.85 unless the gate's head is sure of "go" too, so the robot walks
-unasked only where both embeddings agree (their errors differ: round 14's Whisper head walked on "co", the
-speech-embedding head on no held-out word). `HRI_VOICE_WALK_GATE`: a head file, or `none`; by default a head
-on another embedding than the speech embedding is gated by the shipped speech-embedding head
-(`spotter/head.npz`), and a speech-embedding head is not gated.
+unasked only where both embeddings agree (their errors differ: on one bench draw the Whisper head walked on
+"co" and the speech-embedding head on nothing, on another the speech-embedding head walked on two one-phoneme
+neighbours and the gated Whisper head on none). `HRI_VOICE_WALK_GATE`: a head file, or `none`; by default a
+head on another embedding than the speech embedding is gated by the shipped speech-embedding head
+(`spotter/head-speech-embedding.npz`), and a speech-embedding head (an enrolled one) is not gated.
 
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.

@@ -69,11 +69,13 @@ def check_settings(settings: VoiceSettings) -> None:
             Head.load(settings.head)
         except HeadError as exc:
             raise EngineError(f"HRI_VOICE_HEAD: {exc}") from None
-    if settings.engine == "spotter" and settings.walk_gate and settings.walk_gate != "none":
+    if settings.engine == "spotter" and settings.walk_gate:
+        from services.voice.engine_spotter import NO_GATE
         from services.voice.spotter.head import Head, HeadError
 
         try:
-            Head.load(settings.walk_gate)
+            if settings.walk_gate != NO_GATE:
+                Head.load(settings.walk_gate)
         except HeadError as exc:
             raise EngineError(f"HRI_VOICE_WALK_GATE: {exc}") from None
 

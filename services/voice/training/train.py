@@ -18,7 +18,10 @@
      reached, by `sure_margin` in log-odds (for "go", 2.5: twelve times the odds of the worst tune
      clip; the robot walks without asking only above it, and the tune split is small, so its worst
      case is an underestimate of what unseen voices and words reach).
-5. Save the head (`spotter/head.npz` by default) and print the tune figures.
+5. With `word_folds` (the default head's recipe: 5), move the knots to where near-command words the head never
+   heard need them (`folds`).
+6. Save the head (`spotter/head.npz` by default; `shipped_recipe` and `SHIPPED_HEADS` say which recipe makes
+   which shipped head) and print the tune figures.
 """
 
 from __future__ import annotations
