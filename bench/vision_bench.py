@@ -4,7 +4,7 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
                                            [--hand-variety SHARE] [--lens K [--calibrated [--keep-matrix]]]
-                                           (the last three: tuning split only)
+                                           (--hand-variety, --calibrated, --keep-matrix: tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
@@ -14,7 +14,9 @@ of its cards with fingers get people's variety of fingers, `Variation.hand_varie
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
-undistorted with the calibration's own camera matrix, which cuts the edges). Frames cycle X, O,
+undistorted with the calibration's own camera matrix, which cuts the edges). With `--split heldout`,
+`--lens K` shows the held-out scenes through a lens in OpenCV's radial model (k1 = -K, focal length the
+frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
 detected class's precision. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
@@ -76,7 +78,8 @@ def main(
     lens: Annotated[
         float,
         typer.Option(
-            help="tuning split only: the lens's barrel distortion k for every frame (Variation.lens)"
+            help="the lens's barrel distortion k for every frame: the tuning generator's own model "
+            "(Variation.lens), or for the held-out split OpenCV's radial model with k1 = -k (heldout.lens_maps)"
         ),
     ] = 0.0,
     calibrated: Annotated[
@@ -92,11 +95,14 @@ def main(
     ] = False,
 ) -> None:
     cv2.setNumThreads(1)
-    if (hand_variety or lens) and split != "tuning":
-        raise typer.BadParameter("--hand-variety and --lens are tuning-generator settings (--split tuning)")
-    if calibrated and not lens:
-        raise typer.BadParameter("--calibrated needs --lens K")
-    frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix)
+    if hand_variety and split != "tuning":
+        raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
+    if calibrated and (not lens or split != "tuning"):
+        raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
+    try:
+        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix)
+    except ValueError as exc:  # a held-out lens the model cannot show
+        raise typer.BadParameter(str(exc), param_hint="--lens") from None
     det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
@@ -204,7 +210,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
     if split == "heldout":
         from services.vision.heldout import HeldOutGenerator
 
-        gen = HeldOutGenerator(seed=seed)
+        gen = HeldOutGenerator(seed=seed, lens=lens)
 
         def held(shape: Shape | None) -> tuple[np.ndarray, Any, Meta]:
             img, lab = gen.frame(shape)

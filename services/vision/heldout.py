@@ -22,6 +22,10 @@ It differs from `synthetic.py` in how frames are made, not only in its seed:
   discs, filled triangles off any card, a cat's face, cables, textures, and decoy cards with words,
   discs or squares.
 
+- optics (off by default, `lens`): a wide-angle lens in OpenCV's radial model (k1 = -lens, focal length the
+  frame's width), applied to the composed scene before the sensor's light, blur, noise and JPEG; the
+  tuning generator's lens is its own model, applied by its own code.
+
 `HeldOutGenerator(seed).frame(shape)` returns a BGR uint8 frame and a `HeldOutLabel` (or None).
 """
 
@@ -120,11 +124,15 @@ def _font(path: Path | None, size: int) -> ImageFont.FreeTypeFont | ImageFont.Im
 class HeldOutGenerator:
     """Deterministic for a given seed."""
 
-    def __init__(self, seed: int = 0, width: int = 640, height: int = 480) -> None:
+    def __init__(self, seed: int = 0, width: int = 640, height: int = 480, lens: float = 0.0) -> None:
         self.rng = np.random.default_rng(seed)
         self.width, self.height = width, height
         self.bank = _load_bank()
         self.fonts: list[Path | None] = [*_fonts(), None]
+        self.lens = lens
+        """Barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws no random
+        numbers, so a seed's scenes are the same with and without it."""
+        self._lens_maps = lens_maps(lens, width, height) if lens else None
 
     # ------------------------------------------------------------------ public
     def frame(self, shape: Shape | None) -> tuple[np.ndarray, HeldOutLabel | None]:
@@ -138,12 +146,29 @@ class HeldOutGenerator:
         elif rng.random() < 0.5:
             self._held_card(bg, None)  # a blank or decoy card held up
         blur = float(rng.uniform(0, 20)) if rng.random() < 0.7 else 0.0
+        if self._lens_maps is not None:
+            bg = Image.fromarray(cv2.remap(np.asarray(bg), *self._lens_maps, cv2.INTER_LINEAR,
+                                           borderMode=cv2.BORDER_REPLICATE))
+            if label is not None:
+                label = self._through_lens(label)
         img = self._camera(bg, blur)
         if label is not None:
             label = HeldOutLabel(
                 label.shape, label.box, label.size, label.tilt_deg, blur, label.finger_near, label.filled
             )
         return img, label
+
+    def _through_lens(self, label: HeldOutLabel) -> HeldOutLabel | None:
+        """The label of a mark seen through the lens: its ink mask (kept by `_held_card`) distorted as the frame
+        is; None if the lens leaves none of it in view."""
+        assert self._lens_maps is not None
+        wm = cv2.remap(self._mask, *self._lens_maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+        ys, xs = np.nonzero(wm > 127)
+        if len(xs) == 0:
+            return None
+        box = (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
+        return HeldOutLabel(label.shape, box, float(max(box[2], box[3])), label.tilt_deg, label.blur_px,
+                            label.finger_near, label.filled)
 
     # ------------------------------------------------------------------ scene
     def _background(self) -> Image.Image:
@@ -295,6 +320,7 @@ class HeldOutGenerator:
         if shape is None:
             return None
         wm = np.asarray(mask.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BILINEAR))
+        self._mask = wm  # the mark's ink where the frame shows it, for a lens (`_through_lens`)
         ys, xs = np.nonzero(wm > 127)
         if len(xs) == 0:
             return None
@@ -494,6 +520,33 @@ class HeldOutGenerator:
 
 
 # ---------------------------------------------------------------------- helpers
+def max_lens(width: int, height: int) -> float:
+    """The strongest lens the one-coefficient model can show this frame through: with k1 = -k the model's
+    distorted radius r (1 - k r^2) peaks at (2/3) / sqrt(3 k), and the frame's corners must lie inside it."""
+    corner = math.hypot(width / 2, height / 2) / width  # normalised by the focal length, the frame's width
+    return (2 / 3) ** 2 / 3 / corner**2
+
+
+def lens_camera(lens: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """The held-out lens in OpenCV's model: (camera matrix, distortion coefficients k1, k2, p1, p2). ValueError
+    for a lens stronger than `max_lens` (no scene point would show at the frame's corners)."""
+    if not 0 <= lens < max_lens(width, height):
+        raise ValueError(f"lens {lens}: between 0 and {max_lens(width, height):.3f} for a {width}x{height} frame "
+                         "(a stronger barrel lens folds the frame's corners back in this one-coefficient model)")
+    k = np.array([[width, 0, width / 2], [0, width, height / 2], [0, 0, 1]], np.float64)
+    return k, np.array([-lens, 0, 0, 0], np.float64)
+
+
+def lens_maps(lens: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """`cv2.remap` maps that show a pinhole frame through the lens: for each pixel of the distorted frame, where
+    the pinhole frame has it (`cv2.undistortPoints` of that pixel, back into pixels)."""
+    k, dist = lens_camera(lens, width, height)
+    yy, xx = np.mgrid[0:height, 0:width].astype(np.float32)
+    pts = np.stack([xx.ravel(), yy.ravel()], axis=1).reshape(-1, 1, 2)
+    src = cv2.undistortPoints(pts, k, dist, P=k).reshape(height, width, 2)
+    return np.ascontiguousarray(src[..., 0]), np.ascontiguousarray(src[..., 1])
+
+
 def _load_bank() -> list[Image.Image]:
     try:
         from skimage import data

@@ -641,3 +641,39 @@ def test_a_letter_of_a_text_line_is_printed_on_paper() -> None:
         i = int(labels[85, 102])
         assert _in_text_line(stats, i, g, labels, 0.0)  # without the test, both rows are words
         assert _in_text_line(stats, i, g, labels, 0.7) is on_paper
+
+
+def test_held_out_lens_distorts_frames_and_labels_as_opencvs_model_says() -> None:
+    """`HeldOutGenerator(lens=K)`: the same scenes as without it (it draws no random numbers), seen through a
+    barrel lens in OpenCV's radial model; each mark's label is its ink's extent in the distorted frame."""
+    import cv2
+
+    from services.vision.heldout import HeldOutGenerator, lens_camera, lens_maps
+
+    w, h = 640, 480
+    with pytest.raises(ValueError, match="between 0 and 0.379"):  # k1 = -0.6 folds the corners back
+        lens_maps(0.6, w, h)
+    mx, my = lens_maps(0.3, w, h)
+    assert abs(mx[h // 2, w // 2] - w / 2) < 0.5 and abs(my[h // 2, w // 2] - h / 2) < 0.5  # the centre stays
+    assert mx[0, 0] < 0 and my[0, 0] < 0  # a barrel lens shows more than the pinhole frame at its corners
+    # the maps invert OpenCV's own forward model: projecting a map's source lands on that pixel
+    k, dist = lens_camera(0.3, w, h)
+    for v, u in ((10, 10), (100, 600), (240, 320), (470, 5)):
+        src = np.array([[[mx[v, u], my[v, u]]]], np.float64)
+        normalised = (src - k[:2, 2]) / k[0, 0]
+        back, _ = cv2.projectPoints(np.dstack([normalised, np.ones((1, 1))]).reshape(1, 3), np.zeros(3), np.zeros(3),
+                                    k, dist)
+        assert np.allclose(back.reshape(2), (u, v), atol=0.5)
+    pinhole, lensed = HeldOutGenerator(seed=11), HeldOutGenerator(seed=11, lens=0.3)
+    assert np.array_equal(HeldOutGenerator(seed=12, lens=0.0).frame(Shape.X)[0], HeldOutGenerator(seed=12).frame(Shape.X)[0])
+    centre = np.array([w / 2, h / 2])
+    for i in range(9):
+        shape = SHAPES[i % 3]
+        (a, la), (b, lb) = pinhole.frame(shape), lensed.frame(shape)
+        assert la is not None and lb is not None and la.shape is lb.shape is shape
+        assert not np.array_equal(a, b)
+        ca = np.array([la.box[0] + la.box[2] / 2, la.box[1] + la.box[3] / 2])
+        cb = np.array([lb.box[0] + lb.box[2] / 2, lb.box[1] + lb.box[3] / 2])
+        assert np.linalg.norm(cb - centre) <= np.linalg.norm(ca - centre) + 2  # barrel: pulled towards the centre
+        x, y, bw, bh = lb.box
+        assert 0 <= x and 0 <= y and x + bw <= w and y + bh <= h
