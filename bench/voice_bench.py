@@ -20,7 +20,8 @@ with a confidence between the reasoner's `^min-confidence` and `^confirm-below`,
 "yes" by the same voice would confirm it, and is reported separately), non-command words accepted, noise
 accepted, false walks through the reasoner's policy, real-time factor (decode time / utterance time),
 and stream latency (end of speech -> VoiceCommand: the VAD's end-of-utterance decision plus decoding).
-With `--enrol`: the figure for five samples per command of an unseen voice, who also says the words
+With `--enrol`: the figure for five samples per command of an unseen voice (adapting the head `enroll` adapts, the
+speech-embedding head, or `--enrol-head H`), who also says the words
 `--mic` enrolment prompts (`enrol.PROMPT_OTHERS`, `PROMPT_REPEATS` times each; none is scored), and without those words.
 
 False walks: a non-"go" clip published as "go" at or above `^confirm-below` walks at once ("direct");
