@@ -62,22 +62,18 @@ def check_settings(settings: VoiceSettings) -> None:
             Lexicon.load(settings.lexicon)
         except LexiconError as exc:
             raise EngineError(str(exc)) from None
-    if settings.engine == "spotter" and settings.head:
-        from services.voice.spotter.head import Head, HeadError
-
-        try:
-            Head.load(settings.head)
-        except HeadError as exc:
-            raise EngineError(f"HRI_VOICE_HEAD: {exc}") from None
-    if settings.engine == "spotter" and settings.walk_gate:
+    if settings.engine == "spotter":
         from services.voice.engine_spotter import NO_GATE
         from services.voice.spotter.head import Head, HeadError
 
-        try:
-            if settings.walk_gate != NO_GATE:
-                Head.load(settings.walk_gate)
-        except HeadError as exc:
-            raise EngineError(f"HRI_VOICE_WALK_GATE: {exc}") from None
+        files = {"HRI_VOICE_HEAD": settings.head,
+                 "HRI_VOICE_WALK_GATE": settings.walk_gate if settings.walk_gate != NO_GATE else None}
+        for variable, path in files.items():
+            try:
+                if path:
+                    Head.load(path)
+            except HeadError as exc:
+                raise EngineError(f"{variable}: {exc}") from None
 
 
 @dataclass
