@@ -23,26 +23,14 @@ from __future__ import annotations
 import random
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from services.voice.spotter.head import Head
 from services.voice.training import corpus, dataset
-
-if TYPE_CHECKING:
-    from services.voice.training.train import TrainConfig
+from services.voice.training.train import TrainConfig, calibrate, fit, fit_temperature, logit, sigmoid
 
 FOLD_SEED = 0
-
-
-def _logit(p: float) -> float:
-    p = min(max(p, 1e-9), 1 - 1e-9)
-    return float(np.log(p / (1 - p)))
-
-
-def _sigmoid(z: float) -> float:
-    return float(1 / (1 + np.exp(-z)))
 
 
 def near_words(sizes: dataset.Sizes, seed: int) -> list[str]:
@@ -66,7 +54,7 @@ def accept_shift(p: np.ndarray, best: np.ndarray, c: int, accept: float, budget:
     k = int(np.floor(budget * len(p)))
     if ranked.size <= k or ranked[k] < accept:
         return 0.0
-    return _logit(float(ranked[k]) + 1e-4) - _logit(accept)
+    return logit(float(ranked[k]) + 1e-4) - logit(accept)
 
 
 @dataclass(frozen=True)
@@ -92,21 +80,19 @@ def score_fold(head: Head, worst_go: float, x: np.ndarray, budgets: dict[str, fl
     go = head.vocabulary.index("go")
     shifts = {w: accept_shift(p, best, c, float(head.accept[c]), budgets.get(w, default_budget))
               for c, w in enumerate(head.vocabulary)}
-    return FoldResult(len(x), accepted, _logit(float(p[:, go].max())) - _logit(worst_go), shifts)
+    return FoldResult(len(x), accepted, logit(float(p[:, go].max())) - logit(worst_go), shifts)
 
 
 def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.ndarray, np.ndarray],
               cfg: TrainConfig, progress: bool = True) -> list[FoldResult]:
     """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows."""
-    from services.voice.training import train
-
     results = []
     other = len(corpus.VOCABULARY)
     for k, words in enumerate(word_folds(near_words(cfg.sizes, cfg.seed), cfg.word_folds)):
         out = np.isin(texts, words) & (y == other)
-        head = train.fit(x[~out], y[~out], cfg)
-        train.fit_temperature(head, *tune)
-        chosen = train.calibrate(head, *tune, cfg)
+        head = fit(x[~out], y[~out], cfg)
+        fit_temperature(head, *tune)
+        chosen = calibrate(head, *tune, cfg)
         worst_go = float(chosen["go"]["worst_other"])  # type: ignore[index]
         result = score_fold(head, worst_go, x[out], dict(cfg.fold_budgets), cfg.default_fold_budget)
         if progress:
@@ -124,8 +110,8 @@ def apply(head: Head, results: Sequence[FoldResult], worst: dict[str, float], cf
     margin = max(recipe_margin, max(r.go_margin for r in results) + cfg.fold_sure_extra)
     shifts = {w: max(r.shifts[w] for r in results) for w in head.vocabulary}
     for c, w in enumerate(head.vocabulary):
-        head.accept[c] = min(_sigmoid(_logit(float(head.accept[c])) + shifts[w]), 0.9999)
-    sure_go = _sigmoid(_logit(worst["go"]) + margin)
+        head.accept[c] = min(sigmoid(logit(float(head.accept[c])) + shifts[w]), 0.9999)
+    sure_go = sigmoid(logit(worst["go"]) + margin)
     head.sure[go] = min(max(float(head.sure[go]), sure_go, float(head.accept[go]) + 0.01), 0.99999)
     for c in range(len(head.vocabulary)):
         head.sure[c] = max(float(head.sure[c]), min(float(head.accept[c]) + 0.01, 0.99999))

@@ -119,12 +119,13 @@ def speaker_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
     return ("speakers", *(f"speakers:{k}" for k in range(1, sizes.speaker_rounds)))
 
 
-def _logit(p: float) -> float:
+def logit(p: float) -> float:
+    """Log-odds of p, clipped away from 0 and 1."""
     p = min(max(p, 1e-9), 1 - 1e-9)
     return float(np.log(p / (1 - p)))
 
 
-def _sigmoid(z: float) -> float:
+def sigmoid(z: float) -> float:
     return float(1 / (1 + np.exp(-z)))
 
 
@@ -225,7 +226,7 @@ def calibrate(head: Head, x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> dic
         accept = max(cfg.min_accept, float(ranked[k]) + 1e-4 if ranked.size > k else cfg.min_accept)
         worst = float(probs[y != c, c].max())
         margin = dict(cfg.sure_margin).get(head.vocabulary[c], cfg.default_sure_margin)
-        sure = min(max(accept + 0.01, _sigmoid(_logit(worst) + margin)), 0.99999)
+        sure = min(max(accept + 0.01, sigmoid(logit(worst) + margin)), 0.99999)
         head.accept[c], head.sure[c] = accept, sure
         report[head.vocabulary[c]] = {"accept": round(accept, 4), "sure": round(sure, 4),
                                       "worst_other": round(worst, 4)}
