@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from services.runtime import get_logger
 from services.voice.spotter.head import Head
 from services.voice.training import corpus, dataset
 from services.voice.training.train import TrainConfig, calibrate, fit, fit_temperature, logit, sigmoid
@@ -96,8 +97,8 @@ def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.nd
         worst_go = float(chosen["go"]["worst_other"])  # type: ignore[index]
         result = score_fold(head, worst_go, x[out], dict(cfg.fold_budgets), cfg.default_fold_budget)
         if progress:
-            print(f"fold {k}: {result.clips} clips of {len(words)} words, {result.accepted} accepted, "
-                  f"go margin {result.go_margin:.2f}", flush=True)
+            get_logger("voice.train").info("word fold", fold=k, words=len(words), clips=result.clips,
+                                           accepted=result.accepted, go_margin=round(result.go_margin, 2))
         results.append(result)
     return results
 
