@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import time
 
+import pytest
+
 from schemas import Action, Posture
-from services.cli.scenario import load
+from services.cli.scenario import builtin_names, load
 from tests.system.conftest import Robot
 
 
-def test_paper_experiment(robot: Robot) -> None:
-    results = robot.runner.run(load("paper"))
+@pytest.mark.parametrize("name", builtin_names())
+def test_builtin_scenarios(robot: Robot, name: str) -> None:
+    """Every built-in scenario (`hri demo --scenario NAME`; `paper` is the paper's experiment and the default), on
+    the real recogniser: a new spotter head that asks about "go" where the old one walked broke `danger` unseen."""
+    results = robot.runner.run(load(name))
     failed = [f"step {r.index} {r.step.label()}: {'; '.join(r.problems)}" for r in results if not r.ok]
     assert not failed, "\n".join(failed)
     # The refusal was spoken: a WAV exists for it.
