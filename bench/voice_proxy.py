@@ -83,16 +83,9 @@ class Rows:
 
 def load(splits: tuple[str, ...], cfg: TrainConfig) -> Rows:
     """The cached features of these splits, with each row's voice, split and text."""
-    xs, ys, voices, names, texts = [], [], [], [], []
-    for sp in splits:
-        rec = dataset.recipes(sp, cfg.sizes, cfg.seed)
-        x, y, idx = dataset.indexed_features(rec, cfg.workers, progress=False, embedding=cfg.embedding)
-        xs.append(x)
-        ys.append(y)
-        voices += [rec[i].voice for i in idx]
-        names += [sp] * len(y)
-        texts += [rec[i].text for i in idx]
-    return Rows(np.concatenate(xs), np.concatenate(ys), np.array(voices), np.array(names), np.array(texts))
+    x, y, rows, names = dataset.split_rows(splits, cfg.sizes, cfg.seed, cfg.workers, progress=False,
+                                           embedding=cfg.embedding)
+    return Rows(x, y, np.array([r.voice for r in rows]), np.array(names), np.array([r.text for r in rows]))
 
 
 def without(rows: Rows, d: str) -> np.ndarray:

@@ -378,6 +378,21 @@ def indexed_features(items: list[Recipe], workers: int = 2, progress: bool = Tru
     return data["x"], data["y"], data["idx"]
 
 
+def split_rows(splits: tuple[str, ...], sizes: Sizes, seed: int, workers: int = 2, progress: bool = True,
+               embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray, np.ndarray, list[Recipe], list[str]]:
+    """The features and labels of these splits, one after another (`indexed_features`, cached), with each row's
+    recipe and split name."""
+    xs, ys, rows, names = [], [], [], []
+    for split in splits:
+        items = recipes(split, sizes, seed)
+        x, y, idx = indexed_features(items, workers, progress, embedding)
+        xs.append(x)
+        ys.append(y)
+        rows += [items[i] for i in idx]
+        names += [split] * len(y)
+    return np.concatenate(xs), np.concatenate(ys), rows, names
+
+
 def indexed_mels(items: list[Recipe], workers: int = 2,
                  progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(mel spectrograms: n x mel frames x 32 float16, y, recipe index) of the rows `indexed_features`

@@ -255,9 +255,9 @@ def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
     t0 = time.time()
     if cfg.crop_width and cfg.embedding != SPEECH_EMBEDDING:
         raise ValueError(f"crops are for the {SPEECH_EMBEDDING}'s frames, not {cfg.embedding}: set crop_width 0")
-    tune_parts = [dataset.features(dataset.recipes(split, cfg.sizes, cfg.seed), cfg.workers, embedding=cfg.embedding)
-                  for split in TUNE_SPLITS if split in cfg.tune_splits]
-    tune = (np.concatenate([p[0] for p in tune_parts]), np.concatenate([p[1] for p in tune_parts]))
+    tune_x, tune_y, _, _ = dataset.split_rows(tuple(sp for sp in TUNE_SPLITS if sp in cfg.tune_splits), cfg.sizes,
+                                              cfg.seed, cfg.workers, embedding=cfg.embedding)
+    tune = (tune_x, tune_y)
     x, y, texts = training_rows(cfg)
     t1 = time.time()
     head = fit(x, y, cfg)
@@ -282,11 +282,6 @@ def train(cfg: TrainConfig, out: Path = DEFAULT_HEAD) -> dict[str, object]:
 
 def training_rows(cfg: TrainConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(features, labels, each clip's text) of the training splits, rendered and cached on first use."""
-    xs, ys, texts = [], [], []
-    for split in training_splits(cfg.sizes):
-        rec = dataset.recipes(split, cfg.sizes, cfg.seed)
-        x, y, idx = dataset.indexed_features(rec, cfg.workers, embedding=cfg.embedding)
-        xs.append(x)
-        ys.append(y)
-        texts += [rec[i].text for i in idx]
-    return np.concatenate(xs), np.concatenate(ys), np.array(texts)
+    x, y, rows, _ = dataset.split_rows(training_splits(cfg.sizes), cfg.sizes, cfg.seed, cfg.workers,
+                                       embedding=cfg.embedding)
+    return x, y, np.array([r.text for r in rows])
