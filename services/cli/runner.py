@@ -119,7 +119,7 @@ class ScenarioRunner:
             else:
                 self._voice.put(VoiceCommand(command=step.send, text=step.send.value, confidence=1.0,
                                              engine=SENT_ENGINE))
-            res.heard = self.rec.wait(lambda: next(iter(self.rec.since(t0, "heard")), None), step.timeout)
+            res.heard = self._first_heard(t0, step.timeout)
             if res.heard is None:
                 res.problems.append("the voice service published nothing")
             else:
@@ -166,12 +166,16 @@ class ScenarioRunner:
         res.asked = res.decision
         t1 = time.monotonic()
         self.speak(words)
-        answer = self.rec.wait(lambda: next(iter(self.rec.since(t1, "heard")), None), res.step.timeout)
+        answer = self._first_heard(t1, res.step.timeout)
         if answer is None:
             res.problems.append(f'the voice service published nothing for the answer "{words}"')
             res.decision = None
             return
         res.decision = self.rec.wait(lambda: self._decision_for(t1, answer), res.step.timeout)
+
+    def _first_heard(self, t0: float, timeout: float) -> VoiceCommand | None:
+        """The first VoiceCommand published since t0, waiting up to `timeout` for it."""
+        return self.rec.wait(lambda: next(iter(self.rec.since(t0, "heard")), None), timeout)
 
     def _decision_for(self, t0: float, heard: VoiceCommand) -> Decision | None:
         for d in self.rec.since(t0, "decision"):
