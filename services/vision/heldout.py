@@ -129,9 +129,8 @@ class HeldOutGenerator:
         self.width, self.height = width, height
         self.bank = _load_bank()
         self.fonts: list[Path | None] = [*_fonts(), None]
-        self.lens = lens
-        """Barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws no random
-        numbers, so a seed's scenes are the same with and without it."""
+        # `lens`: the barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws
+        # no random numbers, so a seed's scenes are the same with and without it.
         self._lens_maps = lens_maps(lens, width, height) if lens else None
 
     # ------------------------------------------------------------------ public
@@ -149,26 +148,12 @@ class HeldOutGenerator:
         if self._lens_maps is not None:
             bg = Image.fromarray(cv2.remap(np.asarray(bg), *self._lens_maps, cv2.INTER_LINEAR,
                                            borderMode=cv2.BORDER_REPLICATE))
-            if label is not None:
-                label = self._through_lens(label)
         img = self._camera(bg, blur)
         if label is not None:
             label = HeldOutLabel(
                 label.shape, label.box, label.size, label.tilt_deg, blur, label.finger_near, label.filled
             )
         return img, label
-
-    def _through_lens(self, label: HeldOutLabel) -> HeldOutLabel | None:
-        """The label of a mark seen through the lens: its ink mask (kept by `_held_card`) distorted as the frame
-        is; None if the lens leaves none of it in view."""
-        assert self._lens_maps is not None
-        wm = cv2.remap(self._mask, *self._lens_maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-        ys, xs = np.nonzero(wm > 127)
-        if len(xs) == 0:
-            return None
-        box = (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
-        return HeldOutLabel(label.shape, box, float(max(box[2], box[3])), label.tilt_deg, label.blur_px,
-                            label.finger_near, label.filled)
 
     # ------------------------------------------------------------------ scene
     def _background(self) -> Image.Image:
@@ -320,7 +305,8 @@ class HeldOutGenerator:
         if shape is None:
             return None
         wm = np.asarray(mask.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BILINEAR))
-        self._mask = wm  # the mark's ink where the frame shows it, for a lens (`_through_lens`)
+        if self._lens_maps is not None:  # the ink where the lens shows it, as `frame` shows the scene
+            wm = cv2.remap(wm, *self._lens_maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         ys, xs = np.nonzero(wm > 127)
         if len(xs) == 0:
             return None
