@@ -90,13 +90,13 @@ class Step(BaseModel):
         return None if self.show is None or self.show.upper() == "NONE" else Shape(self.show.upper())
 
     def label(self) -> str:
+        answer = f' (if asked: "{self.confirm}")' if self.confirm else ""  # only a say or a show has one
         if self.say is not None:
-            return f'say "{self.say}"' + (f' (if asked: "{self.confirm}")' if self.confirm else "")
+            return f'say "{self.say}"{answer}'
         if self.send is not None:
             return f"send {self.send.value}"
         if self.show is not None:
-            return f"show {self.show.upper() if self.shape else 'nothing'}" + (
-                f' (if asked: "{self.confirm}")' if self.confirm else "")
+            return f"show {self.show.upper() if self.shape else 'nothing'}{answer}"
         return f"wait {self.wait:g} s"
 
 

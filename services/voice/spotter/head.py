@@ -27,7 +27,8 @@ from services.voice.spotter.features import EMBED_DIM, FRAMES
 
 DEFAULT_HEAD = Path(__file__).with_name("head.npz")
 SPEECH_EMBEDDING_HEAD = Path(__file__).with_name("head-speech-embedding.npz")
-"""The shipped head on the speech embedding: the walk gate of a head on another embedding."""
+"""The shipped head on the speech embedding: the walk gate of a head on another embedding, and the head `enroll`
+adapts."""
 ACCEPT_CONFIDENCE = 0.5
 SURE_CONFIDENCE = 0.85
 
