@@ -39,6 +39,12 @@ WalkGateOption = Annotated[
                  help="spotter: a head on another embedding that must be sure of 'go' too before the robot walks "
                       "unasked, or 'none' [default: the shipped speech-embedding head, for a head on another embedding]"),
 ]
+VadOption = Annotated[
+    str,
+    typer.Option("--vad", envvar="HRI_VOICE_VAD",
+                 help="voice activity detector of a live stream (mic, stdin): silero (keeps working in the walking "
+                      "robot's own noise) or webrtc; files are trimmed with webrtc"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -54,12 +60,12 @@ LexiconOption = Annotated[
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
-         walk_gate: WalkGateOption = None) -> None:
+         walk_gate: WalkGateOption = None, vad: VadOption = "silero") -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate)
+                             head=head, walk_gate=walk_gate, vad=vad)
     try:
         check_settings(settings)
     except EngineError as exc:

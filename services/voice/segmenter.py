@@ -1,24 +1,34 @@
-"""Cut a live 16 kHz PCM stream into utterances with pocketsphinx's `Endpointer` (WebRTC-style VAD)."""
+"""Cut a live 16 kHz PCM stream into utterances with a voice activity detector: Silero VAD (`vad.py`, the
+default for streams) or pocketsphinx's `Endpointer` (WebRTC's VAD: files are trimmed with it, as the
+spotter's training clips were)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from pocketsphinx import Endpointer
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+from services.voice.vad import SileroEndpointer
+
+VADS = ("silero", "webrtc")
 
 
 @dataclass(frozen=True)
 class SegmenterConfig:
+    vad: str = "silero"
+    """`silero` (`vad.SileroEndpointer`) or `webrtc` (pocketsphinx's `Endpointer`). In a stream where noise
+    never stops (a walking robot's servos, steady noise 10 dB under the voice) WebRTC's VAD stays in "speech"
+    until the 6 s cut and no command is heard (`bench/voice_walking.py`)."""
     window_s: float = 0.15
-    """Length of the VAD decision window. The end of an utterance is known about this long after the
+    """WebRTC: length of the VAD decision window (Silero: `end_frames` 30 ms frames of the same length). The end of an utterance is known about this long after the
     speech ends: 0.15 s (with ratio 0.8) gives ~120 ms end of speech -> segment on the held-out bench
     clips, none split in two; 0.3 s gave ~270 ms."""
     ratio: float = 0.8
-    """Fraction of the window that must be speech (or silence) to switch state."""
+    """WebRTC: fraction of the window that must be speech (or silence) to switch state."""
     vad_mode: int = 1
-    """Aggressiveness 0 (loose) .. 3 (strict)."""
+    """WebRTC: aggressiveness 0 (loose) .. 3 (strict)."""
     max_utterance_s: float = 6.0
     """An utterance is cut here even if speech goes on (a stuck VAD never blocks decoding)."""
     min_utterance_s: float = 0.15
@@ -44,10 +54,16 @@ class Segmenter:
     config: SegmenterConfig = field(default_factory=SegmenterConfig)
 
     def __post_init__(self) -> None:
-        self._ep = Endpointer(
-            window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,
-            sample_rate=SAMPLE_RATE,
-        )
+        self._ep: Any
+        if self.config.vad == "silero":
+            self._ep = SileroEndpointer(end_frames=max(1, round(self.config.window_s / 0.03)))
+        elif self.config.vad == "webrtc":
+            self._ep = Endpointer(
+                window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,
+                sample_rate=SAMPLE_RATE,
+            )
+        else:
+            raise ValueError(f"unknown VAD {self.config.vad!r}: one of {', '.join(VADS)}")
         self._frame = self._ep.frame_bytes
         self._pending = b""
         self._speech: list[bytes] = []

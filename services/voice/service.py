@@ -21,7 +21,9 @@ from schemas.messages import HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice.audio import AudioError
 from services.voice.engine import DEFAULT_ENGINE, Engine, EngineError, check_engine_name, make_engine
+from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
+from services.voice.vad import VadError, silero_model_path
 
 NAME = "voice"
 
@@ -36,6 +38,8 @@ class VoiceSettings:
     """Spotter head file; None: the enrolled head in the state folder if there is one, else the committed one."""
     walk_gate: str | None = None
     """Spotter walk gate (`engine_spotter.walk_gate_for`): a head file, `none`, or None for the default."""
+    vad: str = "silero"
+    """The live stream's voice activity detector (`segmenter.VADS`); files are always trimmed with WebRTC's."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -48,6 +52,7 @@ class VoiceSettings:
             lexicon=os.environ.get("HRI_VOICE_LEXICON") or None,
             head=os.environ.get("HRI_VOICE_HEAD") or None,
             walk_gate=os.environ.get("HRI_VOICE_WALK_GATE") or None,
+            vad=os.environ.get("HRI_VOICE_VAD") or "silero",
         )
 
 
@@ -55,6 +60,13 @@ def check_settings(settings: VoiceSettings) -> None:
     """Raise `EngineError` for configuration that can never work (so the service exits 2 at start);
     a missing device or model that may appear later is not checked here (it is retried)."""
     check_engine_name(settings.engine)
+    if settings.vad not in VADS:
+        raise EngineError(f"HRI_VOICE_VAD={settings.vad!r}: one of {', '.join(VADS)}")
+    if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
+        try:
+            silero_model_path()
+        except VadError as exc:
+            raise EngineError(str(exc)) from None
     if settings.lexicon:
         from services.voice.lexicon import Lexicon, LexiconError
 
@@ -95,7 +107,7 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
-    ctx.update_detail(source=settings.source, engine=settings.engine)
+    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
     listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
@@ -140,7 +152,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     while not ctx.stopping.is_set():
         try:
             spec = SourceSpec.parse(settings.source)
-            for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file):
+            for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
+                                  segmenter=SegmenterConfig(vad=settings.vad)):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)

@@ -8,7 +8,7 @@ import pytest
 
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
-from services.voice.segmenter import Segmenter
+from services.voice.segmenter import Segmenter, SegmenterConfig
 from services.voice.sources import SourceSpec, stream_utterances, utterances
 
 pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
@@ -31,9 +31,10 @@ def recording() -> tuple[bytes, list[float]]:
     return pcm, centres
 
 
-def test_segmenter_finds_each_utterance(recording: tuple[bytes, list[float]]) -> None:
+@pytest.mark.parametrize("vad", ["silero", "webrtc"])
+def test_segmenter_finds_each_utterance(recording: tuple[bytes, list[float]], vad: str) -> None:
     pcm, centres = recording
-    seg = Segmenter()
+    seg = Segmenter(SegmenterConfig(vad=vad))
     step = 4800  # 150 ms chunks, not a multiple of the VAD frame
     found = [s for i in range(0, len(pcm), step) for s in seg.feed(pcm[i : i + step])] + seg.flush()
     assert len(found) == len(WORDS), [(s.start_s, s.end_s) for s in found]

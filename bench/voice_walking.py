@@ -1,0 +1,208 @@
+"""A command said to a walking robot: the live stream path (VAD segmenter -> engine) in the robot's own
+noise (prints figures; not a test).
+
+The held-out bench (`voice_bench.py`) mixes random noise into each clip, then trims it: it never asks
+whether the service's voice activity detector still finds the end of a word while the servos whine and
+the feet land without pause. This bench does. Each held-out clip (clean renderings of `voice_bench`'s
+held-out split, all voice families, the same seed's cache) is placed 1.2 s into a stream of the walking
+robot's ego-noise (`ego_noise.py`: a model made from the motion service's gait, or `--noise-wav`, a
+recording of your own robot), scaled to a speech-to-noise ratio, followed by 1.5 s more of it, and fed to
+the service's `Segmenter` in 30 ms chunks; every segment it emits goes to the engine, as in the service.
+
+Per ratio: commands heard right (the segment that overlaps the word gives its command, accepted; for "go",
+at least the reasoner's `^min-confidence`), "stop" on its own (what a walking robot must hear), non-command
+words taken for a command, how many segments the stream gave and how long they were (a VAD stuck in "speech"
+cuts at `SegmenterConfig.max_utterance_s`, and the spotter refuses utterances over its limit), end of speech
+-> segment emitted, and commands heard in the noise alone (`--noise-only` seconds of it, no speech).
+
+    nice -n 10 .venv/bin/python bench/voice_walking.py                      # 20, 10, 5, 0 dB and quiet
+    .venv/bin/python bench/voice_walking.py --snr 10 --per-family 40 --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.ego_noise import EgoNoiseModel, ego_noise, mix  # noqa: E402
+from bench.voice_bench import OTHER, WORDS, Item, Policy, heldout_items, speech_end_s  # noqa: E402
+from schemas.messages import Command  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
+from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
+
+LEAD_S = 1.2
+TAIL_S = 1.5
+CHUNK = int(0.03 * SAMPLE_RATE) * 2
+
+
+def pick(items: list[Item], per_family: int, seed: int) -> list[Item]:
+    """Clean clips, commands and non-commands, up to `per_family` of each kind per family."""
+    rng = np.random.default_rng(seed)
+    out: list[Item] = []
+    for fam in sorted({it.family for it in items if it.family != "noise"}):
+        for is_cmd in (True, False):
+            pool = [it for it in items if it.family == fam and it.condition == "clean" and (it.label < OTHER) == is_cmd]
+            take = rng.permutation(len(pool))[:per_family]
+            out += [pool[i] for i in sorted(take)]
+    return out
+
+
+def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray | None) -> np.ndarray:
+    if recording is None:
+        return ego_noise(seconds, rng, EgoNoiseModel())
+    n = int(seconds * SAMPLE_RATE)
+    start = int(rng.integers(0, max(1, recording.size - n)))
+    x = np.resize(recording[start:], n)
+    return x / (np.sqrt(np.mean(x**2)) + 1e-12)
+
+
+def stream(engine: Engine, x: np.ndarray, vad: str) -> list[tuple[float, float, float, Command | None, float]]:
+    """Feed `x` (float, ±1) to a fresh segmenter with `vad` in 30 ms chunks: (emitted at s, start s, end s,
+    command, confidence) per segment."""
+    pcm = to_pcm(x)
+    seg = Segmenter(SegmenterConfig(vad=vad))
+    out = []
+    for k in range(0, len(pcm), CHUNK):
+        for s in seg.feed(pcm[k : k + CHUNK]):
+            rec = engine.recognise(s.pcm)
+            out.append(((k + CHUNK) / 2 / SAMPLE_RATE, s.start_s, s.end_s, rec.command, rec.confidence))
+    for s in seg.flush():
+        rec = engine.recognise(s.pcm)
+        out.append((len(pcm) / 2 / SAMPLE_RATE, s.start_s, s.end_s, rec.command, rec.confidence))
+    return out
+
+
+def run_ratio(engine: Engine, clips: list[Item], snr: float | None, vad: str, policy: Policy, seed: int,
+              recording: np.ndarray | None) -> dict[str, object]:
+    rng = np.random.default_rng(seed)
+    heard = Counter()
+    total = Counter()
+    oov_taken = 0
+    oov = 0
+    lengths: list[float] = []
+    latency: list[float] = []
+    missed_segment = 0
+    errors: Counter[str] = Counter()
+    for it in clips:
+        speech = np.frombuffer(it.pcm, "<i2") / 32768.0
+        at = int(LEAD_S * SAMPLE_RATE)
+        seconds = LEAD_S + speech.size / SAMPLE_RATE + TAIL_S
+        if snr is None:  # quiet, as voice_bench's stream latency: a faint hiss
+            x = np.zeros(int(seconds * SAMPLE_RATE)) + rng.normal(0, 3e-4, int(seconds * SAMPLE_RATE))
+            x[at : at + speech.size] += speech
+        else:
+            x = mix(speech, noise_source(seconds, rng, recording), snr, at)
+        x = np.clip(x, -1.0, 1.0)
+        word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
+        segs = stream(engine, x, vad)
+        lengths += [end - start for _, start, end, _, _ in segs]
+        over = [s for s in segs if s[1] < word_end and s[2] > word_start]
+        if not over:
+            missed_segment += 1
+        got = next(((cmd, conf, emit) for emit, _, _, cmd, conf in over if cmd is not None), (None, 0.0, None))
+        cmd, conf, emit = got
+        if it.label < OTHER:
+            word = WORDS[it.label]
+            total[word] += 1
+            ok = cmd is not None and cmd.value == word and conf >= policy.min_confidence
+            heard[word] += ok
+            if ok and emit is not None:
+                latency.append(emit - (word_start + speech_end_s(it.pcm)))
+            if not ok:
+                errors[f"{word}->{cmd.value if cmd else 'none'}"] += 1
+        else:
+            oov += 1
+            oov_taken += cmd is not None and conf >= policy.min_confidence
+    commands = sum(total.values())
+    lat = np.array(latency) * 1000 if latency else np.zeros(1)
+    return {
+        "vad": vad,
+        "snr_db": "quiet" if snr is None else snr,
+        "command_accuracy": round(sum(heard.values()) / max(1, commands), 3),
+        "stop": f"{heard['stop']}/{total['stop']}",
+        "by_command": {w: round(heard[w] / max(1, total[w]), 2) for w in WORDS},
+        "oov_accepted": round(oov_taken / max(1, oov), 3),
+        "no_segment_over_word": missed_segment,
+        "segments_per_clip": round(len(lengths) / max(1, len(clips)), 2),
+        "segment_s_p50_p90_max": [round(float(np.percentile(lengths, q)), 2) for q in (50, 90, 100)] if lengths else [],
+        "end_of_speech_to_segment_ms_p50_p90": [round(float(np.percentile(lat, q)), 1) for q in (50, 90)],
+        "top_errors": dict(errors.most_common(6)),
+        "n": {"commands": commands, "oov": oov},
+    }
+
+
+def speech_power(clips: list[Item]) -> float:
+    """The median power of the commands' active speech (as `mix` measures it)."""
+    powers = []
+    for it in clips:
+        x = np.frombuffer(it.pcm, "<i2") / 32768.0
+        active = x[np.abs(x) > 0.05 * np.max(np.abs(x))]
+        powers.append(float(np.mean(active**2)))
+    return float(np.median(powers))
+
+
+def noise_only(engine: Engine, seconds: float, level_rms: float, vad: str, policy: Policy, seed: int,
+               recording: np.ndarray | None) -> dict[str, object]:
+    """The walking noise alone at `level_rms`, no one speaking: what the robot hears in it."""
+    rng = np.random.default_rng(seed + 1)
+    x = noise_source(seconds, rng, recording) * level_rms
+    segs = stream(engine, x, vad)
+    heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and conf >= policy.min_confidence)
+    return {"vad": vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
+            "segment_s_max": round(max((e - s for _, s, e, _, _ in segs), default=0.0), 2)}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--engine", default="spotter")
+    ap.add_argument("--seed", type=int, default=1, help="voice_bench's held-out seed (its rendered clips are reused)")
+    ap.add_argument("--snr", default="20,10,5,0", help="speech-to-ego-noise ratios, dB (quiet is always run)")
+    ap.add_argument("--per-family", type=int, default=14, help="clean commands and as many non-commands per family")
+    ap.add_argument("--noise-only", type=float, default=60.0, help="seconds of walking noise alone")
+    ap.add_argument("--noise-only-snr", type=float, default=10.0,
+                    help="its level: this far (dB) below the median command's speech")
+    ap.add_argument("--noise-wav", type=Path, help="a recording of your robot walking (16 kHz mono WAV) instead of the model")
+    ap.add_argument("--vad", default="webrtc,silero", help="the segmenter's VADs to compare")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    policy = Policy.from_knowledge()
+    recording = read_wav(args.noise_wav) if args.noise_wav else None
+    rec = np.frombuffer(recording, "<i2") / 32768.0 if recording is not None else None
+    clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
+    engine = make_engine(args.engine)
+    rows: list[dict[str, object]] = []
+    alone: list[dict[str, object]] = []
+    level = np.sqrt(speech_power([c for c in clips if c.label < OTHER]) / 10 ** (args.noise_only_snr / 10))
+    for vad in args.vad.split(","):
+        for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
+            row = run_ratio(engine, clips, snr, vad, policy, args.seed, rec)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+        alone.append(noise_only(engine, args.noise_only, float(level), vad, policy, args.seed, rec))
+        print(json.dumps({"noise_only": alone[-1]}), flush=True)
+    print()
+    print(f"{'VAD':7} {'SNR dB':>6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'no seg':>6} {'seg/clip':>8} {'seg s p90':>9} {'EoS->seg p50':>12}")
+    for r in rows:
+        print(f"{r['vad']:7} {r['snr_db']!s:>6} {r['command_accuracy']:7.3f} {r['stop']:>7} {r['oov_accepted']:7.3f} "
+              f"{r['no_segment_over_word']:6d} {r['segments_per_clip']:8.2f} {r['segment_s_p50_p90_max'][1]:9.2f} "
+              f"{r['end_of_speech_to_segment_ms_p50_p90'][0]:12.1f}")
+    for q in alone:
+        print(f"{q['vad']:7} walking noise alone, {q['seconds']:.0f} s, {args.noise_only_snr:.0f} dB under the median command: "
+              f"{q['segments']} segments (longest {q['segment_s_max']} s), commands heard: {q['commands_heard'] or 'none'}")
+    if args.json:
+        args.json.write_text(json.dumps({"ratios": rows, "noise_only": alone}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
