@@ -18,13 +18,13 @@ quiet frames that end it are not speech. These were set before any measurement, 
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+from services.voice.spotter.features import FeatureError, model_dir
 
 FRAME_SAMPLES = 480
 """30 ms at 16 kHz, as the Endpointer's frames."""
@@ -36,14 +36,10 @@ class VadError(RuntimeError):
 
 def silero_model_path() -> Path:
     """The Silero VAD model inside the installed openwakeword package."""
-    found = importlib.util.find_spec("openwakeword")
-    if found is None or not found.submodule_search_locations:
-        raise VadError("the Silero VAD model ships in the openwakeword package: pip install openwakeword==0.4.0 "
-                       "(or set HRI_VOICE_VAD=webrtc)")
-    path = Path(next(iter(found.submodule_search_locations))) / "resources" / "models" / "silero_vad.onnx"
-    if not path.is_file():
-        raise VadError(f"{path}: no Silero VAD model in this openwakeword install (or set HRI_VOICE_VAD=webrtc)")
-    return path
+    try:
+        return model_dir(("silero_vad.onnx",)) / "silero_vad.onnx"
+    except FeatureError as exc:
+        raise VadError(f"{exc} (or set HRI_VOICE_VAD=webrtc)") from None
 
 
 class SileroVad:

@@ -36,13 +36,14 @@ class FeatureError(RuntimeError):
     """The embedding models (openwakeword 0.4.0 wheel) or onnxruntime are missing."""
 
 
-def model_dir() -> Path:
+def model_dir(names: tuple[str, ...] = ("melspectrogram.onnx", "embedding_model.onnx")) -> Path:
+    """The openwakeword 0.4.0 wheel's model folder, checked to hold `names` (FeatureError otherwise)."""
     spec = importlib.util.find_spec("openwakeword")
     if spec is None or not spec.submodule_search_locations:
         raise FeatureError("the openwakeword==0.4.0 package (which ships the embedding models) is not installed: "
                            "pip install 'openwakeword==0.4.0'")
     path = Path(next(iter(spec.submodule_search_locations))) / "resources" / "models"
-    for name in ("melspectrogram.onnx", "embedding_model.onnx"):
+    for name in names:
         if not (path / name).is_file():
             raise FeatureError(f"{path / name} is missing: openwakeword 0.4.0 ships it; newer versions download it")
     return path
