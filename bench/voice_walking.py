@@ -164,6 +164,7 @@ def noise_only(engine: Engine, seconds: float, level_rms: float, vad: str, polic
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engine", default="spotter")
+    ap.add_argument("--head", help="spotter head file (default: the committed default head)")
     ap.add_argument("--seed", type=int, default=1, help="voice_bench's held-out seed (its rendered clips are reused)")
     ap.add_argument("--snr", default="20,10,5,0", help="speech-to-ego-noise ratios, dB (quiet is always run)")
     ap.add_argument("--per-family", type=int, default=14, help="clean commands and as many non-commands per family")
@@ -179,7 +180,7 @@ def main() -> int:
     recording = read_wav(args.noise_wav) if args.noise_wav else None
     rec = np.frombuffer(recording, "<i2") / 32768.0 if recording is not None else None
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
-    engine = make_engine(args.engine)
+    engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
     rows: list[dict[str, object]] = []
     alone: list[dict[str, object]] = []
     level = np.sqrt(speech_power([c for c in clips if c.label < OTHER]) / 10 ** (args.noise_only_snr / 10))
