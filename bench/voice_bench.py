@@ -286,7 +286,8 @@ def speech_end_s(pcm: bytes, floor_db: float = 30.0) -> float:
     return float((loud[-1] + 1) * 160 / SAMPLE_RATE) if loud.size else len(pcm) / 2 / SAMPLE_RATE
 
 
-def stream_latency(engine: Engine, items: list[Item], n: int = 40, vad: str = SegmenterConfig.vad) -> dict[str, float]:
+def stream_latency(engine: Engine, items: list[Item], n: int = 40,
+                   config: SegmenterConfig | None = None) -> dict[str, float]:
     """End of speech -> command, on a stream: each clip in quiet noise, fed in 30 ms chunks to the
     service's VAD segmenter; latency = audio time at which the segment is emitted - the clip's speech end
     (`speech_end_s`), plus decoding time."""
@@ -299,7 +300,7 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40, vad: str = Se
         x = x + rng.normal(0, 3e-4, x.size)
         speech_end = lead.size / SAMPLE_RATE + speech_end_s(it.pcm)
         pcm = to_pcm(x)
-        seg = Segmenter(SegmenterConfig(vad=vad))
+        seg = Segmenter(config or SegmenterConfig())
         step = int(0.03 * SAMPLE_RATE) * 2
         for k in range(0, len(pcm), step):
             found = seg.feed(pcm[k : k + step])
@@ -382,7 +383,7 @@ def main() -> int:
             if s.family == "ALL":
                 row.update(extra)
                 row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA],
-                                                       vad=args.vad)
+                                                       config=SegmenterConfig(vad=args.vad))
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:
