@@ -65,11 +65,11 @@ def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray
     return x / (np.sqrt(np.mean(x**2)) + 1e-12)
 
 
-def stream(engine: Engine, x: np.ndarray, vad: str) -> list[tuple[float, float, float, Command | None, float]]:
-    """Feed `x` (float, ±1) to a fresh segmenter with `vad` in 30 ms chunks: (emitted at s, start s, end s,
-    command, confidence) per segment."""
+def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple[float, float, float, Command | None, float]]:
+    """Feed `x` (float, ±1) to a fresh segmenter in 30 ms chunks: (emitted at s, start s, end s, command,
+    confidence) per segment."""
     pcm = to_pcm(x)
-    seg = Segmenter(SegmenterConfig(vad=vad))
+    seg = Segmenter(config)
     out = []
     for k in range(0, len(pcm), CHUNK):
         for s in seg.feed(pcm[k : k + CHUNK]):
@@ -81,7 +81,7 @@ def stream(engine: Engine, x: np.ndarray, vad: str) -> list[tuple[float, float, 
     return out
 
 
-def run_ratio(engine: Engine, clips: list[Item], snr: float | None, vad: str, policy: Policy, seed: int,
+def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: SegmenterConfig, policy: Policy, seed: int,
               recording: np.ndarray | None) -> dict[str, object]:
     rng = np.random.default_rng(seed)
     heard = Counter()
@@ -103,7 +103,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, vad: str, po
             x = mix(speech, noise_source(seconds, rng, recording), snr, at)
         x = np.clip(x, -1.0, 1.0)
         word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
-        segs = stream(engine, x, vad)
+        segs = stream(engine, x, config)
         lengths += [end - start for _, start, end, _, _ in segs]
         over = [s for s in segs if s[1] < word_end and s[2] > word_start]
         if not over:
@@ -125,7 +125,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, vad: str, po
     commands = sum(total.values())
     lat = np.array(latency) * 1000 if latency else np.zeros(1)
     return {
-        "vad": vad,
+        "vad": config.vad,
         "snr_db": "quiet" if snr is None else snr,
         "command_accuracy": round(sum(heard.values()) / max(1, commands), 3),
         "stop": f"{heard['stop']}/{total['stop']}",
@@ -150,14 +150,14 @@ def speech_power(clips: list[Item]) -> float:
     return float(np.median(powers))
 
 
-def noise_only(engine: Engine, seconds: float, level_rms: float, vad: str, policy: Policy, seed: int,
+def noise_only(engine: Engine, seconds: float, level_rms: float, config: SegmenterConfig, policy: Policy, seed: int,
                recording: np.ndarray | None) -> dict[str, object]:
     """The walking noise alone at `level_rms`, no one speaking: what the robot hears in it."""
     rng = np.random.default_rng(seed + 1)
     x = noise_source(seconds, rng, recording) * level_rms
-    segs = stream(engine, x, vad)
+    segs = stream(engine, x, config)
     heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and conf >= policy.min_confidence)
-    return {"vad": vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
+    return {"vad": config.vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
             "segment_s_max": round(max((e - s for _, s, e, _, _ in segs), default=0.0), 2)}
 
 
@@ -173,6 +173,8 @@ def main() -> int:
                     help="its level: this far (dB) below the median command's speech")
     ap.add_argument("--noise-wav", type=Path, help="a recording of your robot walking (16 kHz mono WAV) instead of the model")
     ap.add_argument("--vad", default="webrtc,silero", help="the segmenter's VADs to compare")
+    ap.add_argument("--silero-threshold", type=float, default=SegmenterConfig.threshold,
+                    help="Silero's speech threshold (SegmenterConfig.threshold)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -185,11 +187,12 @@ def main() -> int:
     alone: list[dict[str, object]] = []
     level = np.sqrt(speech_power([c for c in clips if c.label < OTHER]) / 10 ** (args.noise_only_snr / 10))
     for vad in args.vad.split(","):
+        config = SegmenterConfig(vad=vad, threshold=args.silero_threshold)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
-            row = run_ratio(engine, clips, snr, vad, policy, args.seed, rec)
+            row = run_ratio(engine, clips, snr, config, policy, args.seed, rec)
             rows.append(row)
             print(json.dumps(row), flush=True)
-        alone.append(noise_only(engine, args.noise_only, float(level), vad, policy, args.seed, rec))
+        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, rec))
         print(json.dumps({"noise_only": alone[-1]}), flush=True)
     print()
     print(f"{'VAD':7} {'SNR dB':>6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'no seg':>6} {'seg/clip':>8} {'seg s p90':>9} {'EoS->seg p50':>12}")

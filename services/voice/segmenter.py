@@ -21,6 +21,9 @@ class SegmenterConfig:
     """`silero` (`vad.SileroEndpointer`) or `webrtc` (pocketsphinx's `Endpointer`). In a stream where noise
     never stops (a walking robot's servos, steady noise 10 dB under the voice) WebRTC's VAD stays in "speech"
     until the 6 s cut and no command is heard (`bench/voice_walking.py`)."""
+    threshold: float = 0.5
+    """Silero: speech probability that starts an utterance (it ends below `threshold - 0.15`); 0.5 is Silero's
+    documented default."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""
@@ -60,7 +63,8 @@ class Segmenter:
     def __post_init__(self) -> None:
         self._ep: Any
         if self.config.vad == "silero":
-            self._ep = SileroEndpointer(end_frames=max(1, round(self.config.quiet_s / 0.03)))
+            self._ep = SileroEndpointer(threshold=self.config.threshold,
+                                        end_frames=max(1, round(self.config.quiet_s / 0.03)))
         elif self.config.vad == "webrtc":
             self._ep = Endpointer(
                 window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,
