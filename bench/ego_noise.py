@@ -135,11 +135,15 @@ def ego_noise(seconds: float, rng: np.random.Generator, model: EgoNoiseModel | N
     return _unit(out)
 
 
+def active_power(speech: np.ndarray) -> float:
+    """Mean power of the speech's active part (samples above 5 % of its peak), float ±1 full scale."""
+    active = speech[np.abs(speech) > 0.05 * np.max(np.abs(speech))]
+    return float(np.mean(active**2)) if active.size else float(np.mean(speech**2))
+
+
 def mix(speech: np.ndarray, ego: np.ndarray, snr_db: float, at: int) -> np.ndarray:
     """`ego` (unit RMS) scaled so that the speech's active part is `snr_db` above it, with `speech` (float,
     ±1 full scale) added from sample `at`."""
-    active = speech[np.abs(speech) > 0.05 * np.max(np.abs(speech))]
-    power = float(np.mean(active**2)) if active.size else float(np.mean(speech**2))
-    out = ego * np.sqrt(power / 10 ** (snr_db / 10))
+    out = ego * np.sqrt(active_power(speech) / 10 ** (snr_db / 10))
     out[at : at + speech.size] += speech[: out.size - at]
     return out

@@ -32,7 +32,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.ego_noise import EgoNoiseModel, ego_noise, mix  # noqa: E402
+from bench.ego_noise import EgoNoiseModel, active_power, ego_noise, mix  # noqa: E402
 from bench.voice_bench import OTHER, WORDS, Item, Policy, heldout_items, speech_end_s  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
@@ -142,12 +142,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
 
 def speech_power(clips: list[Item]) -> float:
     """The median power of the commands' active speech (as `mix` measures it)."""
-    powers = []
-    for it in clips:
-        x = np.frombuffer(it.pcm, "<i2") / 32768.0
-        active = x[np.abs(x) > 0.05 * np.max(np.abs(x))]
-        powers.append(float(np.mean(active**2)))
-    return float(np.median(powers))
+    return float(np.median([active_power(np.frombuffer(it.pcm, "<i2") / 32768.0) for it in clips]))
 
 
 def noise_only(engine: Engine, seconds: float, level_rms: float, config: SegmenterConfig, policy: Policy, seed: int,

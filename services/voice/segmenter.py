@@ -10,7 +10,7 @@ from typing import Any
 from pocketsphinx import Endpointer
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
-from services.voice.vad import SileroEndpointer
+from services.voice.vad import FRAME_SAMPLES, SileroEndpointer
 
 VADS = ("silero", "webrtc")
 
@@ -64,7 +64,7 @@ class Segmenter:
         self._ep: Any
         if self.config.vad == "silero":
             self._ep = SileroEndpointer(threshold=self.config.threshold,
-                                        end_frames=max(1, round(self.config.quiet_s / 0.03)))
+                                        end_frames=max(1, round(self.config.quiet_s * SAMPLE_RATE / FRAME_SAMPLES)))
         elif self.config.vad == "webrtc":
             self._ep = Endpointer(
                 window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,

@@ -6,7 +6,7 @@ sound speech. In a stream where noise never stops - a walking robot's own servos
 utterance runs to the 6 s cut, and the spotter refuses it as too long: no command is heard at all, "stop"
 included. Silero VAD was trained on speech in many real noises; it ends the word where the voice ends.
 
-The model is the one the openwakeword 0.4.0 wheel ships (`resources/models/silero_vad.onnx`, 1.7 MB;
+The model is the one the openwakeword 0.4.0 wheel ships (`resources/models/silero_vad.onnx`, 1.8 MB;
 openwakeword is already a dependency for the speech embedding): 30 ms frames of 16 kHz audio, an LSTM
 state carried from frame to frame, one speech probability per frame, about 0.15 ms a frame on one core.
 

@@ -101,3 +101,12 @@ def test_unknown_vad_setting_exits_2_naming_the_variable() -> None:
                          env={**os.environ, "HRI_VOICE_VAD": "energy", "HRI_VOICE_SOURCE": "stdin"})
     assert out.returncode == 2
     assert out.stderr.strip().count("\n") == 0 and "HRI_VOICE_VAD='energy'" in out.stderr and "silero" in out.stderr
+
+
+def test_walking_bench_plays_a_users_recording_at_unit_rms() -> None:
+    from bench.voice_walking import noise_source
+
+    recording = np.sin(np.arange(8000) / 10.0)  # shorter than asked: repeated
+    x = noise_source(1.5, np.random.default_rng(0), recording)
+    assert x.size == int(1.5 * SAMPLE_RATE)
+    assert np.sqrt(np.mean(x**2)) == pytest.approx(1.0)
