@@ -79,6 +79,7 @@ def test_the_voice_engine_is_the_services_own_default_unless_set() -> None:
     """No pinned engine: the scenarios expect what the voice service recognises by default."""
     environment = COMPOSE["services"]["voice"]["environment"]
     assert "HRI_VOICE_ENGINE" in environment and environment["HRI_VOICE_ENGINE"] is None  # passed through
+    assert "HRI_VOICE_VAD" in environment and environment["HRI_VOICE_VAD"] is None  # so is the microphone's VAD
 
 
 def test_devices_are_mapped_where_needed_with_simulation_default() -> None:
