@@ -6,7 +6,8 @@ whether the service's voice activity detector still finds the end of a word whil
 the feet land without pause. This bench does. Each held-out clip (clean renderings of `voice_bench`'s
 held-out split, all voice families, the same seed's cache) is placed 1.2 s into a stream of the walking
 robot's ego-noise (`ego_noise.py`: a model made from the motion service's gait, or `--noise-wav`, a
-recording of your own robot), scaled to a speech-to-noise ratio, followed by 1.5 s more of it, and fed to
+recording of your own robot; `--standing`: the robot standing still, only its fan and the servos' holding
+hiss), scaled to a speech-to-noise ratio, followed by 1.5 s more of it, and fed to
 the service's `Segmenter` in 30 ms chunks; every segment it emits goes to the engine, as in the service.
 
 Per ratio: commands heard right (the segment that overlaps the word gives its command, accepted; for "go",
@@ -17,6 +18,7 @@ cuts at `SegmenterConfig.max_utterance_s`, and the spotter refuses utterances ov
 
     nice -n 10 .venv/bin/python bench/voice_walking.py                      # 20, 10, 5, 0 dB and quiet
     .venv/bin/python bench/voice_walking.py --snr 10 --per-family 40 --json out.json
+    .venv/bin/python bench/voice_walking.py --standing                     # the robot standing still
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import argparse
 import json
 import sys
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -56,9 +59,11 @@ def pick(items: list[Item], per_family: int, seed: int) -> list[Item]:
     return out
 
 
-def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray | None) -> np.ndarray:
+def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray | None,
+                 model: EgoNoiseModel | None = None) -> np.ndarray:
+    """`seconds` of the robot's noise at unit RMS: the model's (walking by default), or a stretch of `recording`."""
     if recording is None:
-        return ego_noise(seconds, rng, EgoNoiseModel())
+        return ego_noise(seconds, rng, model or EgoNoiseModel())
     n = int(seconds * SAMPLE_RATE)
     start = int(rng.integers(0, max(1, recording.size - n)))
     x = np.resize(recording[start:], n)
@@ -81,8 +86,12 @@ def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple
     return out
 
 
+Noise = Callable[[float, np.random.Generator], np.ndarray]
+"""Seconds -> the robot's noise at unit RMS (`noise_source` with its model or recording)."""
+
+
 def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: SegmenterConfig, policy: Policy, seed: int,
-              recording: np.ndarray | None) -> dict[str, object]:
+              noise: Noise) -> dict[str, object]:
     rng = np.random.default_rng(seed)
     heard = Counter()
     total = Counter()
@@ -100,7 +109,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
             x = np.zeros(int(seconds * SAMPLE_RATE)) + rng.normal(0, 3e-4, int(seconds * SAMPLE_RATE))
             x[at : at + speech.size] += speech
         else:
-            x = mix(speech, noise_source(seconds, rng, recording), snr, at)
+            x = mix(speech, noise(seconds, rng), snr, at)
         x = np.clip(x, -1.0, 1.0)
         word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
         segs = stream(engine, x, config)
@@ -146,10 +155,10 @@ def speech_power(clips: list[Item]) -> float:
 
 
 def noise_only(engine: Engine, seconds: float, level_rms: float, config: SegmenterConfig, policy: Policy, seed: int,
-               recording: np.ndarray | None) -> dict[str, object]:
-    """The walking noise alone at `level_rms`, no one speaking: what the robot hears in it."""
+               noise: Noise) -> dict[str, object]:
+    """The robot's noise alone at `level_rms`, no one speaking: what the robot hears in it."""
     rng = np.random.default_rng(seed + 1)
-    x = noise_source(seconds, rng, recording) * level_rms
+    x = noise(seconds, rng) * level_rms
     segs = stream(engine, x, config)
     heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and conf >= policy.min_confidence)
     return {"vad": config.vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
@@ -163,9 +172,11 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=1, help="voice_bench's held-out seed (its rendered clips are reused)")
     ap.add_argument("--snr", default="20,10,5,0", help="speech-to-ego-noise ratios, dB (quiet is always run)")
     ap.add_argument("--per-family", type=int, default=14, help="clean commands and as many non-commands per family")
-    ap.add_argument("--noise-only", type=float, default=60.0, help="seconds of walking noise alone")
+    ap.add_argument("--noise-only", type=float, default=60.0, help="seconds of the robot's noise alone")
     ap.add_argument("--noise-only-snr", type=float, default=10.0,
                     help="its level: this far (dB) below the median command's speech")
+    ap.add_argument("--standing", action="store_true",
+                    help="the robot standing still (its fan and the servos' holding hiss) instead of walking")
     ap.add_argument("--noise-wav", type=Path, help="a recording of your robot walking (16 kHz mono WAV) instead of the model")
     ap.add_argument("--vad", default="webrtc,silero", help="the segmenter's VADs to compare")
     ap.add_argument("--silero-threshold", type=float, default=SegmenterConfig.threshold,
@@ -176,6 +187,11 @@ def main() -> int:
     policy = Policy.from_knowledge()
     recording = read_wav(args.noise_wav) if args.noise_wav else None
     rec = np.frombuffer(recording, "<i2") / 32768.0 if recording is not None else None
+    model = EgoNoiseModel(walking=not args.standing)
+
+    def noise(seconds: float, rng: np.random.Generator) -> np.ndarray:
+        return noise_source(seconds, rng, rec, model)
+
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
     rows: list[dict[str, object]] = []
@@ -184,10 +200,10 @@ def main() -> int:
     for vad in args.vad.split(","):
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
-            row = run_ratio(engine, clips, snr, config, policy, args.seed, rec)
+            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise)
             rows.append(row)
             print(json.dumps(row), flush=True)
-        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, rec))
+        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise))
         print(json.dumps({"noise_only": alone[-1]}), flush=True)
     print()
     print(f"{'VAD':7} {'SNR dB':>6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'no seg':>6} {'seg/clip':>8} {'seg s p90':>9} {'EoS->seg p50':>12}")
@@ -196,7 +212,7 @@ def main() -> int:
               f"{r['no_segment_over_word']:6d} {r['segments_per_clip']:8.2f} {r['segment_s_p50_p90_max'][1]:9.2f} "
               f"{r['end_of_speech_to_segment_ms_p50_p90'][0]:12.1f}")
     for q in alone:
-        print(f"{q['vad']:7} walking noise alone, {q['seconds']:.0f} s, {args.noise_only_snr:.0f} dB under the median command: "
+        print(f"{q['vad']:7} {'standing' if args.standing else 'walking'} noise alone, {q['seconds']:.0f} s, {args.noise_only_snr:.0f} dB under the median command: "
               f"{q['segments']} segments (longest {q['segment_s_max']} s), commands heard: {q['commands_heard'] or 'none'}")
     if args.json:
         args.json.write_text(json.dumps({"ratios": rows, "noise_only": alone}, indent=1))
