@@ -89,7 +89,7 @@ def _add(out: np.ndarray, at: int, x: np.ndarray) -> None:
         out[at : at + seg.size] += seg
 
 
-def _unit(x: np.ndarray) -> np.ndarray:
+def unit_rms(x: np.ndarray) -> np.ndarray:
     return x / (np.sqrt(np.mean(x**2)) + 1e-12)
 
 
@@ -101,7 +101,7 @@ def ego_noise(seconds: float, rng: np.random.Generator, model: EgoNoiseModel | N
     t = np.arange(n) / SAMPLE_RATE
     out = np.zeros(n)
     hiss = sosfilt(butter(2, [100.0, 7000.0], btype="bandpass", fs=SAMPLE_RATE, output="sos"), noise("pink", n, rng))
-    out += m.hiss * _unit(hiss)
+    out += m.hiss * unit_rms(hiss)
     fan = np.sin(2 * np.pi * m.fan_hz * t + rng.uniform(0, 2 * np.pi))
     out += m.fan_hum * np.sqrt(2) * (fan + 0.3 * np.sin(4 * np.pi * m.fan_hz * t))
     if m.walking:
@@ -115,24 +115,24 @@ def ego_noise(seconds: float, rng: np.random.Generator, model: EgoNoiseModel | N
             v = np.interp(t, ticks, speeds[:, j])
             if v.max() < 1.0:  # a joint the gait holds still (the head, the elbows)
                 continue
+            motor_hz = v * GEAR_RATIO / 360.0
             wander = 1.0 + m.jitter * np.cumsum(rng.normal(size=n)) / np.sqrt(SAMPLE_RATE)
-            phase = 2 * np.pi * np.cumsum(v * GEAR_RATIO / 360.0 * wander) / SAMPLE_RATE
+            phase = 2 * np.pi * np.cumsum(motor_hz * wander) / SAMPLE_RATE
             level = (v / top) ** m.speed_exponent
             for order, amp in MESH_ORDERS:
-                f = order * v * GEAR_RATIO / 360.0
-                audible = f < 0.45 * SAMPLE_RATE
+                audible = order * motor_hz < 0.45 * SAMPLE_RATE
                 whine += audible * amp * level * np.sin(order * phase + rng.uniform(0, 2 * np.pi))
-            reversals = np.flatnonzero(np.diff(np.sign(np.gradient(np.interp(t[::160], ticks, speeds[:, j])))) > 0)
+            reversals = np.flatnonzero(np.diff(np.sign(np.gradient(v[::160]))) > 0)
             for r in reversals:  # speed passes a minimum: the joint turns round and takes up its backlash
                 if v[r * 160] < 5.0:
                     _add(out, r * 160, m.backlash * _burst(16, 0.001, (1500.0, 6000.0), rng))
-        out += m.whine * _unit(whine)
+        out += m.whine * unit_rms(whine)
         for land in landings - offset:
             at = int(land * SAMPLE_RATE)
             gain = 10 ** (rng.uniform(-3, 3) / 20)
             _add(out, at, m.footfall * gain * _burst(int(0.08 * SAMPLE_RATE), 0.015, (0.0, 600.0), rng))
             _add(out, at, 0.5 * m.footfall * gain * _burst(int(0.01 * SAMPLE_RATE), 0.002, (2000.0, 6000.0), rng))
-    return _unit(out)
+    return unit_rms(out)
 
 
 def active_power(speech: np.ndarray) -> float:

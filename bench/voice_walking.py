@@ -35,7 +35,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.ego_noise import EgoNoiseModel, active_power, ego_noise, mix  # noqa: E402
+from bench.ego_noise import EgoNoiseModel, active_power, ego_noise, mix, unit_rms  # noqa: E402
 from bench.voice_bench import OTHER, WORDS, Item, Policy, heldout_items, speech_end_s  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
@@ -66,8 +66,7 @@ def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray
         return ego_noise(seconds, rng, model or EgoNoiseModel())
     n = int(seconds * SAMPLE_RATE)
     start = int(rng.integers(0, max(1, recording.size - n)))
-    x = np.resize(recording[start:], n)
-    return x / (np.sqrt(np.mean(x**2)) + 1e-12)
+    return unit_rms(np.resize(recording[start:], n))
 
 
 def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple[float, float, float, Command | None, float]]:
@@ -185,12 +184,11 @@ def main() -> int:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     policy = Policy.from_knowledge()
-    recording = read_wav(args.noise_wav) if args.noise_wav else None
-    rec = np.frombuffer(recording, "<i2") / 32768.0 if recording is not None else None
+    recording = np.frombuffer(read_wav(args.noise_wav), "<i2") / 32768.0 if args.noise_wav else None
     model = EgoNoiseModel(walking=not args.standing)
 
     def noise(seconds: float, rng: np.random.Generator) -> np.ndarray:
-        return noise_source(seconds, rng, rec, model)
+        return noise_source(seconds, rng, recording, model)
 
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
