@@ -2,6 +2,7 @@
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
+                                       [--proposals PEAK]   (0.3; 0: the recipe before round vision18b)
                                        [--printed SHARE] [--hands SHARE] [--levels PYRAMID]
                                        (recipe variants, off by default)
 
@@ -9,8 +10,10 @@ Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
 words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
 shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
-shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; its
-label is the true mark's class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each
+shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape, and
+(since round vision18b) every proposal of the committed proposer (`proposer.py`), cropped as the detector
+crops it and also with no claimed shape: the verifier judges proposals in service, and must have seen
+the clutter they fall on (crossing cables, square outlines); its label is the true mark's class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each
 candidate is its three crops (`verifier.crops`) and its claim (`verifier.claim`).
 
 The model (`Net`) is a small convolutional network trained with PyTorch (fixed seed, one thread, the
@@ -33,7 +36,8 @@ import numpy as np
 import typer
 
 from schemas.messages import Shape
-from services.vision.detector import DetectorConfig, MarkDetector, parse_levels
+from services.vision.detector import Candidate, DetectorConfig, MarkDetector, parse_levels, to_gray
+from services.vision.proposer import Proposer
 from services.vision.printed import print_words, typefaces
 from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 from services.vision.verifier import CLASSES, INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, SHAPES, Verifier
@@ -77,7 +81,7 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 
 def harvest(
-    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = ""
+    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -85,13 +89,16 @@ def harvest(
     (`printed.print_words`) on the scene's background, clear of the mark, before the card is drawn
     over it and the camera's light, blur, noise and JPEG act on all of it; a share `hands` of the cards
     with fingers have people's variety of fingers (`Variation.hand_variety`); `levels` is the pyramid
-    the candidates come from ("1:31,2:31,4:31,6:31", `detector.parse_levels`; "": `HARVEST`'s)."""
+    the candidates come from ("1:31,2:31,4:31,6:31", `detector.parse_levels`; "": `HARVEST`'s); with
+    `proposals` > 0, every proposal of the committed proposer (`proposer.py`) with a peak of at least
+    that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`)."""
     import cv2
 
     cv2.setNumThreads(1)
     variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands)
     gen = SceneGenerator(seed=seed, variation=variation)
     det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
+    proposer = Proposer.load() if proposals > 0 else None
     words_rng = np.random.default_rng([seed, PRINTED_STREAM])
     faces = typefaces() if printed > 0 else []
     images: list[np.ndarray] = []
@@ -105,7 +112,13 @@ def harvest(
             mark = (int(cx - half), int(cy - half), int(scene.size), int(scene.size))
             scene.background = print_words(scene.background, words_rng, faces, avoid=[mark], blur=False)
         img, truth = gen.render(scene)
-        for c in det.candidates(img):
+        found = det.candidates(img)
+        if proposer is not None:
+            gray = to_gray(img)
+            found += [
+                Candidate(None, p.box, det.proposal_crops(gray, p.box)) for p in proposer.propose(gray, proposals)
+            ]
+        for c in found:
             label: Shape | None = None
             for t in truth:
                 if iou(c.box, t.box) >= IOU:
@@ -130,21 +143,23 @@ def harvest_all(
     printed: float = 0.0,
     hands: float = 0.0,
     levels: str = "",
+    proposals: float = 0.0,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed` or `hands` share or another pyramid is not used)."""
+    (a cache made with other seeds, another `printed`, `hands` or `proposals` setting or another pyramid is not
+    used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
-            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands")}
+            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals")}
             pyramid = str(z["levels"]) if "levels" in z else ""
-            same = shares == {"printed": printed, "hands": hands} and pyramid == levels
+            same = shares == {"printed": printed, "hands": hands, "proposals": proposals} and pyramid == levels
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
     n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
-            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n)
+            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
@@ -155,6 +170,7 @@ def harvest_all(
             printed=np.array(printed),
             hands=np.array(hands),
             levels=np.array(levels),
+            proposals=np.array(proposals),
             **arrays,
         )
     return parts
@@ -349,6 +365,10 @@ def main(
             help="the pyramid the candidates come from, as --detector levels= writes it (default: HARVEST's)"
         ),
     ] = "",
+    proposals: Annotated[
+        float,
+        typer.Option(help="also harvest the proposer's proposals of at least this peak (proposer.py; 0: none)"),
+    ] = 0.0,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -365,7 +385,7 @@ def main(
             raise typer.BadParameter(
                 f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
             ) from None
-    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels)
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])

@@ -233,10 +233,14 @@ def test_a_faint_cross_or_a_letter_in_a_word_is_not_rescued(detector: MarkDetect
         card, cv2.getRotationMatrix2D((320, 240), 285, 1.0), (640, 480), borderValue=(110,) * 3
     )
     assert detector.detect(faint) == [] and detector.detect(word) == []
-    # the network alone would take both for an X: only the two tests it may not overrule hold them
+    # the network alone would take both for an X: only the two tests it may not overrule hold them (the
+    # word's X with the rescue at 0.6: the verifier retrained in round vision18b gives it 0.68, the one
+    # before was sure of it)
     everything = DetectorConfig(card_rescue_from=(*DetectorConfig().card_rescue_from, "faint", "letter"))
     assert [d.shape for d in MarkDetector(everything).detect(faint)] == [Shape.X]
-    assert [d.shape for d in MarkDetector(everything).detect(word)] == [Shape.X]
+    assert MarkDetector(dataclasses.replace(DetectorConfig(), card_rescue=0.6)).detect(word) == []
+    lenient = dataclasses.replace(everything, card_rescue=0.6)
+    assert [d.shape for d in MarkDetector(lenient).detect(word)] == [Shape.X]
 
 
 def test_a_bad_configuration_is_refused_at_construction() -> None:
@@ -359,7 +363,7 @@ def test_a_loose_candidate_is_named_by_the_verifier(detector: MarkDetector) -> N
     # nothing to name without the verifier, and a verifier that is never sure names nothing
     assert MarkDetector(DetectorConfig(verify=False)).detect(img) == []
     unsure = dataclasses.replace(detector.verifier, loose_thresholds=(1.01, 1.01, 1.01))  # type: ignore[arg-type]
-    assert MarkDetector(verifier=unsure).detect(img) == []
+    assert MarkDetector(DetectorConfig(propose=0.0), verifier=unsure).detect(img) == []
 
 
 def test_big_components_are_judged_at_the_quarter_scale_only() -> None:
@@ -419,7 +423,7 @@ def test_a_mark_joined_to_a_finger_is_cut_free(detector: MarkDetector, name: str
     }[name]()
     # one joined shape that no test reads as a mark: on the pyramid before round vision16, whose coarser
     # levels (half resolution uncapped, a sixth) can read the X whole, finger and all, in a wider box
-    premise = dataclasses.replace(detector.config, split="", levels=VISION15_LEVELS)
+    premise = dataclasses.replace(detector.config, split="", levels=VISION15_LEVELS, propose=0.0)
     assert MarkDetector(premise).detect(img) == []
     found = detector.detect(img)
     assert [d.shape for d in found] == [shape]
@@ -446,7 +450,7 @@ def test_a_mark_joined_to_a_finger_from_out_of_the_frame_is_cut_free(
     """A finger from above the frame over the end of an arm: X and finger are one component, cut by
     the frame edge, which only `split` with "edge" judges (its parts); then the X is found."""
     img = _held_from_above("cross", (380, 190), skin)
-    assert MarkDetector(dataclasses.replace(detector.config, split="grey,loose")).detect(img) == []
+    assert MarkDetector(dataclasses.replace(detector.config, split="grey,loose", propose=0.0)).detect(img) == []
     found = MarkDetector(dataclasses.replace(detector.config, split="grey,loose,edge")).detect(img)
     assert [d.shape for d in found] == [Shape.X]
     x, y, w, h = found[0].box
