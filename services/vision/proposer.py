@@ -96,7 +96,9 @@ class Proposer:
             raise ValueError(f"{path}: not a proposer model ({e})") from e
         meta = session.get_modelmeta().custom_metadata_map
         if meta.get("input_format") != INPUT_FORMAT:
-            raise ValueError(f"{path}: made for inputs {meta.get('input_format')!r}, this code makes {INPUT_FORMAT}")
+            raise ValueError(
+                f"{path}: made for inputs {meta.get('input_format')!r}, this code makes {INPUT_FORMAT}"
+            )
         return cls(session=session)
 
     def heads(self, gray: np.ndarray) -> np.ndarray:

@@ -37,8 +37,8 @@ import typer
 
 from schemas.messages import Shape
 from services.vision.detector import Candidate, DetectorConfig, MarkDetector, parse_levels, to_gray
-from services.vision.proposer import Proposer
 from services.vision.printed import print_words, typefaces
+from services.vision.proposer import Proposer
 from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 from services.vision.verifier import CLASSES, INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, SHAPES, Verifier
 
