@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Shape
+from services.vision.verifier import onnx_session
 
 MODEL_PATH = Path(__file__).with_name("proposer.onnx")
 SHAPES: tuple[Shape, ...] = (Shape.X, Shape.O, Shape.TRIANGLE)
@@ -84,16 +85,7 @@ class Proposer:
     @classmethod
     def load(cls, path: Path = MODEL_PATH) -> Proposer:
         """The model in `path`, on one thread; ValueError for a file that is not a proposer model."""
-        import onnxruntime as ort  # type: ignore[import-untyped,unused-ignore]
-
-        opts = ort.SessionOptions()
-        opts.intra_op_num_threads = 1
-        opts.inter_op_num_threads = 1
-        opts.log_severity_level = 3
-        try:
-            session = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
-        except Exception as e:  # onnxruntime's own exception types: not a readable ONNX model
-            raise ValueError(f"{path}: not a proposer model ({e})") from e
+        session = onnx_session(path, "proposer")
         meta = session.get_modelmeta().custom_metadata_map
         if meta.get("input_format") != INPUT_FORMAT:
             raise ValueError(

@@ -64,6 +64,21 @@ def claim(shape: Shape | None) -> np.ndarray:
     return np.array([shape is s for s in SHAPES] + [shape is None], np.float32)
 
 
+def onnx_session(path: Path, what: str) -> Any:
+    """An onnxruntime session of the model in `path` on one thread (the vision loop's budget is one
+    core); ValueError naming `what` the model should be for a file onnxruntime cannot read."""
+    import onnxruntime as ort  # type: ignore[import-untyped,unused-ignore]
+
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = 1
+    opts.inter_op_num_threads = 1
+    opts.log_severity_level = 3
+    try:
+        return ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
+    except Exception as e:  # onnxruntime's own exception types: not a readable ONNX model
+        raise ValueError(f"{path}: not a {what} model ({e})") from e
+
+
 def _floats(text: str) -> tuple[float, float, float]:
     values = tuple(float(v) for v in text.split(","))
     if len(values) != len(SHAPES):
@@ -86,16 +101,7 @@ class Verifier:
     def load(cls, path: Path = MODEL_PATH, thresholds: tuple[float, float, float] | None = None) -> Verifier:
         """The model in `path`, on one thread; `thresholds` overrides the stored ones. ValueError for a
         file that is not a model for this code's inputs."""
-        import onnxruntime as ort  # type: ignore[import-untyped,unused-ignore]
-
-        opts = ort.SessionOptions()
-        opts.intra_op_num_threads = 1
-        opts.inter_op_num_threads = 1
-        opts.log_severity_level = 3
-        try:
-            session = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
-        except Exception as e:  # onnxruntime's own exception types: not a readable ONNX model
-            raise ValueError(f"{path}: not a verifier model ({e})") from e
+        session = onnx_session(path, "verifier")
         meta = session.get_modelmeta().custom_metadata_map
         inputs = {i.name: i.shape[1:] for i in session.get_inputs()}
         if meta.get("input_format") != INPUT_FORMAT or inputs != {
