@@ -30,7 +30,9 @@ quarter for large ones):
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape; and it
    may keep an X or triangle that some card tests refused (not for faint ink or a letter beside it)
    if it is very sure (`card_rescue`): a missed danger mark is the worst miss;
-6. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
+6. optionally (`propose`, off by default), a small network over the whole frame (`proposer.py`)
+   proposes marks where no component showed one; the verifier judges each like a loose candidate;
+7. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
 
 A filled disc, a square (outline or filled) or a filled triangle is not a mark. By construction an
 isolated letter O / digit 0 or X with a clear margin is indistinguishable from a mark.
@@ -436,8 +438,8 @@ class MarkDetector:
         """The proposer's peaks where nothing was detected, each kept if the verifier, shown its box as a
         loose candidate (cropped at the coarsest level where it is still 48 px), gives the proposed
         shape enough probability (`DetectorConfig.propose_thresholds`). Never over a component the
-        context tests refused (the card, the O's margin, the hole, a line of text: only the verifier's
-        rescue may overrule some of them), nor over a letter in a line of text."""
+        context tests refused (the card tests, the O's margin, a line of text: only the verifier's
+        rescue may overrule some of them), nor over any letter in a line of text (`_in_text`)."""
         assert self.proposer is not None and self.verifier is not None
         cfg = self.config
         props = [
