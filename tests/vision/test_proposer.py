@@ -96,14 +96,14 @@ def test_proposals_find_small_blurred_marks_the_components_lose_and_no_false_one
     from services.vision.synthetic import SceneGenerator, Variation
 
     gen = SceneGenerator(seed=31, variation=Variation(size=(28.0, 60.0), blur=20.0))
-    marked = [gen.frame((Shape.X, Shape.O, Shape.TRIANGLE)[i % 3]) for i in range(60)]
+    marked = [gen.frame((Shape.X, Shape.O, Shape.TRIANGLE)[i % 3]) for i in range(90)]
     clutter = SceneGenerator(seed=32, variation=Variation(distractors=(8, 14)))
     empty = [clutter.frame(None) for _ in range(20)]
     without = MarkDetector(DetectorConfig(propose=0.0))
     with_proposer = MarkDetector(DetectorConfig(propose=0.3))
     base, base_false = _found(without, marked + empty)
     more, more_false = _found(with_proposer, marked + empty)
-    assert more >= base + 4, (base, more)
+    assert more >= base + 5, (base, more)  # 62 -> 70 of 90 with the committed models
     assert more_false <= base_false
 
 
