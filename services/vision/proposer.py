@@ -8,9 +8,10 @@ of mark centres per shape, and each centre's box size and sub-cell offset) run o
 image at half the detector's scale (320x240 for 640x480), in `proposer.onnx` with onnxruntime on
 one thread.
 
-Its peaks are proposals, not marks: the detector (`DetectorConfig.propose`) keeps a proposal only where
-it found nothing itself and only when the learned verifier (`verifier.py`), shown the proposal's box as
-a loose candidate, names the same shape with at least its loose threshold. It was trained by `python -m
+Its peaks are proposals, not marks: the detector (`DetectorConfig.propose`, off by default) keeps a
+proposal only where it found nothing itself and only when the learned verifier (`verifier.py`), shown the
+proposal's box as a loose candidate, gives the proposed shape at least `DetectorConfig.propose_thresholds`.
+It was trained by `python -m
 services.vision.proposer_training` on the tuning generator only (`synthetic.py`); see the vision README.
 """
 

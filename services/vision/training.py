@@ -2,19 +2,19 @@
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
-                                       [--proposals PEAK]   (0.3; 0: the recipe before round vision18b)
-                                       [--printed SHARE] [--hands SHARE] [--levels PYRAMID]
+                                       [--proposals PEAK] [--printed SHARE] [--hands SHARE]
+                                       [--levels PYRAMID]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
 mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
 words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
 shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
-shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape, and
-(since round vision18b) every proposal of the committed proposer (`proposer.py`), cropped as the detector
-crops it and also with no claimed shape: the verifier judges proposals in service, and must have seen
-the clutter they fall on (crossing cables, square outlines); its label is the true mark's class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each
-candidate is its three crops (`verifier.crops`) and its claim (`verifier.claim`).
+shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; with
+`--proposals PEAK` (round vision18b; not the committed recipe) so is every proposal of the committed
+proposer (`proposer.py`), cropped as the detector crops it. Each candidate's label is the true mark's
+class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each candidate is its three
+crops (`verifier.crops`) and its claim (`verifier.claim`).
 
 The model (`Net`) is a small convolutional network trained with PyTorch (fixed seed, one thread, the
 eight flips and quarter turns of the crops plus contrast, blur and noise as augmentation), exported to
