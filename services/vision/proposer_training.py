@@ -23,6 +23,7 @@ threshold.
 from __future__ import annotations
 
 import json
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -41,6 +42,10 @@ if TYPE_CHECKING:
 CHUNK = 500
 HANDS = 0.3  # share of cards with fingers that have people's variety of fingers (`Variation.hand_variety`)
 WIDTH, HEIGHT = 640, 480
+DOC = "vision mark proposer: python -m services.vision.proposer_training (tuning generator only)"
+CALIBRATION = 25
+WIDTHS = (16, 24, 32, 64, 96)
+"""the network's channels at strides 2, 4, 8, 16 and 32"""
 
 
 def render(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
@@ -105,7 +110,7 @@ def targets(labels: np.ndarray, h: int, w: int) -> tuple[np.ndarray, ...]:
     return heat, index, size, offset
 
 
-def _net() -> torch.nn.Module:
+def _net(widths: tuple[int, ...] = WIDTHS) -> torch.nn.Module:
     import torch  # type: ignore[import-not-found,unused-ignore]
     import torch.nn.functional as F  # type: ignore[import-not-found,unused-ignore]
     from torch import nn  # type: ignore[import-not-found,unused-ignore]
@@ -123,14 +128,15 @@ def _net() -> torch.nn.Module:
 
         def __init__(self) -> None:
             super().__init__()
-            self.fine = nn.Sequential(block(1, 16, 2), block(16, 24, 2), block(24, 32, 2), block(32, 32))
-            self.mid = nn.Sequential(block(32, 64, 2), block(64, 64), block(64, 64, dilation=2))
-            self.deep = nn.Sequential(block(64, 96, 2), block(96, 96), block(96, 96, dilation=2))
-            self.lat_deep = nn.Conv2d(96, 64, 1)
-            self.mix_mid = block(64, 64)
-            self.lat_mid = nn.Conv2d(64, 32, 1)
-            self.mix_fine = block(32, 32)
-            self.heads = nn.Conv2d(32, HEADS, 1)
+            w2, w4, w8, w16, w32 = widths
+            self.fine = nn.Sequential(block(1, w2, 2), block(w2, w4, 2), block(w4, w8, 2), block(w8, w8))
+            self.mid = nn.Sequential(block(w8, w16, 2), block(w16, w16), block(w16, w16, dilation=2))
+            self.deep = nn.Sequential(block(w16, w32, 2), block(w32, w32), block(w32, w32, dilation=2))
+            self.lat_deep = nn.Conv2d(w32, w16, 1)
+            self.mix_mid = block(w16, w16)
+            self.lat_mid = nn.Conv2d(w16, w8, 1)
+            self.mix_fine = block(w8, w8)
+            self.heads = nn.Conv2d(w8, HEADS, 1)
             assert self.heads.bias is not None
             with torch.no_grad():  # CenterNet's start: every centre unlikely (sigmoid ~0.01)
                 self.heads.bias[: len(SHAPES)].fill_(-4.6)
@@ -192,7 +198,14 @@ def _loss(out: torch.Tensor, heat: Any, index: Any, size: Any, offset: Any) -> t
     return (focal + reg) / n_pos
 
 
-def fit(parts: list[tuple[np.ndarray, np.ndarray]], seed: int, epochs: int, threads: int, log: Any) -> Any:
+def fit(
+    parts: list[tuple[np.ndarray, np.ndarray]],
+    seed: int,
+    epochs: int,
+    threads: int,
+    log: Any,
+    widths: tuple[int, ...] = WIDTHS,
+) -> Any:
     """Train `_net` on the rendered chunks; fixed seed."""
     import torch  # type: ignore[import-not-found,unused-ignore]
 
@@ -201,7 +214,7 @@ def fit(parts: list[tuple[np.ndarray, np.ndarray]], seed: int, epochs: int, thre
     rng = np.random.default_rng(seed)
     x = np.concatenate([p[0] for p in parts])
     y = np.concatenate([p[1] for p in parts])
-    net = _net()
+    net = _net(widths)
     batch = 32
     steps = epochs * ((len(x) + batch - 1) // batch)
     opt = torch.optim.AdamW(net.parameters(), lr=2e-3, weight_decay=1e-4)
@@ -246,9 +259,57 @@ def export(net: Any, out: Path) -> None:
     model = onnx.load_from_string(buf.getvalue())
     entry = model.metadata_props.add()
     entry.key, entry.value = "input_format", INPUT_FORMAT
-    model.doc_string = (
-        "vision mark proposer: python -m services.vision.proposer_training (tuning generator only)"
+    model.doc_string = DOC
+    onnx.save(model, str(out))
+
+
+def calibration_frames(train: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """The frames that set the int8 model's activation ranges: the first CALIBRATION of every third
+    training chunk (both variations, every shape and mark-free)."""
+    return np.concatenate([xs[:CALIBRATION] for xs, _ in train[::3]])
+
+
+def quantize(float_model: Path, out: Path, frames: np.ndarray, work: Path) -> None:
+    """`float_model` as static int8 (onnxruntime's QDQ format, per-channel weights, activation ranges
+    from `frames` by min-max), its metadata kept. Weights use 7 bits (`reduce_range`): CPUs without
+    VNNI multiply u8 x s8 pairs into saturating 16-bit sums, and 7-bit weights never saturate, so the
+    model gives the same output on every x86 CPU."""
+    import onnx  # type: ignore[import-not-found,unused-ignore]
+    from onnxruntime.quantization import (  # type: ignore[import-untyped,unused-ignore]
+        CalibrationDataReader,
+        QuantFormat,
+        QuantType,
+        quant_pre_process,
+        quantize_static,
     )
+
+    class Frames(CalibrationDataReader):  # type: ignore[misc]
+        def __init__(self) -> None:
+            self.left = iter(frames)
+
+        def get_next(self) -> dict[str, np.ndarray] | None:
+            x = next(self.left, None)
+            return None if x is None else {"frame": (x.astype(np.float32) / 255.0)[None, None]}
+
+    prepared = work / "prepared.onnx"
+    quant_pre_process(str(float_model), str(prepared))
+    quantize_static(
+        str(prepared),
+        str(out),
+        Frames(),
+        quant_format=QuantFormat.QDQ,
+        per_channel=True,
+        reduce_range=True,
+        activation_type=QuantType.QUInt8,
+        weight_type=QuantType.QInt8,
+    )
+    model = onnx.load(str(out))
+    meta = {m.key: m.value for m in model.metadata_props}
+    if meta.get("input_format") != INPUT_FORMAT:  # the quantiser keeps it today; never ship a model without
+        raise RuntimeError(f"{out}: the quantised model lost its input format ({meta})")
+    entry = model.metadata_props.add()
+    entry.key, entry.value = "weights", "int8"
+    model.doc_string = DOC + " (static int8)"
     onnx.save(model, str(out))
 
 
@@ -298,17 +359,35 @@ def main(
     thresholds: Annotated[
         list[float], typer.Option("--threshold", help="heatmap peaks to report the held-back frames at")
     ] = [0.2, 0.3, 0.5],  # noqa: B006 - typer reads the default
+    widths: Annotated[
+        list[int], typer.Option("--width", help="channels at strides 2, 4, 8, 16, 32 (five times)")
+    ] = list(WIDTHS),  # noqa: B006 - typer reads the default
+    keep_float: Annotated[Path | None, typer.Option(help="also keep the trained float32 model here")] = None,
+    from_float: Annotated[
+        Path | None,
+        typer.Option(help="skip training: quantise this float32 model (the frames still calibrate)"),
+    ] = None,
 ) -> None:
+    if len(widths) != 5:
+        raise typer.BadParameter("give --width five times: strides 2, 4, 8, 16 and 32", param_hint="--width")
     t0 = time.monotonic()
     parts = render_all(frames, seed, jobs, cache)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
-    net = fit(train, seed, epochs, threads, log=lambda m: typer.echo(m, err=True))
-    export(net, out)
-    result: dict[str, Any] = {"train_frames": sum(len(p[0]) for p in train)}
-    for t in thresholds:
-        result[f"at_{t:g}"] = report(Proposer.load(out), val, t)
+    with tempfile.TemporaryDirectory() as tmp:
+        if from_float is None:
+            from_float = keep_float or Path(tmp) / "float.onnx"
+            net = fit(
+                train, seed, epochs, threads, log=lambda m: typer.echo(m, err=True), widths=tuple(widths)
+            )
+            export(net, from_float)
+        quantize(from_float, out, calibration_frames(train), Path(tmp))
+        result: dict[str, Any] = {"train_frames": sum(len(p[0]) for p in train)}
+        for t in thresholds:
+            result[f"at_{t:g}"] = report(Proposer.load(out), val, t)
+        middle = thresholds[len(thresholds) // 2]
+        result[f"float_at_{middle:g}"] = report(Proposer.load(from_float), val, middle)
     result["model_bytes"] = out.stat().st_size
     result["seconds"] = round(time.monotonic() - t0)
     typer.echo(json.dumps(result, indent=2))

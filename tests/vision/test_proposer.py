@@ -68,7 +68,8 @@ def test_a_file_that_is_not_a_proposer_is_refused(tmp_path: Path) -> None:
 
 def test_the_committed_model_loads_is_small_and_takes_any_frame_size() -> None:
     p = Proposer.load()
-    assert MODEL_PATH.stat().st_size < 2_000_000
+    assert MODEL_PATH.stat().st_size < 600_000  # int8 weights: 0.44 MB (1.6 MB in float32)
+    assert p.session.get_modelmeta().custom_metadata_map.get("weights") == "int8"
     assert p.heads(np.full((480, 640), 200, np.uint8)).shape == (HEADS, 30, 40)
     assert p.heads(np.full((360, 640), 200, np.uint8)).shape[0] == HEADS
     assert p.propose(np.full((480, 640), 200, np.uint8), 0.3) == []
@@ -136,3 +137,24 @@ def test_the_verifiers_harvest_takes_the_proposals_as_loose_candidates() -> None
     assert np.array_equal(labels1[claimed1], labels0[claimed0])
     # and some of them are the frames' true marks
     assert ((claims1 == 3) & (labels1 < 3)).sum() > ((claims0 == 3) & (labels0 < 3)).sum()
+
+
+def test_quantising_keeps_the_proposals_and_the_input_format(tmp_path: Path) -> None:
+    """`proposer_training.quantize` (static int8, the committed model's last step): the int8 model
+    keeps its input format, is a fraction of the float model's size, and gives nearly the same output."""
+    pytest.importorskip("torch")
+    pytest.importorskip("onnx")
+    from services.vision.proposer_training import _net, export, quantize, render
+
+    frames, _ = render(7, 12)
+    floats = tmp_path / "float.onnx"
+    export(_net(), floats)  # untrained: its output is a smooth function of the input all the same
+    quantize(floats, tmp_path / "int8.onnx", frames[:8], tmp_path)
+    a, b = Proposer.load(floats), Proposer.load(tmp_path / "int8.onnx")
+    assert (tmp_path / "int8.onnx").stat().st_size < floats.stat().st_size / 2
+    for x in frames[8:]:
+        inp = {"frame": (x.astype(np.float32) / 255.0)[None, None]}
+        fa, fb = a.session.run(None, inp)[0][0], b.session.run(None, inp)[0][0]
+        assert fa.shape == fb.shape
+        spread = float(fa.max() - fa.min()) or 1.0
+        assert float(np.abs(fa - fb).max()) <= 0.1 * spread
