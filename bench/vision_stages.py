@@ -1,6 +1,6 @@
 """Where true marks are lost in the detector, on the TUNING generator (`synthetic.py`) only.
 
-    .venv/bin/python bench/vision_stages.py [--frames 600] [--seed 99] [--verify/--no-verify]
+    .venv/bin/python bench/vision_stages.py [--frames 600] [--seed 99] [--verify/--no-verify] [--propose 0.3]
 
 For every frame that holds a mark, every sizeable component of every binarisation and pyramid level is
 followed through the detector (`MarkDetector.trace`) and the mark is charged to the furthest stage that
@@ -15,6 +15,8 @@ claimed shape must also be the true one, else the mark counts as lost at the sha
     card .. hole   the card tests, the O's clear margin, a ring's or triangle's hole
     confidence, text line, verifier
     kept           found (the bench's recall can still differ: its box rule is looser)
+    proposed       lost at one of the stages above, then found by the learned proposer (`proposer.py`:
+                   a proposal the verifier confirmed; `--propose 0` leaves it out, as before round vision19)
 
 Held-out frames are deliberately not offered here: this is a tuning tool.
 """
@@ -30,11 +32,12 @@ import numpy as np
 import typer
 
 from schemas.messages import Shape
-from services.vision.detector import STAGES, DetectorConfig, MarkDetector, Traced
+from services.vision.detector import STAGES, Detection, DetectorConfig, MarkDetector, Traced
 from services.vision.synthetic import SceneGenerator, Variation
 from services.vision.training import IOU, iou
 
 ORDER: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
+COLUMNS: tuple[str, ...] = (*STAGES, "proposed")
 
 
 def lost_at(traced: list[Traced], shape: Shape, box: tuple[int, int, int, int]) -> str:
@@ -51,10 +54,24 @@ def lost_at(traced: list[Traced], shape: Shape, box: tuple[int, int, int, int]) 
     return STAGES[best]
 
 
+def charged(
+    found: list[Detection], traced: list[Traced], shape: Shape, box: tuple[int, int, int, int]
+) -> str:
+    """`lost_at`, or "proposed" for a mark the components lost that a detection (a confirmed proposal:
+    every component's detection is traced as kept) matches all the same."""
+    stage = lost_at(traced, shape, box)
+    if stage != "kept" and any(d.shape is shape and iou(d.box, box) >= IOU for d in found):
+        return "proposed"
+    return stage
+
+
 def main(
     frames: Annotated[int, typer.Option(help="tuning frames (a quarter are mark-free and skipped)")] = 600,
     seed: Annotated[int, typer.Option(help="tuning generator seed")] = 99,
     verify: Annotated[bool, typer.Option(help="run the learned verifier")] = True,
+    propose: Annotated[
+        float, typer.Option(help="the proposer's peak threshold (DetectorConfig.propose; 0: off)")
+    ] = DetectorConfig.propose,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
     hand_variety: Annotated[
         float, typer.Option(help="share of cards with fingers given people's variety of fingers")
@@ -62,7 +79,7 @@ def main(
 ) -> None:
     cv2.setNumThreads(1)
     gen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
-    det = MarkDetector(DetectorConfig(verify=verify))
+    det = MarkDetector(DetectorConfig(verify=verify, propose=propose))
     by_class: dict[str, Counter[str]] = defaultdict(Counter)
     by_slice: dict[str, Counter[str]] = defaultdict(Counter)
     for i in range(frames):
@@ -71,8 +88,8 @@ def main(
         img, labels = gen.render(scene)
         if not labels:
             continue
-        _, traced = det.trace(img)
-        stage = lost_at(traced, labels[0].shape, labels[0].box)
+        found, traced = det.trace(img)
+        stage = charged(found, traced, labels[0].shape, labels[0].box)
         by_class[labels[0].shape.value][stage] += 1
         size = max(labels[0].box[2:])
         slices = {
@@ -97,7 +114,8 @@ def main(
         "seed": seed,
         "hand_variety": hand_variety,
         "verify": verify,
-        "stages": list(STAGES),
+        "propose": propose if verify else 0.0,
+        "stages": list(COLUMNS),
         "by_class": {k: dict(v) for k, v in sorted(by_class.items())},
         "all": dict(total),
         "by_slice": {k: dict(v) for k, v in by_slice.items()},
@@ -106,11 +124,15 @@ def main(
         typer.echo(json.dumps(result, indent=2))
         return
     rows = [("all", total), *sorted(by_class.items()), *by_slice.items()]
-    head = f"{'marks':<16}{'n':>5} " + " ".join(f"{s[:10]:>10}" for s in STAGES)
-    lines = [f"tuning generator, seed {seed}, {frames} frames, verifier {'on' if verify else 'off'}", head]
+    head = f"{'marks':<16}{'n':>5} " + " ".join(f"{s[:10]:>10}" for s in COLUMNS)
+    proposer = f"proposer at {propose:g}" if verify and propose > 0 else "no proposer"
+    lines = [
+        f"tuning generator, seed {seed}, {frames} frames, verifier {'on' if verify else 'off'}, {proposer}",
+        head,
+    ]
     for name, c in rows:
         n = sum(c.values())
-        lines.append(f"{name:<16}{n:>5} " + " ".join(f"{c[s] / n:>10.3f}" for s in STAGES))
+        lines.append(f"{name:<16}{n:>5} " + " ".join(f"{c[s] / n:>10.3f}" for s in COLUMNS))
     typer.echo("\n".join(lines))
 
 

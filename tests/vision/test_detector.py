@@ -335,6 +335,17 @@ def test_stage_accounting_charges_the_furthest_stage() -> None:
     assert lost_at(traced, Shape.O, box) == "verifier"
     assert lost_at(traced, Shape.TRIANGLE, box) == "shape"  # a wrong shape is lost at the shape tests
     assert lost_at([], Shape.O, box) == "no component"
+    # a mark the components lost but a confirmed proposal found is charged to the proposer; a detection
+    # of another shape there, or of this shape elsewhere, is not that mark
+    from vision_stages import charged
+
+    from services.vision.detector import Detection
+
+    assert charged([Detection(Shape.O, 0.995, (99, 101, 50, 49))], traced, Shape.O, box) == "proposed"
+    assert charged([Detection(Shape.X, 0.9, box)], traced, Shape.O, box) == "verifier"
+    assert charged([Detection(Shape.O, 0.9, (300, 300, 50, 50))], traced, Shape.O, box) == "verifier"
+    kept = [*traced, Traced(box, Shape.O, "kept")]
+    assert charged([Detection(Shape.O, 0.9, box)], kept, Shape.O, box) == "kept"
 
 
 def _smeared_triangle(size: int = 30, blur: int = 13) -> np.ndarray:
