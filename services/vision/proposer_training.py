@@ -273,7 +273,8 @@ def quantize(float_model: Path, out: Path, frames: np.ndarray, work: Path) -> No
     """`float_model` as static int8 (onnxruntime's QDQ format, per-channel weights, activation ranges
     from `frames` by min-max), its metadata kept. Weights use 7 bits (`reduce_range`): CPUs without
     VNNI multiply u8 x s8 pairs into saturating 16-bit sums, and 7-bit weights never saturate, so the
-    model gives the same output on every x86 CPU."""
+    model should give the same output on x86 CPUs with and without VNNI (onnxruntime's advice for
+    per-channel models; measured only on one with it)."""
     import onnx  # type: ignore[import-not-found,unused-ignore]
     from onnxruntime.quantization import (  # type: ignore[import-untyped,unused-ignore]
         CalibrationDataReader,
