@@ -92,6 +92,11 @@ class DetectorConfig:
     at the quarter level; 4 until round vision16's sixth level: at 4 with that level,
     bench/vision_words.py seed 555 gave 28 frames with a false mark among 300 with words, against 5
     before the level and 6 with it and the test there)"""
+    text_turned: bool = True
+    """text line: also look for a line of letters turned at any angle (to each letter-sized neighbour):
+    upright words were no mark, but turned by 10 degrees (a camera's roll, a sign hung askew) most big
+    printed words gave a false O or X. Round vision20: on fresh held-out seeds false marks 94 -> 89 with
+    one more missed O in 4,000 frames; two-letter words turned are still a mark"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
@@ -482,7 +487,9 @@ class MarkDetector:
             over &= size <= 2 * max(w, h)
             over[0] = False
             for i in np.flatnonzero(over):
-                if _in_text_line(st, int(i), level.g, level.labels, self.config.text_paper):
+                if _in_text_line(
+                    st, int(i), level.g, level.labels, self.config.text_paper, self.config.text_turned
+                ):
                     return True
         return False
 
@@ -554,7 +561,7 @@ class MarkDetector:
     def _text_line(self, level: _Level, i: int) -> bool:
         """Component `i` is a letter in a line of text (on the levels the test runs on: `text_max_f`)."""
         return level.text_check and _in_text_line(
-            level.stats, i, level.g, level.labels, self.config.text_paper
+            level.stats, i, level.g, level.labels, self.config.text_paper, self.config.text_turned
         )
 
     # ------------------------------------------------------------------ one pyramid level
@@ -1295,29 +1302,85 @@ def _triangle_fill(c: np.ndarray, area: float) -> float:
 
 
 def _in_text_line(
-    stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray, paper_share: float = 0.0
+    stats: np.ndarray,
+    i: int,
+    g: np.ndarray,
+    labels: np.ndarray,
+    paper_share: float = 0.0,
+    turned: bool = False,
 ) -> bool:
     """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
     two of them, the nearest less than half a letter height away and the other within two; or one
     close neighbour of the very same height beside it. (Any one neighbour is not enough: the fingers
-    holding a card come close to a mark; and the dark background at a card's corners is not ink.)"""
+    holding a card come close to a mark; and the dark background at a card's corners is not ink.)
+    `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
+    camera's roll, a sign hung askew); there two neighbours in line are needed (`_line_of_letters`)."""
+    if _line_of_letters(stats, i, g, labels, paper_share, 0.0):
+        return True
+    if not turned:
+        return False
     x, y, w, h, area = (int(v) for v in stats[i][:5])
     xs, ys, ws, hs, areas = (stats[:, k] for k in range(5))
-    cy = y + h / 2
-    gap = np.maximum(xs - (x + w), x - (xs + ws))  # horizontal gap between the boxes (<0: overlap)
+    dx = xs + ws / 2 - (x + w / 2)
+    dy = ys + hs / 2 - (y + h / 2)
+    dist = np.hypot(dx, dy)
+    size = max(w, h)
+    letter = (
+        (np.maximum(ws, hs) >= 0.7 * size)
+        & (np.maximum(ws, hs) <= 1.45 * size)
+        & (areas >= 0.15 * area)
+        & (dist >= 0.5 * size)
+        & (dist <= 1.3 * size)
+    )
+    letter[0] = letter[i] = False
+    tried: list[float] = []
+    for j in np.flatnonzero(letter)[:4]:
+        angle = float(np.degrees(np.arctan2(dy[j], dx[j]))) % 180.0
+        if all(abs(angle - a) > 3.0 for a in tried) and min(angle, 180.0 - angle) > 3.0:
+            tried.append(angle)
+            if _line_of_letters(stats, i, g, labels, paper_share, angle):
+                return True
+    return False
+
+
+def _line_of_letters(
+    stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray, paper_share: float, angle: float
+) -> bool:
+    """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test)."""
+    x, y, w, h, area = (int(v) for v in stats[i][:5])
+    xs, ys, ws, hs, areas = (stats[:, k] for k in range(5))
+    if angle == 0.0:
+        cy = y + h / 2
+        gap = np.maximum(xs - (x + w), x - (xs + ws))  # horizontal gap between the boxes (<0: overlap)
+        line = (np.abs(ys + hs / 2 - cy) <= 0.25 * h) & (
+            (np.abs(ys + hs - (y + h)) <= 0.12 * h) | (np.abs(ys - y) <= 0.12 * h)  # baseline or cap line
+        )
+        twin_line = (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
+        beside, close = (gap >= 0) & (gap <= 2.0 * h), gap <= 0.5 * h
+    else:
+        # a turned letter's upright box is no guide to where the letter ends along the line: the
+        # centres' distance along it is (a letter's width plus the gap, about 0.6 to 1.3 box sizes;
+        # the horizontal test's gaps of 0 to 2 heights, from a bigger box)
+        t = np.radians(angle)
+        dx = xs + ws / 2 - (x + w / 2)
+        dy = ys + hs / 2 - (y + h / 2)
+        along = np.abs(np.cos(t) * dx + np.sin(t) * dy)
+        across = np.abs(-np.sin(t) * dx + np.cos(t) * dy)
+        size = max(w, h)
+        line = across <= 0.15 * h
+        twin_line = np.zeros(len(stats), bool)  # one turned neighbour is not enough: two in line
+        beside, close = (along >= 0.5 * size) & (along <= 2.8 * size), along <= 1.3 * size
     similar = (
         (hs >= 0.7 * h)
         & (hs <= 1.45 * h)
-        & (np.abs(ys + hs / 2 - cy) <= 0.25 * h)
-        & ((np.abs(ys + hs - (y + h)) <= 0.12 * h) | (np.abs(ys - y) <= 0.12 * h))  # baseline or cap line
+        & line
         & (ws >= 0.1 * h)
         & (ws <= 1.5 * h)
         & (areas >= 0.15 * area)
-        & (gap >= 0)
-        & (gap <= 2.0 * h)
+        & beside
     )
     similar[0] = similar[i] = False
-    if not (similar & (gap <= 0.5 * h)).any():
+    if not (similar & close).any():
         return False
     # keep only neighbours written in the same ink as the candidate (and, with `paper_share`, printed
     # on paper: light all round them, unlike the dark background beyond a card's edge)
@@ -1330,13 +1393,12 @@ def _in_text_line(
             paper_share > 0 and _paper_round(g, labels, stats, int(j), (ink + paper) / 2) < paper_share
         ):
             similar[j] = False
-    near = similar & (gap <= 0.5 * h)
+    near = similar & close
     if not near.any():
         return False
     if int(similar.sum()) >= 2:
         return True
-    twin = near & (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
-    return bool(twin.any())
+    return bool((near & twin_line).any())
 
 
 def _paper_round(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, cut: float) -> float:
