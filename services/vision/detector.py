@@ -96,7 +96,7 @@ class DetectorConfig:
     """text line: also look for a line of letters turned at any angle (to each letter-sized neighbour):
     upright words were no mark, but turned by 10 degrees (a camera's roll, a sign hung askew) most big
     printed words gave a false O or X. Round vision20: on fresh held-out seeds false marks 94 -> 89 with
-    one more missed O in 4,000 frames; two-letter words turned are still a mark"""
+    one more missed O in 4,000 frames; two-letter words turned by 15 degrees or more are still a mark"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
@@ -1314,7 +1314,8 @@ def _in_text_line(
     close neighbour of the very same height beside it. (Any one neighbour is not enough: the fingers
     holding a card come close to a mark; and the dark background at a card's corners is not ink.)
     `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
-    camera's roll, a sign hung askew); there two neighbours in line are needed (`_line_of_letters`)."""
+    camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
+    (`_line_of_letters`)."""
     if _line_of_letters(stats, i, g, labels, paper_share, 0.0):
         return True
     if not turned:
@@ -1368,7 +1369,10 @@ def _line_of_letters(
         across = np.abs(-np.sin(t) * dx + np.cos(t) * dy)
         size = max(w, h)
         line = across <= 0.15 * h
-        twin_line = np.zeros(len(stats), bool)  # one turned neighbour is not enough: two in line
+        # one neighbour is enough only when it is the candidate's twin: centred on the line and its upright
+        # box's longest side within a tenth of the candidate's (a two-letter word, NO or OK, seen turned a
+        # little; within a fifth, seed 99 lost 7 more tuning marks)
+        twin_line = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= 0.1 * size)
         beside, close = (along >= 0.5 * size) & (along <= 2.8 * size), along <= 1.3 * size
     similar = (
         (hs >= 0.7 * h)
