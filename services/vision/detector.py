@@ -1359,9 +1359,10 @@ def _line_of_letters(
         twin_line = (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
         beside, close = (gap >= 0) & (gap <= 2.0 * h), gap <= 0.5 * h
     else:
-        # a turned letter's upright box is no guide to where the letter ends along the line: the
-        # centres' distance along it is (a letter's width plus the gap, about 0.6 to 1.3 box sizes;
-        # the horizontal test's gaps of 0 to 2 heights, from a bigger box)
+        # a turned letter's upright box is no guide to where the letter ends along the line, so the
+        # centres' distance along it is judged instead: a letter's width plus the gap, 0.5 to 1.3 box
+        # sizes for the near neighbour and up to 2.8 for the other (the horizontal test's gaps of 0 to
+        # 2 heights, from a bigger box)
         t = np.radians(angle)
         dx = xs + ws / 2 - (x + w / 2)
         dy = ys + hs / 2 - (y + h / 2)
