@@ -9,7 +9,7 @@ image at half the detector's scale (320x240 for 640x480), in `proposer.onnx` wit
 one thread. Its weights and activations are int8 (static quantisation, calibrated on tuning frames):
 about two thirds of the float model's time, at the same proposals on the training's held-back frames.
 
-Its peaks are proposals, not marks: the detector (`DetectorConfig.propose`, off by default) keeps a
+Its peaks are proposals, not marks: the detector (`DetectorConfig.propose`, on since round vision19) keeps a
 proposal only where it found nothing itself and only when the learned verifier (`verifier.py`), shown the
 proposal's box as a loose candidate, gives the proposed shape at least `DetectorConfig.propose_thresholds`.
 It was trained by `python -m

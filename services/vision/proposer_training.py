@@ -2,9 +2,11 @@
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.proposer_training [--frames 24000] [--epochs 10] [--seed 20261125]
-                                                [--jobs 2] [--threads 2] [--cache FILE]
+                                                [--jobs 2] [--threads 2] [--cache FILE] [--width N x5]
+                                                [--keep-float FILE | --from-float FILE]
 
-Its defaults made the committed `proposer.onnx` (37 min on 2 cores).
+Its defaults trained the float32 model of 48ea60e (37 min on 2 cores); the committed `proposer.onnx` is
+that model quantised by `--from-float` (round vision19), the last step of every training run too.
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
 mark-free, in chunks of CHUNK frames: even chunks with the verifier training's default variation, odd
@@ -15,9 +17,10 @@ cards held by people's variety of fingers. Each frame is kept only as the networ
 The network (`_net`) is a small fully convolutional encoder-decoder (stride 32 at its deepest, for the
 context of a mark filling the frame; output at stride 8) trained with CenterNet's losses (a focal loss
 on Gaussian centre heatmaps; L1 on the size and offset at the centre cell), fixed seed, with flips,
-contrast and noise as augmentation, and exported to ONNX with the peak threshold in its metadata. The
-last tenth of the chunks is held back to report the proposals' recall and false proposals at that
-threshold.
+contrast and noise as augmentation, exported to ONNX with its input format in its metadata, then
+quantised to static int8 (`quantize`, activation ranges from training frames). The last tenth of the
+chunks is held back to report the proposals' recall and stray proposals at each `--threshold`, for the
+int8 model and, at the middle threshold, the float one.
 """
 
 from __future__ import annotations
