@@ -289,30 +289,40 @@ def speech_end_s(pcm: bytes, floor_db: float = 30.0) -> float:
 def stream_latency(engine: Engine, items: list[Item], n: int = 40,
                    config: SegmenterConfig | None = None) -> dict[str, float]:
     """End of speech -> command, on a stream: each clip in quiet noise, fed in 30 ms chunks to the
-    service's VAD segmenter; latency = audio time at which the segment is emitted - the clip's speech end
-    (`speech_end_s`), plus decoding time."""
+    service's VAD segmenter (with the engine for its early look, as the service); latency = audio time at which
+    the segment is emitted - the clip's speech end (`speech_end_s`), plus decoding time (for a segment the early
+    look took: the time of the chunk's `feed`, which decoded it)."""
     rng = np.random.default_rng(5)
     picks = [it for it in items if it.label < OTHER and it.condition == "clean"][:: max(1, len(items) // (n * 4))][:n]
     lat = []
+    taken = 0
     for it in picks:
         lead = np.zeros(int(0.8 * SAMPLE_RATE))
         x = np.concatenate([lead, np.frombuffer(it.pcm, "<i2") / 32768.0, np.zeros(SAMPLE_RATE)])
         x = x + rng.normal(0, 3e-4, x.size)
         speech_end = lead.size / SAMPLE_RATE + speech_end_s(it.pcm)
         pcm = to_pcm(x)
-        seg = Segmenter(config or SegmenterConfig())
+        seg = Segmenter(config or SegmenterConfig(), recognise=engine.recognise)
         step = int(0.03 * SAMPLE_RATE) * 2
         for k in range(0, len(pcm), step):
+            t0 = time.perf_counter()
             found = seg.feed(pcm[k : k + step])
             if found:
                 t_emit = (k + step) / 2 / SAMPLE_RATE
-                t0 = time.perf_counter()
-                engine.recognise(found[0].pcm)
+                if found[0].recognition is None:
+                    t0 = time.perf_counter()
+                    engine.recognise(found[0].pcm)
+                taken += found[0].recognition is not None
                 lat.append(t_emit - speech_end + time.perf_counter() - t0)
                 break
     a = np.array(lat) * 1000
     return {"n": len(a), "p50_ms": round(float(np.median(a)), 1), "p90_ms": round(float(np.percentile(a, 90)), 1),
-            "max_ms": round(float(a.max()), 1)}
+            "max_ms": round(float(a.max()), 1), "early_taken": taken}
+
+
+def early_look_arg(text: str) -> float | None:
+    """`--early-look`: seconds of quiet, or `off`."""
+    return None if text.strip().lower() == "off" else float(text)
 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:
@@ -369,6 +379,8 @@ def main() -> int:
     ap.add_argument("--json", type=Path, help="also write the rows here")
     ap.add_argument("--head", help="spotter head file (default: the committed default head)")
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
+    ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
+                    help="the stream latency's early look: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--enrol-head", help="the head --enrol adapts (default: as `enroll`, the speech-embedding head)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -383,7 +395,7 @@ def main() -> int:
             if s.family == "ALL":
                 row.update(extra)
                 row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA],
-                                                       config=SegmenterConfig(vad=args.vad))
+                                                       config=SegmenterConfig(vad=args.vad, early_quiet_s=args.early_look))
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:

@@ -8,13 +8,15 @@ held-out split, all voice families, the same seed's cache) is placed 1.2 s into 
 robot's ego-noise (`ego_noise.py`: a model made from the motion service's gait, or `--noise-wav`, a
 recording of your own robot; `--standing`: the robot standing still, only its fan and the servos' holding
 hiss), scaled to a speech-to-noise ratio, followed by 1.5 s more of it, and fed to
-the service's `Segmenter` in 30 ms chunks; every segment it emits goes to the engine, as in the service.
+the service's `Segmenter` in 30 ms chunks, with the engine for its early look (`--early-look off`: without);
+every segment it emits goes to the engine, as in the service.
 
 Per ratio: commands heard right (the segment that overlaps the word gives its command, accepted; for "go",
 at least the reasoner's `^min-confidence`), "stop" on its own (what a walking robot must hear), non-command
-words taken for a command, how many segments the stream gave and how long they were (a VAD stuck in "speech"
-cuts at `SegmenterConfig.max_utterance_s`, and the spotter refuses utterances over its limit), end of speech
--> segment emitted, and commands heard in the noise alone (`--noise-only` seconds of it, no speech).
+words taken for a command (false walks: for a "go" sure enough that the reasoner walks unasked), how many
+segments the stream gave and how long they were (a VAD stuck in "speech" cuts at
+`SegmenterConfig.max_utterance_s`, and the spotter refuses utterances over its limit), end of speech ->
+segment emitted, and commands heard in the noise alone (`--noise-only` seconds of it, no speech).
 
     nice -n 10 .venv/bin/python bench/voice_walking.py                      # 20, 10, 5, 0 dB and quiet
     .venv/bin/python bench/voice_walking.py --snr 10 --per-family 40 --json out.json
@@ -36,7 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.ego_noise import EgoNoiseModel, active_power, ego_noise, mix, unit_rms  # noqa: E402
-from bench.voice_bench import OTHER, WORDS, Item, Policy, heldout_items, speech_end_s  # noqa: E402
+from bench.voice_bench import OTHER, WORDS, Item, Policy, early_look_arg, heldout_items, speech_end_s  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
@@ -73,11 +75,11 @@ def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple
     """Feed `x` (float, ±1) to a fresh segmenter in 30 ms chunks: (emitted at s, start s, end s, command,
     confidence) per segment."""
     pcm = to_pcm(x)
-    seg = Segmenter(config)
+    seg = Segmenter(config, recognise=engine.recognise)  # the early look, as in the service
     out = []
     for k in range(0, len(pcm), CHUNK):
         for s in seg.feed(pcm[k : k + CHUNK]):
-            rec = engine.recognise(s.pcm)
+            rec = s.recognition or engine.recognise(s.pcm)
             out.append(((k + CHUNK) / 2 / SAMPLE_RATE, s.start_s, s.end_s, rec.command, rec.confidence))
     for s in seg.flush():
         rec = engine.recognise(s.pcm)
@@ -100,6 +102,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
     latency: list[float] = []
     missed_segment = 0
     errors: Counter[str] = Counter()
+    walked_on: Counter[str] = Counter()
     for it in clips:
         speech = np.frombuffer(it.pcm, "<i2") / 32768.0
         at = int(LEAD_S * SAMPLE_RATE)
@@ -130,6 +133,8 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
         else:
             oov += 1
             oov_taken += cmd is not None and conf >= policy.min_confidence
+            if cmd == Command.GO and conf >= policy.confirm_below:  # the reasoner walks without asking
+                walked_on[it.text] += 1
     commands = sum(total.values())
     lat = np.array(latency) * 1000 if latency else np.zeros(1)
     return {
@@ -139,6 +144,8 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
         "stop": f"{heard['stop']}/{total['stop']}",
         "by_command": {w: round(heard[w] / max(1, total[w]), 2) for w in WORDS},
         "oov_accepted": round(oov_taken / max(1, oov), 3),
+        "false_walks": sum(walked_on.values()),
+        "walked_on": dict(walked_on),
         "no_segment_over_word": missed_segment,
         "segments_per_clip": round(len(lengths) / max(1, len(clips)), 2),
         "segment_s_p50_p90_max": [round(float(np.percentile(lengths, q)), 2) for q in (50, 90, 100)] if lengths else [],
@@ -180,6 +187,8 @@ def main() -> int:
     ap.add_argument("--vad", default="webrtc,silero", help="the segmenter's VADs to compare")
     ap.add_argument("--silero-threshold", type=float, default=SegmenterConfig.threshold,
                     help="Silero's speech threshold (SegmenterConfig.threshold)")
+    ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
+                    help="the segmenter's early look: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -196,7 +205,7 @@ def main() -> int:
     alone: list[dict[str, object]] = []
     level = np.sqrt(speech_power([c for c in clips if c.label < OTHER]) / 10 ** (args.noise_only_snr / 10))
     for vad in args.vad.split(","):
-        config = SegmenterConfig(vad=vad, threshold=args.silero_threshold)
+        config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, early_quiet_s=args.early_look)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise)
             rows.append(row)

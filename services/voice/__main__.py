@@ -45,6 +45,12 @@ VadOption = Annotated[
                  help="voice activity detector of a live stream (mic, stdin): silero (keeps working in the walking "
                       "robot's own noise) or webrtc; files are trimmed with webrtc"),
 ]
+EarlyLookOption = Annotated[
+    str | None,
+    typer.Option("--early-look", envvar="HRI_VOICE_EARLY_LOOK",
+                 help="live stream: seconds of quiet after which the utterance so far is decoded and, if the engine "
+                      "is sure of a command, ended there; or 'off' [default: 0.09, the end window is 0.15]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -60,12 +66,12 @@ LexiconOption = Annotated[
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
-         walk_gate: WalkGateOption = None, vad: VadOption = "silero") -> None:
+         walk_gate: WalkGateOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate, vad=vad)
+                             head=head, walk_gate=walk_gate, vad=vad, early_look=early_look)
     try:
         check_settings(settings)
     except EngineError as exc:

@@ -14,13 +14,20 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from schemas.messages import HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice.audio import AudioError
-from services.voice.engine import DEFAULT_ENGINE, Engine, EngineError, check_engine_name, make_engine
+from services.voice.engine import (
+    DEFAULT_ENGINE,
+    Engine,
+    EngineError,
+    Recognition,
+    check_engine_name,
+    make_engine,
+)
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 from services.voice.vad import VadError, silero_model_path
@@ -40,6 +47,9 @@ class VoiceSettings:
     """Spotter walk gate (`engine_spotter.walk_gate_for`): a head file, `none`, or None for the default."""
     vad: str = "silero"
     """The live stream's voice activity detector (`segmenter.VADS`); files are always trimmed with WebRTC's."""
+    early_look: str | None = None
+    """`HRI_VOICE_EARLY_LOOK`: seconds of quiet before the segmenter's early look (`SegmenterConfig.early_quiet_s`),
+    or `off`; None: the default."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -53,7 +63,25 @@ class VoiceSettings:
             head=os.environ.get("HRI_VOICE_HEAD") or None,
             walk_gate=os.environ.get("HRI_VOICE_WALK_GATE") or None,
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
+            early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
         )
+
+    def segmenter(self) -> SegmenterConfig:
+        """The live stream's segmenter; `EngineError` for an early look that is not `off` or seconds shorter than
+        the end window."""
+        base = SegmenterConfig(vad=self.vad)
+        if self.early_look is None:
+            return base
+        if self.early_look.strip().lower() == "off":
+            return replace(base, early_quiet_s=None)
+        try:
+            seconds = float(self.early_look)
+        except ValueError:
+            seconds = -1.0
+        if not 0.0 < seconds < base.quiet_s:
+            raise EngineError(f"HRI_VOICE_EARLY_LOOK={self.early_look!r}: 'off' or seconds of quiet above 0 and "
+                              f"below the end window ({base.quiet_s} s)")
+        return replace(base, early_quiet_s=seconds)
 
 
 def check_settings(settings: VoiceSettings) -> None:
@@ -62,6 +90,7 @@ def check_settings(settings: VoiceSettings) -> None:
     check_engine_name(settings.engine)
     if settings.vad not in VADS:
         raise EngineError(f"HRI_VOICE_VAD={settings.vad!r}: one of {', '.join(VADS)}")
+    settings.segmenter()
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
         try:
             silero_model_path()
@@ -94,20 +123,25 @@ class _Stats:
     accepted: int = 0
     rejected: int = 0
     bad_audio: int = 0
+    early_looks: int = 0
+    """Utterances decoded at the segmenter's early look (each also counts in `decode_s`)."""
+    early_taken: int = 0
+    """Of them, the utterances that ended there (a command accepted confidently enough)."""
     decode_s: float = 0.0
     audio_s: float = 0.0
 
     def as_detail(self) -> dict[str, object]:
         return {
             "utterances": self.utterances, "accepted": self.accepted, "rejected_speech": self.rejected,
-            "bad_audio": self.bad_audio,
+            "bad_audio": self.bad_audio, "early_looks": self.early_looks, "early_taken": self.early_taken,
             "real_time_factor": round(self.decode_s / self.audio_s, 4) if self.audio_s else None,
         }
 
 
 def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
-    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad)
+    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad,
+                      early_look_s=settings.segmenter().early_quiet_s)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
     listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
@@ -128,15 +162,30 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         ctx.log.warning("bad audio skipped", file=str(path), error=str(exc))
         ctx.update_detail(**stats.as_detail(), last_error=str(exc))
 
-    def handle(utt: Utterance) -> None:
+    def early_look(pcm: bytes) -> Recognition:
+        """The segmenter's early look. A decoder error here is not the utterance's end: the segmenter waits for
+        the whole utterance, and `handle` decodes (or reports) it."""
+        stats.early_looks += 1
         try:
-            rec = engine.recognise(utt.pcm)
-        except (RuntimeError, ValueError) as exc:  # a decoder error on odd audio: skip it, keep listening
-            stats.bad_audio += 1
-            ctx.log.warning("decode failed", origin=utt.origin, error=str(exc))
-            return
-        stats.utterances += 1
+            rec = engine.recognise(pcm)
+        except (RuntimeError, ValueError) as exc:
+            return Recognition(None, "(early look failed)", 0.0, engine.name, detail={"reason": str(exc)})
         stats.decode_s += rec.decode_s
+        return rec
+
+    def handle(utt: Utterance) -> None:
+        rec = utt.recognition
+        if rec is not None:
+            stats.early_taken += 1
+        else:
+            try:
+                rec = engine.recognise(utt.pcm)
+            except (RuntimeError, ValueError) as exc:  # a decoder error on odd audio: skip it, keep listening
+                stats.bad_audio += 1
+                ctx.log.warning("decode failed", origin=utt.origin, error=str(exc))
+                return
+            stats.decode_s += rec.decode_s
+        stats.utterances += 1
         stats.audio_s += rec.audio_s
         if rec.command is None:
             stats.rejected += 1
@@ -145,7 +194,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         msg = pub.put(rec.message(stamp=utt.stamp))
         ctx.log.info("heard", origin=utt.origin, command=msg.command.value if msg.command else None,
                      text=msg.text, confidence=msg.confidence, decode_ms=round(rec.decode_s * 1000, 1),
-                     latency_ms=round((time.time() - utt.stamp) * 1000, 1), **rec.detail)
+                     latency_ms=round((time.time() - utt.stamp) * 1000, 1), early=utt.recognition is not None,
+                     **rec.detail)
         ctx.update_detail(**stats.as_detail())
 
     delay, last_error = settings.retry_s, ""
@@ -153,7 +203,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         try:
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
-                                  segmenter=SegmenterConfig(vad=settings.vad)):
+                                  segmenter=settings.segmenter(), recognise=early_look):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)

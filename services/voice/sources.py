@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import BinaryIO, Literal
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
+from services.voice.engine import Recognition
 from services.voice.segmenter import Segmenter, SegmenterConfig
 
 ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir>, stdin"
@@ -47,6 +48,8 @@ class Utterance:
     """File name, or `<source>@<offset>s` for streams."""
     stamp: float = field(default_factory=time.time)
     """UNIX time the utterance was captured (stream: when its speech ended; file: when it was found)."""
+    recognition: Recognition | None = None
+    """Already decoded: the segmenter's early look took this utterance (`Segment.recognition`)."""
 
     @property
     def seconds(self) -> float:
@@ -89,14 +92,18 @@ Stop = Callable[[], bool]
 """Returns True when the source should stop."""
 
 
+Recognise = Callable[[bytes], Recognition]
+"""The engine's decoder, for the segmenter's early look."""
+
+
 def stream_utterances(
-    chunks: Iterator[bytes], origin: str, config: SegmenterConfig | None = None
+    chunks: Iterator[bytes], origin: str, config: SegmenterConfig | None = None, recognise: Recognise | None = None,
 ) -> Iterator[Utterance]:
-    """VAD-cut a stream of PCM chunks into utterances."""
-    seg = Segmenter(config or SegmenterConfig())
+    """VAD-cut a stream of PCM chunks into utterances (with `recognise`, the segmenter's early look is on)."""
+    seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
     for chunk in chunks:
         for s in seg.feed(chunk):
-            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
+            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition)
     for s in seg.flush():
         yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
 
@@ -268,13 +275,15 @@ def mic_chunks(device: str, stop: Stop) -> Iterator[bytes]:
 def utterances(
     spec: SourceSpec, stop: Stop, *, stdin: BinaryIO | None = None,
     on_error: Callable[[Path, AudioError], None] | None = None,
-    segmenter: SegmenterConfig | None = None,
+    segmenter: SegmenterConfig | None = None, recognise: Recognise | None = None,
 ) -> Iterator[Utterance]:
-    """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open."""
+    """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open.
+    `recognise` turns on the segmenter's early look for live streams (microphone, stdin); files and spools
+    are not latency-bound and are decoded whole."""
     if spec.kind == "mic":
-        yield from stream_utterances(mic_chunks(spec.target, stop), str(spec), segmenter)
+        yield from stream_utterances(mic_chunks(spec.target, stop), str(spec), segmenter, recognise)
     elif spec.kind == "stdin":
-        yield from stream_utterances(stdin_chunks(stdin or sys.stdin.buffer, stop), "stdin", segmenter)
+        yield from stream_utterances(stdin_chunks(stdin or sys.stdin.buffer, stop), "stdin", segmenter, recognise)
     elif spec.kind == "file":
         path = Path(spec.target)
         if not path.is_file():

@@ -110,6 +110,16 @@ class SileroEndpointer:
         self.in_speech, self._quiet = False, []
         return b""  # the utterance ended; its quiet tail is not speech
 
+    @property
+    def quiet_frames(self) -> int:
+        """Quiet frames in a row so far inside the current utterance (held back: not yet handed over)."""
+        return len(self._quiet) if self.in_speech else 0
+
+    def end_now(self) -> None:
+        """End the current utterance here, as if its quiet frames had reached `end_frames` (the segmenter's
+        early look took it); the next frames at or above the threshold start a new one."""
+        self.in_speech, self._quiet, self._onset = False, [], []
+
     def end_stream(self, tail: bytes) -> bytes | None:
         """The stream ended (with `tail`, less than a frame): the utterance in progress, if any, ends too."""
         if not self.in_speech:

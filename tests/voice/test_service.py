@@ -107,8 +107,11 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
         proc.stdin.flush()  # the pipe stays open: the service must not wait for EOF to stop
         wait_for(lambda: len(heard) >= 2, timeout=30)
         assert [m.command.value if m.command else None for m in heard[:2]] == ["stop", "yes"]
-        health = bus.query_health("voice")
-        assert health is not None and health.detail["vad"] == "silero"  # the stream's default VAD
+        health = wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("utterances") == 2 and h,
+                          timeout=5)
+        assert health.detail["vad"] == "silero"  # the stream's default VAD
+        assert health.detail["early_look_s"] == 0.09  # and its early look, which took the sure commands
+        assert health.detail["early_looks"] >= health.detail["early_taken"] >= 1
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) == 0
     finally:
