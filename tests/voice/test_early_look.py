@@ -14,6 +14,7 @@ from services.voice.segmenter import Segment, Segmenter, SegmenterConfig
 from services.voice.service import VoiceSettings
 
 LEAD_S = 1.0
+ON = SegmenterConfig(early_quiet_s=0.09)
 STEP = 960  # 30 ms chunks, as the service's sources
 
 
@@ -54,8 +55,8 @@ needs_espeak = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-n
 @needs_espeak
 def test_a_sure_command_ends_the_utterance_at_the_early_look() -> None:
     pcm = _stream("stop")
-    whole = _emitted(pcm, SegmenterConfig(), None)
-    early = _emitted(pcm, SegmenterConfig(), _Judge(Command.STOP))
+    whole = _emitted(pcm, ON, None)
+    early = _emitted(pcm, ON, _Judge(Command.STOP))
     assert len(whole) == len(early) == 1 and whole[0][1].recognition is None
     (t_whole, s_whole), (t_early, s_early) = whole[0], early[0]
     assert t_whole - t_early == pytest.approx(0.06, abs=1e-6)  # 2 of the end window's 5 frames sooner
@@ -67,8 +68,8 @@ def test_a_sure_command_ends_the_utterance_at_the_early_look() -> None:
 @pytest.mark.parametrize("judge", [_Judge(None), _Judge(Command.STOP, confidence=0.6)])
 def test_an_unsure_look_waits_for_the_whole_end_window(judge: _Judge) -> None:
     pcm = _stream("stop")
-    whole = _emitted(pcm, SegmenterConfig(), None)
-    looked = _emitted(pcm, SegmenterConfig(early_confidence=0.7), judge)
+    whole = _emitted(pcm, ON, None)
+    looked = _emitted(pcm, SegmenterConfig(early_quiet_s=0.09, early_confidence=0.7), judge)
     assert judge.calls >= 1
     assert [(t, s.pcm, s.recognition) for t, s in looked] == [(t, s.pcm, None) for t, s in whole]
 
@@ -76,17 +77,17 @@ def test_an_unsure_look_waits_for_the_whole_end_window(judge: _Judge) -> None:
 @needs_espeak
 def test_after_an_early_end_the_next_word_is_its_own_utterance() -> None:
     pcm = _stream("stop", "go", gap_s=0.12)  # 120 ms apart: one utterance for the 150 ms end window
-    whole = _emitted(pcm, SegmenterConfig(), None)
-    early = _emitted(pcm, SegmenterConfig(), _Judge(Command.STOP))
+    whole = _emitted(pcm, ON, None)
+    early = _emitted(pcm, ON, _Judge(Command.STOP))
     assert len(whole) == 1
     assert len(early) == 2 and all(s.recognition is not None for _, s in early)
     assert early[0][1].end_s <= early[1][1].start_s + SegmenterConfig.pre_roll_s
 
 
 @needs_espeak
-def test_the_early_look_is_off_without_an_engine_with_webrtc_and_when_disabled() -> None:
+def test_the_early_look_is_off_with_webrtc_and_by_default() -> None:
     pcm = _stream("stop")
-    for config in (SegmenterConfig(vad="webrtc"), SegmenterConfig(early_quiet_s=None)):
+    for config in (SegmenterConfig(vad="webrtc", early_quiet_s=0.09), SegmenterConfig()):
         judge = _Judge(Command.STOP)
         assert all(s.recognition is None for _, s in _emitted(pcm, config, judge)) and judge.calls == 0
 
@@ -97,15 +98,16 @@ def test_the_spotter_hears_the_same_command_sooner_through_the_early_look() -> N
 
     spotter = SpotterEngine.from_path()
     pcm = _stream("stand", "stop")
-    whole = [(t, spotter.recognise(s.pcm).command) for t, s in _emitted(pcm, SegmenterConfig(), None)]
+    whole = [(t, spotter.recognise(s.pcm).command) for t, s in _emitted(pcm, ON, None)]
     early = [(t, s.recognition.command if s.recognition else spotter.recognise(s.pcm).command)
-             for t, s in _emitted(pcm, SegmenterConfig(), spotter.recognise)]
+             for t, s in _emitted(pcm, ON, spotter.recognise)]
     assert [c for _, c in whole] == [c for _, c in early] == [Command.STAND, Command.STOP]
     assert all(te < tw for (te, _), (tw, _) in zip(early, whole, strict=True))
 
 
 def test_early_look_setting() -> None:
     assert VoiceSettings().segmenter().early_quiet_s == SegmenterConfig.early_quiet_s
+    assert VoiceSettings(early_look="0.09").segmenter().early_quiet_s == 0.09
     assert VoiceSettings(early_look="off").segmenter().early_quiet_s is None
     assert VoiceSettings(early_look="0.06").segmenter().early_quiet_s == 0.06
     for bad in ("0.15", "0", "soon"):

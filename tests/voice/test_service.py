@@ -92,15 +92,17 @@ def test_missing_microphone_is_degraded_not_fatal(bus: ServiceContext, start_ser
     json.dumps(h.detail)  # the detail stays JSON
 
 
+@pytest.mark.parametrize("early_look", ["", "0.09"])
 def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_endpoint: str, robot_id: str,
-                                                  tmp_path: Path) -> None:
+                                                  tmp_path: Path, early_look: str) -> None:
     heard: list[VoiceCommand] = []
     bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
     pcm = synth.recording([synth.speech_clip(w, "en-us", 150) for w in ("stop", "yes")], gap_s=1.0)
     log = open(tmp_path / "voice.log", "wb")  # noqa: SIM115 - closed below
     proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
                             stdout=log, stderr=subprocess.STDOUT,
-                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"))
+                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin",
+                                            HRI_VOICE_EARLY_LOOK=early_look))
     try:
         assert proc.stdin is not None
         proc.stdin.write(pcm)
@@ -110,8 +112,11 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
         health = wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("utterances") == 2 and h,
                           timeout=5)
         assert health.detail["vad"] == "silero"  # the stream's default VAD
-        assert health.detail["early_look_s"] == 0.09  # and its early look, which took the sure commands
-        assert health.detail["early_looks"] >= health.detail["early_taken"] >= 1
+        if not early_look:  # off by default
+            assert health.detail["early_look_s"] is None and health.detail["early_looks"] == 0
+        else:  # on: the sure commands were taken at the early look
+            assert health.detail["early_look_s"] == 0.09
+            assert health.detail["early_looks"] >= health.detail["early_taken"] >= 1
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) == 0
     finally:
