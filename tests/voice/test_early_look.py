@@ -65,11 +65,11 @@ def test_a_sure_command_ends_the_utterance_at_the_early_look() -> None:
 
 
 @needs_espeak
-@pytest.mark.parametrize("judge", [_Judge(None), _Judge(Command.STOP, confidence=0.6)])
+@pytest.mark.parametrize("judge", [_Judge(None), _Judge(Command.STOP, confidence=0.8)])
 def test_an_unsure_look_waits_for_the_whole_end_window(judge: _Judge) -> None:
     pcm = _stream("stop")
     whole = _emitted(pcm, ON, None)
-    looked = _emitted(pcm, SegmenterConfig(early_quiet_s=0.09, early_confidence=0.7), judge)
+    looked = _emitted(pcm, SegmenterConfig(early_quiet_s=0.09, early_confidence=0.85), judge)
     assert judge.calls >= 1
     assert [(t, s.pcm, s.recognition) for t, s in looked] == [(t, s.pcm, None) for t, s in whole]
 
