@@ -58,6 +58,11 @@ DISTRACTORS: tuple[str, ...] = (
     "filled_triangle",
     "sign",
 )
+EXTRA_DISTRACTORS: tuple[str, ...] = ("arrow",)
+"""Clutter kinds the generator can draw but does not by default (`Variation.kinds`): adding one to the
+defaults would change every seed's frames. "arrow" (round vision21): an arrow, its head a filled
+triangle, on a light label or straight on the scene; the verifier trained before it named 58 % of such
+labels a triangle (`docs/experiments/scripts/vision21_triclutter_probe.py`)."""
 
 
 @dataclass(frozen=True)
@@ -339,6 +344,10 @@ class SceneGenerator:
             _draw_texture(img, rng, cx, cy, size * 1.5)
         elif kind == "card":
             self._draw_decoy_card(img, cx, cy, size)
+        elif kind == "arrow":
+            _draw_arrow(img, rng, cx, cy, size)
+        else:
+            raise ValueError(f"unknown clutter kind {kind!r}: one of {', '.join(DISTRACTORS + EXTRA_DISTRACTORS)}")
 
     def _draw_decoy_card(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
         """A white card carrying a non-mark: square, filled disc, filled square or a word."""
@@ -677,6 +686,34 @@ def _motion_blur(img: np.ndarray, length: float, angle_deg: float) -> np.ndarray
     cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1, cv2.LINE_AA)
     kernel /= kernel.sum()
     return cv2.filter2D(img, -1, kernel)
+
+
+def _draw_arrow(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
+    """Not a mark: an arrow (a sign's, a label's, a keyboard key's) whose head is a filled triangle, with a
+    shaft of any length and width, sometimes a head at both ends; 70 % on a light label around it."""
+    ang = rng.uniform(0, 2 * math.pi)
+    u, n = np.array([math.cos(ang), math.sin(ang)]), np.array([-math.sin(ang), math.cos(ang)])
+    head_len, head_w = size * rng.uniform(0.3, 0.6), size * rng.uniform(0.3, 0.7)
+    shaft_w = max(2.0, head_w * rng.uniform(0.15, 0.5))
+    tip = np.array([cx, cy]) + u * size / 2
+    tail = np.array([cx, cy]) - u * size / 2
+    if rng.random() < 0.7:  # the label: light, the arrow's box and a margin
+        level = int(rng.integers(190, 256))
+        label = _rotated_rect(cx, cy, size * rng.uniform(1.15, 1.6), head_w * rng.uniform(1.3, 2.2), math.degrees(ang))
+        cv2.fillPoly(img, [label], (level, level, level - int(rng.integers(0, 12))), cv2.LINE_AA)
+    ink = _dark_or_any(rng)
+    ends = [(tip, u)] + ([(tail, -u)] if rng.random() < 0.2 else [])
+    base_of = {id(e): e[0] - e[1] * head_len for e in ends}
+    start = base_of[id(ends[1])] if len(ends) > 1 else tail
+    shaft = np.array([start + n * shaft_w / 2, base_of[id(ends[0])] + n * shaft_w / 2,
+                      base_of[id(ends[0])] - n * shaft_w / 2, start - n * shaft_w / 2])
+    cv2.fillPoly(img, [_fixed(shaft)], ink, cv2.LINE_AA, shift=4)
+    for end in ends:
+        point, d = end
+        base = point - d * head_len
+        side = np.array([-d[1], d[0]])
+        head = np.array([point, base + side * head_w / 2, base - side * head_w / 2])
+        cv2.fillPoly(img, [_fixed(head)], ink, cv2.LINE_AA, shift=4)
 
 
 def _rotated_rect(cx: float, cy: float, w: float, h: float, ang: float) -> np.ndarray:

@@ -81,7 +81,8 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 
 def harvest(
-    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0
+    seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
+    arrows: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -91,11 +92,14 @@ def harvest(
     with fingers have people's variety of fingers (`Variation.hand_variety`); `levels` is the pyramid
     the candidates come from ("1:31,2:31,4:31,6:31", `detector.parse_levels`; "": `HARVEST`'s); with
     `proposals` > 0, every proposal of the committed proposer (`proposer.py`) with a peak of at least
-    that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`)."""
+    that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`); with
+    `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind."""
     import cv2
 
     cv2.setNumThreads(1)
     variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands)
+    if arrows and seed % 2:
+        variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
     gen = SceneGenerator(seed=seed, variation=variation)
     det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
     proposer = Proposer.load() if proposals > 0 else None
@@ -144,22 +148,25 @@ def harvest_all(
     hands: float = 0.0,
     levels: str = "",
     proposals: float = 0.0,
+    arrows: bool = False,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed`, `hands` or `proposals` setting or another pyramid is not
-    used)."""
+    (a cache made with other seeds, another `printed`, `hands`, `proposals` or `arrows` setting or another pyramid
+    is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
-            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals")}
+            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals", "arrows")}
             pyramid = str(z["levels"]) if "levels" in z else ""
-            same = shares == {"printed": printed, "hands": hands, "proposals": proposals} and pyramid == levels
+            asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows)}
+            same = shares == asked and pyramid == levels
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
     n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
-            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n)
+            pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
+                     [arrows] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
@@ -171,6 +178,7 @@ def harvest_all(
             hands=np.array(hands),
             levels=np.array(levels),
             proposals=np.array(proposals),
+            arrows=np.array(float(arrows)),
             **arrays,
         )
     return parts
@@ -369,6 +377,9 @@ def main(
         float,
         typer.Option(help="also harvest the proposer's proposals of at least this peak (proposer.py; 0: none)"),
     ] = 0.0,
+    arrows: Annotated[
+        bool, typer.Option(help="the cluttered chunks also draw arrows (synthetic.EXTRA_DISTRACTORS; round vision21)")
+    ] = False,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -385,7 +396,7 @@ def main(
             raise typer.BadParameter(
                 f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
             ) from None
-    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals)
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])
