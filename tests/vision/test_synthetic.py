@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 from schemas.messages import Shape
-from services.vision.synthetic import MILD, SceneGenerator
+from services.vision.synthetic import MILD, SceneGenerator, Variation
 
 SKIN = np.array([120, 150, 200])  # the fingers' BGR (their rim is darker)
 
@@ -135,3 +136,19 @@ def test_the_lens_has_a_calibration_in_opencvs_model_that_straightens_it() -> No
     before = np.abs(seen[inner].astype(int) - expected[inner]).mean()
     after = np.abs(undistort(seen)[inner].astype(int) - expected[inner]).mean()
     assert after < 0.2 * before, (before, after)
+
+
+def test_arrows_are_drawn_only_when_asked_and_unknown_clutter_is_refused() -> None:
+    """An arrow (round vision21) is clutter the default generator never draws (its frames stay those of every
+    seed before); asked for, it is ink on the scene with a filled triangular head."""
+    default = SceneGenerator(seed=5, variation=MILD, use_skimage=False)
+    assert "arrow" not in default.variation.kinds
+    arrows = SceneGenerator(seed=5, variation=MILD.only(kinds=("arrow",)), use_skimage=False)
+    drawn = 0
+    for _ in range(10):
+        img = np.full((arrows.height, arrows.width, 3), 128, np.uint8)
+        arrows._distractor(img, "arrow")
+        drawn += int((np.abs(img.astype(int) - 128).max(axis=2) > 40).sum() > 50)  # a label or ink, not a speck
+    assert drawn >= 8  # some fall mostly outside the frame
+    with pytest.raises(ValueError, match="unknown clutter kind 'kite'"):
+        SceneGenerator(seed=5, variation=Variation(kinds=("kite",)), use_skimage=False).frame(None)

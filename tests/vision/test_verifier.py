@@ -222,6 +222,19 @@ def test_a_harvest_from_another_pyramid_has_that_pyramids_candidates() -> None:
     assert len(coarser[2]) > len(plain[2])
 
 
+def test_an_arrow_harvest_adds_arrows_to_the_cluttered_chunks_only() -> None:
+    """`training --arrows`: arrows drawn in the cluttered (odd-seed) chunks give 'none' candidates there; the
+    default-variation (even-seed) chunks are those without the option."""
+    from services.vision.training import harvest
+
+    even = harvest(4, 8)
+    assert all(np.array_equal(p, q) for p, q in zip(even, harvest(4, 8, arrows=True), strict=True))
+    plain, arrows = harvest(3, 8), harvest(3, 8, arrows=True)
+    assert all(np.array_equal(p, q) for p, q in zip(arrows, harvest(3, 8, arrows=True), strict=True))
+    none = len(CLASSES) - 1
+    assert not np.array_equal(plain[2], arrows[2]) and int((arrows[2] == none).sum()) > 0
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 

@@ -5,7 +5,6 @@ tuning generator's mark-free frames; counts the frames with a false mark and the
 (the second form: arrows only, with each detector setting given)."""
 import sys, math
 import cv2, numpy as np
-sys.path.insert(0, "/work/main")
 from services.vision.detector import MarkDetector, DetectorConfig
 from services.vision.synthetic import SceneGenerator
 cv2.setNumThreads(1)
