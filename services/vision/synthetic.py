@@ -702,15 +702,13 @@ def _draw_arrow(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) ->
         label = _rotated_rect(cx, cy, size * rng.uniform(1.15, 1.6), head_w * rng.uniform(1.3, 2.2), math.degrees(ang))
         cv2.fillPoly(img, [label], (level, level, level - int(rng.integers(0, 12))), cv2.LINE_AA)
     ink = _dark_or_any(rng)
-    ends = [(tip, u)] + ([(tail, -u)] if rng.random() < 0.2 else [])
-    base_of = {id(e): e[0] - e[1] * head_len for e in ends}
-    start = base_of[id(ends[1])] if len(ends) > 1 else tail
-    shaft = np.array([start + n * shaft_w / 2, base_of[id(ends[0])] + n * shaft_w / 2,
-                      base_of[id(ends[0])] - n * shaft_w / 2, start - n * shaft_w / 2])
+    heads = [(tip, u)] + ([(tail, -u)] if rng.random() < 0.2 else [])  # (point, direction) of each head
+    bases = [point - d * head_len for point, d in heads]
+    start = bases[1] if len(bases) > 1 else tail  # the shaft runs from the tail (or the second head) to the head
+    shaft = np.array([start + n * shaft_w / 2, bases[0] + n * shaft_w / 2,
+                      bases[0] - n * shaft_w / 2, start - n * shaft_w / 2])
     cv2.fillPoly(img, [_fixed(shaft)], ink, cv2.LINE_AA, shift=4)
-    for end in ends:
-        point, d = end
-        base = point - d * head_len
+    for (point, d), base in zip(heads, bases, strict=True):
         side = np.array([-d[1], d[0]])
         head = np.array([point, base + side * head_w / 2, base - side * head_w / 2])
         cv2.fillPoly(img, [_fixed(head)], ink, cv2.LINE_AA, shift=4)
