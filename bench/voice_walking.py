@@ -8,8 +8,8 @@ held-out split, all voice families, the same seed's cache) is placed 1.2 s into 
 robot's ego-noise (`ego_noise.py`: a model made from the motion service's gait, or `--noise-wav`, a
 recording of your own robot; `--standing`: the robot standing still, only its fan and the servos' holding
 hiss), scaled to a speech-to-noise ratio, followed by 1.5 s more of it, and fed to
-the service's `Segmenter` in 30 ms chunks, with the engine for its early look (`--early-look off`: without);
-every segment it emits goes to the engine, as in the service.
+the service's `Segmenter` in 30 ms chunks (with the engine for its early look when `--early-look S` turns it on;
+off by default, as in the service); every segment it emits goes to the engine, as in the service.
 
 Per ratio: commands heard right (the segment that overlaps the word gives its command, accepted; for "go",
 at least the reasoner's `^min-confidence`), "stop" on its own (what a walking robot must hear), non-command
