@@ -293,7 +293,9 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
     the segment is emitted - the clip's speech end (`speech_end_s`), plus decoding time (for a segment the early
     look took: the time of the chunk's `feed`, which decoded it)."""
     rng = np.random.default_rng(5)
-    picks = [it for it in items if it.label < OTHER and it.condition == "clean"][:: max(1, len(items) // (n * 4))][:n]
+    clean = [it for it in items if it.label < OTHER and it.condition == "clean"]
+    picks = clean[:: max(1, len(clean) // n)][:n]  # n spread over the clean commands (before: a stride over all
+    # items, which left 14 of the 40 asked for)
     lat = []
     taken = 0
     for it in picks:
