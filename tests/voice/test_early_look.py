@@ -113,3 +113,17 @@ def test_early_look_setting() -> None:
     for bad in ("0.15", "0", "soon"):
         with pytest.raises(EngineError, match="HRI_VOICE_EARLY_LOOK"):
             VoiceSettings(early_look=bad).segmenter()
+
+
+def test_a_bad_early_look_setting_exits_2_naming_the_variable() -> None:
+    import os
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    out = subprocess.run([sys.executable, "-m", "services.voice"], cwd=ROOT, capture_output=True, text=True,
+                         check=False, timeout=60,
+                         env={**os.environ, "HRI_VOICE_EARLY_LOOK": "soon", "HRI_VOICE_SOURCE": "stdin"})
+    assert out.returncode == 2
+    assert out.stderr.strip().count("\n") == 0 and "HRI_VOICE_EARLY_LOOK='soon'" in out.stderr
