@@ -12,9 +12,9 @@ from bench.voice_bench import speech_end_s
 CFGS = {
     "base-0.15": (SegmenterConfig(early_quiet_s=None), False),
     "end-0.09": (SegmenterConfig(quiet_s=0.09, early_quiet_s=None), False),
-    "early-0.5": (SegmenterConfig(early_confidence=0.5), True),
-    "early-0.7": (SegmenterConfig(early_confidence=0.7), True),
-    "early-0.85": (SegmenterConfig(early_confidence=0.85), True),
+    "early-0.5": (SegmenterConfig(early_quiet_s=0.09, early_confidence=0.5), True),
+    "early-0.7": (SegmenterConfig(early_quiet_s=0.09, early_confidence=0.7), True),
+    "early-0.85": (SegmenterConfig(early_quiet_s=0.09, early_confidence=0.85), True),
 }
 _E = {}
 

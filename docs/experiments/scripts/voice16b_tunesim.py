@@ -38,7 +38,7 @@ def one(r):
             rec = eng.recognise(pcm_)
             looks.append(((k_now[0] + 960) / 2 / SAMPLE_RATE - end, rec.command.value if rec.command else None, rec.confidence, rec.detail.get("p")))
             return Recognition(None, "x", 0.0, "t")
-        seg = Segmenter(SegmenterConfig(), recognise=judge); segs = []
+        seg = Segmenter(SegmenterConfig(early_quiet_s=0.09), recognise=judge); segs = []
         for k in range(0, len(x), 960):
             k_now[0] = k
             for s in seg.feed(x[k:k + 960]):
