@@ -3,14 +3,16 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE] [--lens K [--calibrated [--keep-matrix]]]
-                                           (--hand-variety, --calibrated, --keep-matrix: tuning split only)
+                                           [--hand-variety SHARE] [--hand-drawn SHARE]
+                                           [--lens K [--calibrated [--keep-matrix]]]
+                                           (--hand-variety, --hand-drawn, --calibrated, --keep-matrix: tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
 backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `--split tuning` uses
 `services/vision/synthetic.py`, the generator the detector was tuned on (`--hand-variety`: that share
-of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--lens K`: every
+of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--hand-drawn S`: that
+share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--lens K`: every
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
@@ -75,6 +77,9 @@ def main(
         float,
         typer.Option(help="tuning split only: share of cards with fingers given people's variety of fingers"),
     ] = 0.0,
+    hand_drawn: Annotated[
+        float, typer.Option(help="tuning split only: share of marks drawn by hand with a pen (Variation.hand_drawn)")
+    ] = 0.0,
     lens: Annotated[
         float,
         typer.Option(
@@ -97,10 +102,12 @@ def main(
     cv2.setNumThreads(1)
     if hand_variety and split != "tuning":
         raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
+    if hand_drawn and split != "tuning":
+        raise typer.BadParameter("--hand-drawn is a tuning-generator setting (--split tuning)")
     if calibrated and (not lens or split != "tuning"):
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     try:
-        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix)
+        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn)
     except ValueError as exc:  # a held-out lens the model cannot show
         raise typer.BadParameter(str(exc), param_hint="--lens") from None
     det = _detector(settings or [])
@@ -158,6 +165,7 @@ def main(
         "frames": frames,
         "seed": seed,
         "hand_variety": hand_variety,
+        "hand_drawn": hand_drawn,
         "lens": lens,
         "calibrated": calibrated,
         "keep_matrix": keep_matrix,
@@ -206,7 +214,7 @@ FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | 
 
 
 def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
-               calibrated: bool = False, keep_matrix: bool = False) -> FrameFn:
+               calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0) -> FrameFn:
     if split == "heldout":
         from services.vision.heldout import HeldOutGenerator
 
@@ -230,12 +238,12 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
     if split == "tuning":
         from services.vision.synthetic import SceneGenerator, Variation
 
-        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, lens=lens))
+        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, lens=lens))
         if calibrated:  # the same scenes without the lens (the lens draws nothing): where the marks are
             from services.vision.calibration import Undistorter
             from services.vision.synthetic import lens_calibration
 
-            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
+            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn))
             undistort = Undistorter(lens_calibration(lens, pinhole.width, pinhole.height),
                                     None if keep_matrix else 1.0)
             new = undistort.new_matrix(pinhole.width, pinhole.height)
@@ -263,6 +271,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
                 "blur_px": _bin(scene.blur[0], BLUR_BINS),
                 # fingers reaching from the card's edge towards the mark (over its edge for some)
                 "finger_near_mark": str(scene.fingers > 0).lower(),
+                **({"by_hand": str(scene.by_hand is not None).lower()} if hand_drawn else {}),
                 **inside,
             }
             return img, (labels[0].shape, labels[0].box), meta

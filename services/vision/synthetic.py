@@ -11,6 +11,7 @@ scikit-image is importable, otherwise they are procedural.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import string
 from dataclasses import dataclass, replace
@@ -94,6 +95,10 @@ class Variation:
     fingers: float = 0.4  # share of cards with fingers reaching towards the mark
     finger_over: float = 0.3  # share of those whose fingertips lie over the mark's edge
     pale_ink: float = 0.2  # share of marks in pale ink (mixed 15-45 % towards the paper)
+    hand_drawn: float = 0.0
+    """share of marks drawn by hand with a pen (`_draw_by_hand`): a triangle of uneven sides and angles, an X of
+    bowed bars of unequal length crossing off their middles, an O a wobbly oval whose stroke overlaps where it
+    closes; every stroke wavers, swells and thins, with round ends and corners (0: the generator's exact shapes)"""
     hand_variety: float = 0.0
     """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
     as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
@@ -157,6 +162,7 @@ class Scene:
     skin: tuple[int, int, int] = (95, 125, 175)  # BGR; the lit middle of a finger is 25 levels lighter
     finger_edge: int = 0  # the card edge they come over: quarter turns from the bottom
     lens: float = 0.0  # barrel distortion k (`Variation.lens`), applied before light, blur, noise and JPEG
+    by_hand: int | None = None  # the random stream of a mark drawn by hand (`Variation.hand_drawn`), or None
 
 
 class SceneGenerator:
@@ -229,6 +235,9 @@ class SceneGenerator:
             scene.finger_width = float(rng.uniform(0.12, 0.45))
             scene.skin = _skin(rng)
             scene.finger_edge = int(rng.integers(0, 4))
+        # no draw at all when hand_drawn is 0, so that older seeds' scenes stay as they were
+        if v.hand_drawn and rng.random() < v.hand_drawn:
+            scene.by_hand = int(rng.integers(2**31))
         scene.lens = v.lens  # the camera's, not drawn
         return scene
 
@@ -431,16 +440,22 @@ class SceneGenerator:
         cw, ch = scene.card[0] * s * k, scene.card[1] * s * k
         card = np.empty((int(ch), int(cw), 3), np.uint8)
         card[:] = scene.paper
-        mark_pts = _draw_mark(
-            card,
-            scene.shape,
-            (cw / 2, ch / 2),
-            s * k,
-            scene.stroke * s * k,
-            scene.ink,
-            scene.skew,
-            scene.filled,
-        )
+        if scene.by_hand is not None and scene.shape is not None:
+            mark_pts = _draw_by_hand(
+                card, scene.shape, (cw / 2, ch / 2), s * k, scene.stroke * s * k, scene.ink, scene.filled,
+                np.random.default_rng(scene.by_hand),
+            )
+        else:
+            mark_pts = _draw_mark(
+                card,
+                scene.shape,
+                (cw / 2, ch / 2),
+                s * k,
+                scene.stroke * s * k,
+                scene.ink,
+                scene.skew,
+                scene.filled,
+            )
         if scene.fingers:
             # fingers over the card's bottom edge (or another: the card turned, drawn on, turned back),
             # their tips stopping short of the mark
@@ -552,6 +567,82 @@ def _draw_mark(
                 ]
         return np.array(pts)
     return np.array([[cx, cy]])
+
+
+def _draw_by_hand(
+    card: np.ndarray, shape: Shape, c: tuple[float, float], s: float, t: float, ink: tuple[int, int, int],
+    filled: bool, rng: Rng,
+) -> np.ndarray:
+    """`_draw_mark`'s shapes as a person draws them with a pen (`Variation.hand_drawn`); the outline points."""
+    centre = np.array(c, np.float64)
+    if shape is Shape.O:
+        # an oval, its axes up to 15 % apart and turned any way, its radius wavering by a few per cent;
+        # the pen goes on past where it started, and not quite back onto its first line
+        start, over = rng.uniform(0, 2 * math.pi), rng.uniform(0.05, 0.5)
+        theta = np.linspace(start, start + 2 * math.pi + over, 90)
+        aspect, turn = rng.uniform(0.85, 1.0), rng.uniform(0, math.pi)
+        drift = np.linspace(0, rng.uniform(-0.35, 0.35) * t, theta.size)
+        rad = (s - t) / 2 * (1 + _waver(rng, theta.size, 0.03)) + drift
+        local = np.stack([rad * np.cos(theta), aspect * rad * np.sin(theta)], axis=1)
+        rot = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+        path = centre + local @ rot.T
+        return _pen(card, [path], t, ink, rng)
+    if shape is Shape.TRIANGLE:
+        # each corner of the exact triangle moved by up to a tenth of the size: uneven sides and angles
+        r_out = s / math.sqrt(3)
+        ang = np.radians(-90 + 120 * np.arange(3) + rng.uniform(-8, 8))
+        verts = centre + r_out * np.stack([np.cos(ang), np.sin(ang)], axis=1) + rng.uniform(-0.1, 0.1, (3, 2)) * s
+        verts += centre - verts.mean(axis=0)
+        first = int(rng.integers(0, 3))
+        corners = np.roll(verts, -first, axis=0)
+        ring = np.vstack([corners, corners[:1], corners[0] + rng.uniform(0.0, 0.12) * (corners[1] - corners[0])])
+        path = np.vstack([_wavy_line(rng, a, b, s) for a, b in itertools.pairwise(ring)])
+        if filled:
+            cv2.fillPoly(card, [_fixed(path)], ink, cv2.LINE_AA, shift=4)
+        return _pen(card, [path], t, ink, rng)
+    # X: two bowed bars of unequal length crossing up to 15 % off their middles, at 70-110 degrees
+    bars = []
+    mid = rng.uniform(-0.15, 0.15, 2) * s
+    for k, bar in enumerate((45 + rng.uniform(-10, 10), 135 + rng.uniform(-10, 10))):
+        half = (s - t) / 2 * math.sqrt(2) * rng.uniform(0.85, 1.0)
+        d = np.array([math.cos(math.radians(bar)), math.sin(math.radians(bar))])
+        a, b = centre + (mid[k] - half) * d, centre + (mid[k] + half) * d
+        bars.append(_wavy_line(rng, a, b, s, bow=0.04))
+    return _pen(card, bars, t, ink, rng)
+
+
+def _waver(rng: Rng, n: int, amount: float) -> np.ndarray:
+    """A smooth random wobble of n samples, at most about `amount` (two slow sine waves)."""
+    x = np.linspace(0, 1, n)
+    return amount * sum(
+        rng.uniform(-1, 1) * np.sin(2 * math.pi * (rng.uniform(0.5, 2.5) * x + rng.uniform(0, 1))) for _ in range(2)
+    ) / 2
+
+
+def _wavy_line(rng: Rng, a: np.ndarray, b: np.ndarray, s: float, bow: float = 0.025) -> np.ndarray:
+    """Points from a to b, bowed and wavering sideways by up to `bow` of the mark's size `s`."""
+    n = max(8, int(np.linalg.norm(b - a) / max(s, 1) * 40))
+    x = np.linspace(0, 1, n)[:, None]
+    normal = np.array([-(b - a)[1], (b - a)[0]]) / max(float(np.linalg.norm(b - a)), 1e-6)
+    side = rng.uniform(-bow, bow) * s * np.sin(math.pi * x) + _waver(rng, n, bow / 2)[:, None] * s
+    pts: np.ndarray = a + x * (b - a) + side * normal
+    return pts
+
+
+def _pen(card: np.ndarray, strokes: list[np.ndarray], t: float, ink: tuple[int, int, int], rng: Rng) -> np.ndarray:
+    """Draw each stroke as a pen does: round ends and corners, the width swelling and thinning by up to a
+    fifth along the way; the points around the strokes, for the label."""
+    for path in strokes:
+        width = t * (1 + _waver(rng, len(path), 0.4))
+        for (p, q), w in zip(itertools.pairwise(path), width[1:], strict=False):
+            cv2.line(card, _sub(p), _sub(q), ink, max(1, round(w)), cv2.LINE_AA, shift=4)
+    pts = np.vstack(strokes)
+    return np.vstack([pts + (dx, dy) for dx in (-t / 2, t / 2) for dy in (-t / 2, t / 2)])
+
+
+def _sub(p: np.ndarray) -> tuple[int, int]:
+    """A point in OpenCV's fixed point (shift=4)."""
+    return round(float(p[0]) * 16), round(float(p[1]) * 16)
 
 
 def _point(p: np.ndarray) -> tuple[int, int]:

@@ -3,7 +3,7 @@
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
-                                       [--levels PYRAMID] [--arrows]
+                                       [--levels PYRAMID] [--arrows] [--hand-drawn SHARE]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
@@ -82,7 +82,7 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
-    arrows: bool = False,
+    arrows: bool = False, hand_drawn: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -93,11 +93,12 @@ def harvest(
     the candidates come from ("1:31,2:31,4:31,6:31", `detector.parse_levels`; "": `HARVEST`'s); with
     `proposals` > 0, every proposal of the committed proposer (`proposer.py`) with a peak of at least
     that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`); with
-    `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind."""
+    `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
+    a share `hand_drawn` of the marks is drawn by hand with a pen (`Variation.hand_drawn`)."""
     import cv2
 
     cv2.setNumThreads(1)
-    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands)
+    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands, hand_drawn=hand_drawn)
     if arrows and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
     gen = SceneGenerator(seed=seed, variation=variation)
@@ -149,16 +150,20 @@ def harvest_all(
     levels: str = "",
     proposals: float = 0.0,
     arrows: bool = False,
+    hand_drawn: float = 0.0,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed`, `hands`, `proposals` or `arrows` setting or another pyramid
-    is not used)."""
+    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows` or `hand_drawn` setting or
+    another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
-            shares = {k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals", "arrows")}
+            shares = {
+                k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals", "arrows", "hand_drawn")
+            }
             pyramid = str(z["levels"]) if "levels" in z else ""
-            asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows)}
+            asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
+                     "hand_drawn": hand_drawn}
             same = shares == asked and pyramid == levels
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
@@ -166,7 +171,7 @@ def harvest_all(
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
-                     [arrows] * n)
+                     [arrows] * n, [hand_drawn] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
@@ -179,6 +184,7 @@ def harvest_all(
             levels=np.array(levels),
             proposals=np.array(proposals),
             arrows=np.array(float(arrows)),
+            hand_drawn=np.array(hand_drawn),
             **arrays,
         )
     return parts
@@ -380,6 +386,9 @@ def main(
     arrows: Annotated[
         bool, typer.Option(help="the cluttered chunks also draw arrows (synthetic.EXTRA_DISTRACTORS; round vision21)")
     ] = False,
+    hand_drawn: Annotated[
+        float, typer.Option(help="share of marks drawn by hand with a pen (Variation.hand_drawn; round vision22)")
+    ] = 0.0,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -396,7 +405,7 @@ def main(
             raise typer.BadParameter(
                 f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
             ) from None
-    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows)
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])

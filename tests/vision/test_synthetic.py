@@ -152,3 +152,27 @@ def test_arrows_are_drawn_only_when_asked_and_unknown_clutter_is_refused() -> No
     assert drawn >= 8  # some fall mostly outside the frame
     with pytest.raises(ValueError, match="unknown clutter kind 'kite'"):
         SceneGenerator(seed=5, variation=Variation(kinds=("kite",)), use_skimage=False).frame(None)
+
+
+def test_marks_drawn_by_hand_keep_the_scene_and_their_box_holds_the_ink() -> None:
+    """`hand_drawn` (round vision22): a mark drawn with a pen - uneven, wavering, round-ended - in the same scene
+    as the exact mark; the label's box holds its ink. At 0 nothing is drawn from the random stream, so every
+    seed's scenes stay those of before."""
+    assert all(SceneGenerator(seed=s, variation=MILD).scene(Shape.X).by_hand is None for s in range(4))
+    for seed in range(9):
+        shape = (Shape.X, Shape.O, Shape.TRIANGLE)[seed % 3]
+        exact = SceneGenerator(seed=seed, variation=MILD.only(noise=0.0))
+        by_hand = SceneGenerator(seed=seed, variation=MILD.only(noise=0.0, hand_drawn=1.0))
+        a, b = exact.scene(shape), by_hand.scene(shape)
+        assert (a.size, a.center, a.ink) == (b.size, b.center, b.ink) and b.by_hand is not None
+        img_a, lab_a = exact.render(a)
+        img_b, lab_b = by_hand.render(b)
+        b.ink = b.paper  # the same scene with the mark in the paper's colour: the difference is its ink
+        blank, _ = by_hand.render(b)
+        # (dark: the hand holding the card's corner is drawn anew at each render, in skin tones)
+        mark_ink = (np.abs(img_b.astype(int) - blank).max(axis=2) > 30) & (img_b.max(axis=2) < 110)
+        x, y, w, h = lab_b[0].box
+        inside = mark_ink[y : y + h, x : x + w].sum()
+        assert inside >= 0.97 * mark_ink.sum(), (shape, inside, mark_ink.sum())
+        assert np.abs(img_a.astype(int) - img_b).max(axis=2).astype(bool).sum() > 100  # another drawing
+        assert abs(lab_a[0].box[2] - w) < 0.35 * w  # about the same size

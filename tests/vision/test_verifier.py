@@ -235,6 +235,18 @@ def test_an_arrow_harvest_adds_arrows_to_the_cluttered_chunks_only() -> None:
     assert not np.array_equal(plain[2], arrows[2]) and int((arrows[2] == none).sum()) > 0
 
 
+def test_a_hand_drawn_harvest_draws_its_marks_by_hand_reproducibly() -> None:
+    """`training --hand-drawn S` (round vision22): the marks of the harvested frames are drawn by hand, so their
+    candidates differ from the exact marks'; the same call gives the same candidates."""
+    from services.vision.training import harvest
+
+    plain, by_hand = harvest(4, 8), harvest(4, 8, hand_drawn=1.0)
+    assert all(np.array_equal(p, q) for p, q in zip(by_hand, harvest(4, 8, hand_drawn=1.0), strict=True))
+    none = len(CLASSES) - 1
+    assert int((by_hand[2] != none).sum()) > 0  # marks drawn by hand are still found and labelled
+    assert len(plain[0]) != len(by_hand[0]) or not np.array_equal(plain[0], by_hand[0])
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 
