@@ -1,6 +1,7 @@
 """Where true marks are lost in the detector, on the TUNING generator (`synthetic.py`) only.
 
     .venv/bin/python bench/vision_stages.py [--frames 600] [--seed 99] [--verify/--no-verify] [--propose 0.3]
+                                            [--hand-variety SHARE] [--hand-drawn SHARE]
 
 For every frame that holds a mark, every sizeable component of every binarisation and pyramid level is
 followed through the detector (`MarkDetector.trace`) and the mark is charged to the furthest stage that
@@ -76,9 +77,12 @@ def main(
     hand_variety: Annotated[
         float, typer.Option(help="share of cards with fingers given people's variety of fingers")
     ] = 0.0,
+    hand_drawn: Annotated[
+        float, typer.Option(help="share of marks drawn by hand with a pen (Variation.hand_drawn)")
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
-    gen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety))
+    gen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn))
     det = MarkDetector(DetectorConfig(verify=verify, propose=propose))
     by_class: dict[str, Counter[str]] = defaultdict(Counter)
     by_slice: dict[str, Counter[str]] = defaultdict(Counter)
@@ -102,6 +106,7 @@ def main(
             "colour ink": max(scene.ink) - min(scene.ink) > 60,
             "filled triangle": scene.filled and scene.shape is Shape.TRIANGLE,
             "dim<0.7": float(np.median(scene.light)) < 0.7,
+            "by hand": scene.by_hand is not None,
         }
         for name, on in slices.items():
             if on:
@@ -113,6 +118,7 @@ def main(
         "frames": frames,
         "seed": seed,
         "hand_variety": hand_variety,
+        "hand_drawn": hand_drawn,
         "verify": verify,
         "propose": propose if verify else 0.0,
         "stages": list(COLUMNS),

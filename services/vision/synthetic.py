@@ -99,6 +99,7 @@ class Variation:
     """share of marks drawn by hand with a pen (`_draw_by_hand`): a triangle of uneven sides and angles, an X of
     bowed bars of unequal length crossing off their middles, an O a wobbly oval whose stroke overlaps where it
     closes; every stroke wavers, swells and thins, with round ends and corners (0: the generator's exact shapes)"""
+    hand_drawn_shapes: tuple[Shape, ...] = (Shape.X, Shape.O, Shape.TRIANGLE)  # the shapes `hand_drawn` applies to
     hand_variety: float = 0.0
     """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
     as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
@@ -237,7 +238,8 @@ class SceneGenerator:
             scene.finger_edge = int(rng.integers(0, 4))
         # no draw at all when hand_drawn is 0, so that older seeds' scenes stay as they were
         if v.hand_drawn and rng.random() < v.hand_drawn:
-            scene.by_hand = int(rng.integers(2**31))
+            by_hand = int(rng.integers(2**31))
+            scene.by_hand = by_hand if shape in v.hand_drawn_shapes else None
         scene.lens = v.lens  # the camera's, not drawn
         return scene
 

@@ -3,7 +3,7 @@
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
-                                       [--levels PYRAMID] [--arrows] [--hand-drawn SHARE]
+                                       [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
@@ -72,6 +72,18 @@ HARVEST = DetectorConfig(
 )
 
 
+HAND_DRAWN_SHAPES = "X,O,TRIANGLE"
+
+
+def parse_shapes(text: str) -> tuple[Shape, ...]:
+    """"X,TRIANGLE" -> (Shape.X, Shape.TRIANGLE); ValueError naming an unknown shape."""
+    names = [t.strip().upper() for t in text.split(",") if t.strip()]
+    unknown = [n for n in names if n not in Shape.__members__]
+    if unknown or not names:
+        raise ValueError(f"shapes {text!r}: comma-separated names of {', '.join(Shape.__members__)}")
+    return tuple(Shape[n] for n in names)
+
+
 def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
     ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
     iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
@@ -82,7 +94,7 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
-    arrows: bool = False, hand_drawn: float = 0.0,
+    arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -94,11 +106,14 @@ def harvest(
     `proposals` > 0, every proposal of the committed proposer (`proposer.py`) with a peak of at least
     that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`); with
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
-    a share `hand_drawn` of the marks is drawn by hand with a pen (`Variation.hand_drawn`)."""
+    a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
+    pen (`Variation.hand_drawn`)."""
     import cv2
 
     cv2.setNumThreads(1)
-    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=hands, hand_drawn=hand_drawn)
+    variation = (CLUTTERED if seed % 2 else DEFAULT).only(
+        hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes)
+    )
     if arrows and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
     gen = SceneGenerator(seed=seed, variation=variation)
@@ -151,10 +166,11 @@ def harvest_all(
     proposals: float = 0.0,
     arrows: bool = False,
     hand_drawn: float = 0.0,
+    hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows` or `hand_drawn` setting or
-    another pyramid is not used)."""
+    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows` or `hand_drawn` setting,
+    other `hand_drawn_shapes` or another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
@@ -164,14 +180,15 @@ def harvest_all(
             pyramid = str(z["levels"]) if "levels" in z else ""
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
                      "hand_drawn": hand_drawn}
-            same = shares == asked and pyramid == levels
+            drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
+            same = shares == asked and pyramid == levels and (drawn == hand_drawn_shapes or not hand_drawn)
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
     n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
-                     [arrows] * n, [hand_drawn] * n)
+                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
@@ -185,6 +202,7 @@ def harvest_all(
             proposals=np.array(proposals),
             arrows=np.array(float(arrows)),
             hand_drawn=np.array(hand_drawn),
+            hand_drawn_shapes=np.array(hand_drawn_shapes),
             **arrays,
         )
     return parts
@@ -389,6 +407,9 @@ def main(
     hand_drawn: Annotated[
         float, typer.Option(help="share of marks drawn by hand with a pen (Variation.hand_drawn; round vision22)")
     ] = 0.0,
+    hand_drawn_shapes: Annotated[
+        str, typer.Option(help="the shapes --hand-drawn applies to, comma-separated (round vision22c: TRIANGLE)")
+    ] = HAND_DRAWN_SHAPES,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -405,7 +426,12 @@ def main(
             raise typer.BadParameter(
                 f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
             ) from None
-    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn)
+    try:
+        parse_shapes(hand_drawn_shapes)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--hand-drawn-shapes") from None
+    parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
+                        hand_drawn_shapes)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])
