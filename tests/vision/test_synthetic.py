@@ -176,3 +176,16 @@ def test_marks_drawn_by_hand_keep_the_scene_and_their_box_holds_the_ink() -> Non
         assert inside >= 0.97 * mark_ink.sum(), (shape, inside, mark_ink.sum())
         assert np.abs(img_a.astype(int) - img_b).max(axis=2).astype(bool).sum() > 100  # another drawing
         assert abs(lab_a[0].box[2] - w) < 0.35 * w  # about the same size
+
+
+def test_hand_drawn_shapes_limit_the_pen_to_those_shapes() -> None:
+    """`hand_drawn_shapes` (round vision22c): only marks of those shapes are drawn by hand; the others keep the
+    exact drawing, and the scenes' other draws are unchanged."""
+    only_triangles = MILD.only(hand_drawn=1.0, hand_drawn_shapes=(Shape.TRIANGLE,))
+    for seed in range(4):
+        every = SceneGenerator(seed=seed, variation=MILD.only(hand_drawn=1.0))
+        some = SceneGenerator(seed=seed, variation=only_triangles)
+        for shape in (Shape.X, Shape.O, Shape.TRIANGLE):
+            a, b = every.scene(shape), some.scene(shape)
+            assert (a.size, a.center, a.ink) == (b.size, b.center, b.ink)
+            assert (b.by_hand is not None) == (shape is Shape.TRIANGLE) and a.by_hand is not None

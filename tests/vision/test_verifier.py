@@ -247,6 +247,16 @@ def test_a_hand_drawn_harvest_draws_its_marks_by_hand_reproducibly() -> None:
     assert len(plain[0]) != len(by_hand[0]) or not np.array_equal(plain[0], by_hand[0])
 
 
+def test_hand_drawn_shapes_are_parsed_and_an_unknown_one_is_refused() -> None:
+    from services.vision.training import parse_shapes
+
+    assert parse_shapes("TRIANGLE") == (Shape.TRIANGLE,)
+    assert parse_shapes(" x, o ") == (Shape.X, Shape.O)
+    for bad in ("kite", "", "X,square"):
+        with pytest.raises(ValueError, match="comma-separated names of X, O, TRIANGLE"):
+            parse_shapes(bad)
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 
