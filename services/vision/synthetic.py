@@ -622,7 +622,7 @@ def _waver(rng: Rng, n: int, amount: float) -> np.ndarray:
 
 
 def _wavy_line(rng: Rng, a: np.ndarray, b: np.ndarray, s: float, bow: float = 0.025) -> np.ndarray:
-    """Points from a to b, bowed and wavering sideways by up to `bow` of the mark's size `s`."""
+    """Points from a to b, bowed sideways by up to `bow` of the mark's size `s` and wavering by up to half that."""
     n = max(8, int(np.linalg.norm(b - a) / max(s, 1) * 40))
     x = np.linspace(0, 1, n)[:, None]
     normal = np.array([-(b - a)[1], (b - a)[0]]) / max(float(np.linalg.norm(b - a)), 1e-6)
@@ -632,8 +632,8 @@ def _wavy_line(rng: Rng, a: np.ndarray, b: np.ndarray, s: float, bow: float = 0.
 
 
 def _pen(card: np.ndarray, strokes: list[np.ndarray], t: float, ink: tuple[int, int, int], rng: Rng) -> np.ndarray:
-    """Draw each stroke as a pen does: round ends and corners, the width swelling and thinning by up to a
-    fifth along the way; the points around the strokes, for the label."""
+    """Draw each stroke as a pen does: round ends and corners, the width swelling and thinning along the way
+    (by up to 40 %); the points around the strokes, for the label."""
     for path in strokes:
         width = t * (1 + _waver(rng, len(path), 0.4))
         for (p, q), w in zip(itertools.pairwise(path), width[1:], strict=False):
