@@ -47,6 +47,10 @@ VARIATIONS: dict[str, Variation] = {
     "jpeg_40_and_noise": MILD.only(jpeg=(40, 45), noise=12.0),
     "tilt_45": MILD.only(tilt_deg=45.0, rotation_deg=180.0),
     "fills_frame": MILD.only(size=(300.0, 430.0), border=(0.1, 0.3)),
+    # drawn with a pen (round vision22): uneven, wavering, round-ended strokes; alone they are found, it is
+    # together with blur, small size and fingers that they are lost (vision README, "Vision22")
+    "drawn_by_hand": MILD.only(hand_drawn=1.0, rotation_deg=180.0),
+    "drawn_by_hand_filled_triangle": MILD.only(hand_drawn=1.0, filled_triangle=1.0, rotation_deg=180.0),
 }
 
 
