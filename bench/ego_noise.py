@@ -32,6 +32,7 @@ from services.motion.gait import Gait, GaitParams
 from services.motion.joints import TICKS_PER_DEGREE
 from services.voice.audio import SAMPLE_RATE
 from services.voice.synth import noise
+from services.voice.training.augment import active_power
 
 GEAR_RATIO = 193.0
 """MX-28 reduction."""
@@ -133,12 +134,6 @@ def ego_noise(seconds: float, rng: np.random.Generator, model: EgoNoiseModel | N
             _add(out, at, m.footfall * gain * _burst(int(0.08 * SAMPLE_RATE), 0.015, (0.0, 600.0), rng))
             _add(out, at, 0.5 * m.footfall * gain * _burst(int(0.01 * SAMPLE_RATE), 0.002, (2000.0, 6000.0), rng))
     return unit_rms(out)
-
-
-def active_power(speech: np.ndarray) -> float:
-    """Mean power of the speech's active part (samples above 5 % of its peak), float ±1 full scale."""
-    active = speech[np.abs(speech) > 0.05 * np.max(np.abs(speech))]
-    return float(np.mean(active**2)) if active.size else float(np.mean(speech**2))
 
 
 def mix(speech: np.ndarray, ego: np.ndarray, snr_db: float, at: int) -> np.ndarray:

@@ -37,12 +37,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.ego_noise import EgoNoiseModel, active_power, ego_noise, mix, unit_rms  # noqa: E402
+from bench.ego_noise import EgoNoiseModel, ego_noise, mix, unit_rms  # noqa: E402
 from bench.voice_bench import OTHER, WORDS, Item, Policy, early_look_arg, heldout_items, speech_end_s  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
+from services.voice.training.augment import active_power  # noqa: E402
 
 LEAD_S = 1.2
 TAIL_S = 1.5

@@ -58,6 +58,13 @@ def babble(n: int, rng: np.random.Generator, others: list[np.ndarray]) -> np.nda
     return out if np.any(out) else noise("pink", n, rng)
 
 
+def active_power(speech: np.ndarray) -> float:
+    """Mean power of the speech's active part (samples above 5 % of its peak), float ±1 full scale: what noise
+    is scaled to for a speech-to-noise ratio, so that silence around a word does not count."""
+    active = speech[np.abs(speech) > 0.05 * np.max(np.abs(speech))]
+    return float(np.mean(active**2)) if active.size else float(np.mean(speech**2))
+
+
 def apply(speech: np.ndarray, aug: Augment, rng: np.random.Generator,
           others: list[np.ndarray] | None = None) -> np.ndarray:
     x = speech
@@ -72,8 +79,7 @@ def apply(speech: np.ndarray, aug: Augment, rng: np.random.Generator,
         x = sosfilt(butter(2, [lo, min(hi, 7900.0)], btype="bandpass", fs=SAMPLE_RATE, output="sos"), x)
     x = aug.peak * x / (np.max(np.abs(x)) + 1e-9)
     if aug.noise is not None:
-        active = x[np.abs(x) > 0.05 * aug.peak]
-        p = float(np.mean(active**2)) if active.size else float(np.mean(x**2))
+        p = active_power(x)
         bg = babble(x.size, rng, others or []) if aug.noise == "babble" else noise(aug.noise, x.size, rng)
         bg = bg / (np.sqrt(np.mean(bg**2)) + 1e-12)
         x = x + bg * np.sqrt(p / 10 ** (aug.snr_db / 10))
