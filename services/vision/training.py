@@ -181,7 +181,8 @@ def harvest_all(
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
                      "hand_drawn": hand_drawn}
             drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
-            same = shares == asked and pyramid == levels and (drawn == hand_drawn_shapes or not hand_drawn)
+            same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
+            same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
     n = len(seeds)

@@ -257,6 +257,38 @@ def test_hand_drawn_shapes_are_parsed_and_an_unknown_one_is_refused() -> None:
             parse_shapes(bad)
 
 
+def test_the_harvest_cache_is_reused_for_the_same_shapes_however_spelt(tmp_path: Path) -> None:
+    """A cache made with `--hand-drawn-shapes TRIANGLE` serves `triangle` or `O,X` written as `X,O` (the shapes,
+    not their spelling, decide), and another set of shapes harvests again (here: a harvest that is refused)."""
+    from services.vision import training
+
+    parts = [tuple(np.full(2, k + j) for j in range(4)) for k in range(2)]
+    seeds = [7, 8]
+
+    def cache_for(shapes: str) -> Path:
+        path = tmp_path / f"{shapes}.npz"
+        np.savez(path, seeds=np.array(seeds), hand_drawn=np.array(0.4), levels=np.array(""),
+                 hand_drawn_shapes=np.array(shapes), **{f"{k}_{j}": a for k, p in enumerate(parts) for j, a in enumerate(p)})
+        return path
+
+    def read(cache: Path, shapes: str) -> list[tuple[np.ndarray, ...]]:
+        return training.harvest_all(2 * training.CHUNK, 7, 1, cache, hand_drawn=0.4, hand_drawn_shapes=shapes)
+
+    class Refused(RuntimeError):
+        pass
+
+    def no_pool(*args: object, **kwargs: object) -> None:
+        raise Refused
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(training, "ProcessPoolExecutor", no_pool)  # a harvest would start here
+        for stored, asked in (("TRIANGLE", "triangle"), ("O,X", "X,O"), ("X,O,TRIANGLE", " triangle, x ,o")):
+            got = read(cache_for(stored), asked)
+            assert [[a.tolist() for a in p] for p in got] == [[a.tolist() for a in p] for p in parts]
+        with pytest.raises(Refused):  # other shapes: the cache is not used
+            read(cache_for("TRIANGLE"), "X")
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 
