@@ -1,22 +1,26 @@
 """Vision benchmark on held-out frames: per-class precision and recall, the false-mark rate, recall by
 mark size, tilt, blur and finger occlusion, and single-thread frames per second at 640x480.
 
-    .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|tuning]
+    .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|blind|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE] [--hand-drawn SHARE]
+                                           [--hand-variety SHARE] [--hand-drawn SHARE] [--plus-signs]
                                            [--lens K [--calibrated [--keep-matrix]]]
                                            (--hand-variety, --hand-drawn, --calibrated, --keep-matrix: tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
 backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `--split tuning` uses
-`services/vision/synthetic.py`, the generator the detector was tuned on (`--hand-variety`: that share
+`services/vision/synthetic.py`, the generator the detector was tuned on; `--split blind` uses
+`services/vision/blind.py`, a third generator written blind (without reading the detector or the other
+two generators) after 22 rounds of held-out decisions, to ask whether the held-out figures carry over
+(it adds a recall slice by how the mark was made; `--plus-signs`: its mark-free frames show upright plus
+signs, which the product's contract makes X marks turned by 45 degrees). With the tuning split, `--hand-variety`: that share
 of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--hand-drawn S`: that
 share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--lens K`: every
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
-undistorted with the calibration's own camera matrix, which cuts the edges). With `--split heldout`,
+undistorted with the calibration's own camera matrix, which cuts the edges. With `--split heldout`,
 `--lens K` shows the held-out scenes through a lens in OpenCV's radial model (k1 = -K, focal length the
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
@@ -62,7 +66,7 @@ def _bin(value: float, bins: tuple[tuple[float, float], ...]) -> str:
 def main(
     frames: Annotated[int, typer.Option(help="frames to generate")] = 2000,
     seed: Annotated[int, typer.Option(help="generator seed")] = 4242,
-    split: Annotated[str, typer.Option(help="heldout (report this) or tuning")] = "heldout",
+    split: Annotated[str, typer.Option(help="heldout (report this), blind (a third generator) or tuning")] = "heldout",
     failures: Annotated[Path | None, typer.Option(help="write misses and false marks here")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
     settings: Annotated[
@@ -80,6 +84,10 @@ def main(
     hand_drawn: Annotated[
         float, typer.Option(help="tuning split only: share of marks drawn by hand with a pen (Variation.hand_drawn)")
     ] = 0.0,
+    plus_signs: Annotated[
+        bool,
+        typer.Option(help="blind split only: mark-free frames show upright plus signs (an X turned by 45 degrees)"),
+    ] = False,
     lens: Annotated[
         float,
         typer.Option(
@@ -104,10 +112,14 @@ def main(
         raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
     if hand_drawn and split != "tuning":
         raise typer.BadParameter("--hand-drawn is a tuning-generator setting (--split tuning)")
+    if plus_signs and split != "blind":
+        raise typer.BadParameter("--plus-signs is a blind-generator setting (--split blind)")
+    if lens and split == "blind":
+        raise typer.BadParameter("--lens is a tuning or held-out generator setting (the blind one has its own optics)")
     if calibrated and (not lens or split != "tuning"):
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     try:
-        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn)
+        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs)
     except ValueError as exc:  # a held-out lens the model cannot show
         raise typer.BadParameter(str(exc), param_hint="--lens") from None
     det = _detector(settings or [])
@@ -166,6 +178,7 @@ def main(
         "seed": seed,
         "hand_variety": hand_variety,
         "hand_drawn": hand_drawn,
+        **({"plus_signs": plus_signs} if split == "blind" else {}),
         "lens": lens,
         "calibrated": calibrated,
         "keep_matrix": keep_matrix,
@@ -214,11 +227,17 @@ FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | 
 
 
 def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
-               calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0) -> FrameFn:
-    if split == "heldout":
-        from services.vision.heldout import HeldOutGenerator
+               calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0,
+               plus_signs: bool = False) -> FrameFn:
+    if split in ("heldout", "blind"):
+        if split == "heldout":
+            from services.vision.heldout import HeldOutGenerator
 
-        gen = HeldOutGenerator(seed=seed, lens=lens)
+            gen: Any = HeldOutGenerator(seed=seed, lens=lens)
+        else:
+            from services.vision.blind import BlindGenerator
+
+            gen = BlindGenerator(seed=seed, plus_signs=plus_signs)
 
         def held(shape: Shape | None) -> tuple[np.ndarray, Any, Meta]:
             img, lab = gen.frame(shape)
@@ -232,6 +251,8 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
             }
             if lab.shape is Shape.TRIANGLE:
                 meta["triangle"] = "filled" if lab.filled else "outline"
+            if split == "blind":  # how the mark was made: a marker, print, tape, a sticker
+                meta["style"] = lab.style
             return img, (lab.shape, lab.box), meta
 
         return held
@@ -277,7 +298,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
             return img, (labels[0].shape, labels[0].box), meta
 
         return tuning
-    raise typer.BadParameter(f"split must be heldout or tuning, got {split!r}")
+    raise typer.BadParameter(f"split must be heldout, blind or tuning, got {split!r}")
 
 
 def _viewed(label: Any, view: tuple[float, float, float, float], width: int, height: int) -> Any:

@@ -59,11 +59,14 @@ DISTRACTORS: tuple[str, ...] = (
     "filled_triangle",
     "sign",
 )
-EXTRA_DISTRACTORS: tuple[str, ...] = ("arrow",)
+EXTRA_DISTRACTORS: tuple[str, ...] = ("arrow", "star", "check", "clock")
 """Clutter kinds the generator can draw but does not by default (`Variation.kinds`): adding one to the
 defaults would change every seed's frames. "arrow" (round vision21): an arrow, its head a filled
 triangle, on a light label or straight on the scene; the verifier trained before it named 58 % of such
-labels a triangle (`docs/experiments/scripts/vision21_triclutter_probe.py`)."""
+labels a triangle (`docs/experiments/scripts/vision21_triclutter_probe.py`). "star", "check" and "clock"
+(round vision23): a star sticker or printed star, a check mark (a tick, sometimes in its box) and a clock
+face (a ring with ticks and two hands inside), each on a light plate or straight on the scene: everyday
+things the third, blind generator (`blind.py`) showed the detector taking for an X, a triangle or an O."""
 
 
 @dataclass(frozen=True)
@@ -357,6 +360,8 @@ class SceneGenerator:
             self._draw_decoy_card(img, cx, cy, size)
         elif kind == "arrow":
             _draw_arrow(img, rng, cx, cy, size)
+        elif kind in ("star", "check", "clock"):
+            _draw_pictogram(img, rng, kind, cx, cy, size)
         else:
             raise ValueError(f"unknown clutter kind {kind!r}: one of {', '.join(DISTRACTORS + EXTRA_DISTRACTORS)}")
 
@@ -866,6 +871,11 @@ def _draw_sign(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> 
             max(1, int(2 * scale)),
             cv2.LINE_AA,
         )
+    _paste_plate(img, rng, plate, cx, cy)
+
+
+def _paste_plate(img: np.ndarray, rng: Rng, plate: np.ndarray, cx: float, cy: float) -> None:
+    """`plate` pasted centred at (cx, cy), turned in the image by up to 40 degrees and tilted up to 35."""
     h_mat = _card_homography(
         plate.shape[1],
         plate.shape[0],
@@ -875,6 +885,53 @@ def _draw_sign(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> 
         (rng.uniform(-35, 35), rng.uniform(-35, 35)),
     )
     _paste_warped(img, plate, h_mat)
+
+
+def _draw_pictogram(img: np.ndarray, rng: Rng, kind: str, cx: float, cy: float, size: float) -> None:
+    """Not a mark: a star (five or six points, filled or outlined), a check mark (a tick, half of them in
+    their box) or a clock face (a ring with twelve ticks and two hands: its hole is not empty paper), in
+    any ink, 70 % on a light plate (a sticker, a label, a wall clock's face), else straight on the scene."""
+    r = max(10.0, size / 2)
+    side = int(2.6 * r)
+    on_plate = rng.random() < 0.7
+    plate = np.full((side, side, 3), int(rng.integers(190, 256)), np.uint8)
+    c = np.array([side / 2, side / 2])
+    ink = _dark_or_any(rng)
+    stroke = max(2, int(r * rng.uniform(0.1, 0.25)))
+    if kind == "star":
+        points = int(rng.choice([5, 5, 6]))
+        ang = rng.uniform(0, 2 * math.pi) + np.arange(2 * points) * math.pi / points
+        radii = np.where(np.arange(2 * points) % 2 == 0, r, r * rng.uniform(0.35, 0.55))
+        star = c + np.stack([radii * np.cos(ang), radii * np.sin(ang)], axis=1)
+        if rng.random() < 0.75:
+            cv2.fillPoly(plate, [_fixed(star)], ink, cv2.LINE_AA, shift=4)
+        else:
+            cv2.polylines(plate, [_fixed(star)], True, ink, stroke, cv2.LINE_AA, shift=4)
+    elif kind == "check":
+        tick = c + np.array([[-0.75, -0.05], [-0.25, 0.55], [0.8, -0.7]]) * r * rng.uniform(0.75, 1.0, size=(3, 1))
+        cv2.polylines(plate, [_fixed(tick)], False, ink, stroke, cv2.LINE_AA, shift=4)
+        if rng.random() < 0.5:
+            box = c + np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * r * 1.1
+            cv2.polylines(plate, [_fixed(box)], True, ink, max(1, stroke // 2), cv2.LINE_AA, shift=4)
+    else:  # clock
+        cv2.circle(plate, _point(c), int(r - stroke / 2), ink, stroke, cv2.LINE_AA)
+        for k in range(12):
+            u = np.array([math.cos(k * math.pi / 6), math.sin(k * math.pi / 6)])
+            cv2.line(plate, _point(c + u * r * 0.78), _point(c + u * r * (0.66 if k % 3 else 0.6)), ink,
+                     max(1, stroke // 3), cv2.LINE_AA)
+        for length, width in ((0.45, 0.6), (0.7, 0.35)):  # the hour and the minute hand
+            a = rng.uniform(0, 2 * math.pi)
+            tip = c + np.array([math.cos(a), math.sin(a)]) * r * length
+            cv2.line(plate, _point(c), _point(tip), ink, max(1, int(stroke * width)), cv2.LINE_AA)
+    if on_plate:
+        _paste_plate(img, rng, plate, cx, cy)
+        return
+    light = plate.min(axis=2) >= plate[0, 0].min()  # the plate's paper: only the ink goes onto the scene
+    x0, y0 = int(cx - side / 2), int(cy - side / 2)
+    xs, ys = slice(max(0, x0), min(img.shape[1], x0 + side)), slice(max(0, y0), min(img.shape[0], y0 + side))
+    sub = (slice(ys.start - y0, ys.stop - y0), slice(xs.start - x0, xs.stop - x0))
+    ink_here = ~light[sub]
+    img[ys, xs][ink_here] = plate[sub][ink_here]
 
 
 def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:

@@ -4,6 +4,7 @@
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
+                                       [--everyday]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
@@ -94,7 +95,7 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
 
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
-    arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
+    arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -107,7 +108,8 @@ def harvest(
     that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`); with
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
-    pen (`Variation.hand_drawn`)."""
+    pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks also draw stars (twice as often as each other
+    kind), check marks and clock faces (`synthetic.EXTRA_DISTRACTORS`)."""
     import cv2
 
     cv2.setNumThreads(1)
@@ -116,6 +118,8 @@ def harvest(
     )
     if arrows and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
+    if everyday and seed % 2:
+        variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
     gen = SceneGenerator(seed=seed, variation=variation)
     det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
     proposer = Proposer.load() if proposals > 0 else None
@@ -167,19 +171,21 @@ def harvest_all(
     arrows: bool = False,
     hand_drawn: float = 0.0,
     hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
+    everyday: bool = False,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows` or `hand_drawn` setting,
+    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows`, `hand_drawn` or `everyday` setting,
     other `hand_drawn_shapes` or another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
             shares = {
-                k: float(z[k]) if k in z else 0.0 for k in ("printed", "hands", "proposals", "arrows", "hand_drawn")
+                k: float(z[k]) if k in z else 0.0
+                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday")
             }
             pyramid = str(z["levels"]) if "levels" in z else ""
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
-                     "hand_drawn": hand_drawn}
+                     "hand_drawn": hand_drawn, "everyday": float(everyday)}
             drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
             same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
             same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
@@ -189,7 +195,7 @@ def harvest_all(
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
-                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n)
+                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n)
         )
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
@@ -204,6 +210,7 @@ def harvest_all(
             arrows=np.array(float(arrows)),
             hand_drawn=np.array(hand_drawn),
             hand_drawn_shapes=np.array(hand_drawn_shapes),
+            everyday=np.array(float(everyday)),
             **arrays,
         )
     return parts
@@ -411,6 +418,10 @@ def main(
     hand_drawn_shapes: Annotated[
         str, typer.Option(help="the shapes --hand-drawn applies to, comma-separated (round vision22c: TRIANGLE)")
     ] = HAND_DRAWN_SHAPES,
+    everyday: Annotated[
+        bool,
+        typer.Option(help="the cluttered chunks also draw stars, check marks and clock faces (round vision23)"),
+    ] = False,
     out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
@@ -432,7 +443,7 @@ def main(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--hand-drawn-shapes") from None
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
-                        hand_drawn_shapes)
+                        hand_drawn_shapes, everyday)
     n_val = max(1, len(parts) // 10)
     train, val = parts[:-n_val], parts[-n_val:]
     x = np.concatenate([p[0] for p in train])

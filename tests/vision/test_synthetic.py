@@ -189,3 +189,19 @@ def test_hand_drawn_shapes_limit_the_pen_to_those_shapes() -> None:
             a, b = every.scene(shape), some.scene(shape)
             assert (a.size, a.center, a.ink) == (b.size, b.center, b.ink)
             assert (b.by_hand is not None) == (shape is Shape.TRIANGLE) and a.by_hand is not None
+
+
+@pytest.mark.parametrize("kind", ["star", "check", "clock"])
+def test_everyday_pictograms_are_drawn_only_when_asked(kind: str) -> None:
+    """Stars, check marks and clock faces (round vision23) are clutter the default generator never draws; asked for,
+    each is ink on the scene (on a light plate 70 % of the time), never a label."""
+    assert kind not in SceneGenerator(seed=5, variation=MILD, use_skimage=False).variation.kinds
+    gen = SceneGenerator(seed=5, variation=MILD.only(kinds=(kind,)), use_skimage=False)
+    drawn = 0
+    for _ in range(10):
+        img = np.full((gen.height, gen.width, 3), 128, np.uint8)
+        gen._distractor(img, kind)
+        drawn += int((np.abs(img.astype(int) - 128).max(axis=2) > 40).sum() > 50)
+    assert drawn >= 8
+    _, labels = gen.frame(None)
+    assert labels == []
