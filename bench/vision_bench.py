@@ -14,8 +14,9 @@ backgrounds, fonts, card proportions, inks, hands, lighting and blur ranges); `-
 `services/vision/blind.py`, a third generator written blind (without reading the detector or the other
 two generators) after 22 rounds of held-out decisions, to ask whether the held-out figures carry over
 (it adds a recall slice by how the mark was made; `--plus-signs`: its mark-free frames show upright plus
-signs, which the product's contract makes X marks turned by 45 degrees). With the tuning split, `--hand-variety`: that share
-of its cards with fingers get people's variety of fingers, `Variation.hand_variety`; `--hand-drawn S`: that
+signs, which the product's contract makes X marks turned by 45 degrees). With the tuning split,
+`--hand-variety`: that share of its cards with fingers get people's variety of fingers,
+`Variation.hand_variety`; `--hand-drawn S`: that
 share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--lens K`: every
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,

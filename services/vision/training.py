@@ -108,8 +108,8 @@ def harvest(
     that is a loose candidate too, cropped as the detector crops it (`MarkDetector.proposal_crops`); with
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
-    pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks also draw stars (twice as often as each other
-    kind), check marks and clock faces (`synthetic.EXTRA_DISTRACTORS`)."""
+    pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks' kinds of clutter also list stars twice and check
+    marks and clock faces once each (`synthetic.EXTRA_DISTRACTORS`)."""
     import cv2
 
     cv2.setNumThreads(1)
