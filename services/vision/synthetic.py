@@ -707,11 +707,17 @@ def _paste_warped(img: np.ndarray, patch: np.ndarray, h_mat: np.ndarray) -> None
     roi[:] = (warped * m + roi * (1 - m)).astype(np.uint8)
 
 
-def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int) -> None:
+def _paste(img: np.ndarray, patch: np.ndarray, x: int, y: int, where: np.ndarray | None = None) -> None:
+    """`patch` into `img` with its corner at (x, y), cut at the frame's edges; only its `where` pixels if given."""
     h, w = patch.shape[:2]
     x0, y0, x1, y1 = max(0, x), max(0, y), min(img.shape[1], x + w), min(img.shape[0], y + h)
     if x1 > x0 and y1 > y0:
-        img[y0:y1, x0:x1] = patch[y0 - y : y1 - y, x0 - x : x1 - x]
+        part = patch[y0 - y : y1 - y, x0 - x : x1 - x]
+        if where is None:
+            img[y0:y1, x0:x1] = part
+        else:
+            keep = where[y0 - y : y1 - y, x0 - x : x1 - x]
+            img[y0:y1, x0:x1][keep] = part[keep]
 
 
 @functools.lru_cache(maxsize=4)
@@ -926,12 +932,8 @@ def _draw_pictogram(img: np.ndarray, rng: Rng, kind: str, cx: float, cy: float, 
     if on_plate:
         _paste_plate(img, rng, plate, cx, cy)
         return
-    light = plate.min(axis=2) >= plate[0, 0].min()  # the plate's paper: only the ink goes onto the scene
-    x0, y0 = int(cx - side / 2), int(cy - side / 2)
-    xs, ys = slice(max(0, x0), min(img.shape[1], x0 + side)), slice(max(0, y0), min(img.shape[0], y0 + side))
-    sub = (slice(ys.start - y0, ys.stop - y0), slice(xs.start - x0, xs.stop - x0))
-    ink_here = ~light[sub]
-    img[ys, xs][ink_here] = plate[sub][ink_here]
+    ink_only = plate.min(axis=2) < plate[0, 0].min()  # not the plate's paper: only the ink goes onto the scene
+    _paste(img, plate, int(cx - side / 2), int(cy - side / 2), ink_only)
 
 
 def _draw_texture(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
