@@ -54,17 +54,20 @@ def test_the_committed_model_loads_and_is_small() -> None:
     assert v.probabilities(np.zeros((0, 3, PATCH, PATCH), np.uint8), np.zeros((0, 4))).shape == (0, 4)
 
 
-def test_the_committed_thresholds_are_what_training_writes() -> None:
-    """`python -m services.vision.training` with its defaults must make the committed model, so the
-    thresholds stored in the committed file are its defaults."""
+def test_the_committed_thresholds_are_what_training_and_the_join_write() -> None:
+    """The committed model is two trainings (`python -m services.vision.training`, with and without
+    `--everyday`) joined by `python -m services.vision.ensemble` with its defaults: its thresholds are
+    training's defaults, except the loose X, which is the join's."""
     import inspect
 
+    from services.vision.ensemble import main as join_main
     from services.vision.training import main
 
     d = {k: p.default for k, p in inspect.signature(main).parameters.items()}
+    j = {k: p.default for k, p in inspect.signature(join_main).parameters.items()}
     v = Verifier.load()
     assert v.thresholds == (d["threshold_x"], d["threshold_o"], d["threshold_triangle"])
-    assert v.loose_thresholds == (d["loose_x"], d["loose_o"], d["loose_triangle"])
+    assert v.loose_thresholds == (j["loose_x"], d["loose_o"], d["loose_triangle"])
 
 
 def test_the_crops_are_three_scales_stretched_to_the_mark() -> None:

@@ -1,0 +1,110 @@
+"""Join two verifier networks into one `verifier.onnx`: a loose candidate is named X only if both agree.
+
+    pip install -e '.[train]'
+    python -m services.vision.training --out main.onnx                # the default recipe
+    python -m services.vision.training --everyday --out everyday.onnx  # stars, check marks, clocks (round vision23)
+    python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out services/vision/verifier.onnx]
+
+The first network (`main`) judges every row as before. The second (`veto`) runs on the loose rows only (claim
+slot 'loose' set: loose candidates, parts `_split` cut off, the proposer's proposals) and gives those rows'
+X probability a ceiling: it becomes the lower of the two networks' X, and what it loses goes to 'none', so a
+row still sums to one. A claimed candidate, and a loose row's O and TRIANGLE, are judged by `main` alone.
+Why (round vision23f, services/vision/README.md): the blind generator's filled stars reach the verifier as
+loose candidates that `main` names X; a network trained with stars (`--everyday`) refuses them, but used on
+its own it also refused held-out marks `main` keeps.
+
+The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): `main`'s
+nodes on every row, NonZero and GatherND to pick the loose rows for `veto`, Min and ScatterND to write their
+X back. Its metadata is `main`'s, with the loose X threshold `--loose-x` (the lower of two probabilities is
+lower: `main`'s own was 0.5).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
+
+LOOSE_SLOT = len(SHAPES)  # the claim's 'loose' slot (verifier.claim)
+
+
+def join(main: Any, veto: Any, loose_x: float) -> Any:
+    """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset)."""
+    from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
+
+    if main.opset_import[0].version != veto.opset_import[0].version:
+        raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
+    m = compose.add_prefix(main, "main_", rename_inputs=False)  # reads `crops` and `claim` itself
+    v = compose.add_prefix(veto, "veto_")  # reads `veto_crops` and `veto_claim`, the loose rows
+    pm, pv = m.graph.output[0].name, v.graph.output[0].name
+
+    def ints(name: str, values: list[int]) -> Any:
+        return helper.make_tensor(name, TensorProto.INT64, [len(values)], values)
+
+    consts = [
+        helper.make_tensor("j_slot", TensorProto.INT64, [], [LOOSE_SLOT]),
+        helper.make_tensor("j_half", TensorProto.FLOAT, [], [0.5]),
+        ints("j_0", [0]), ints("j_1", [1]), ints("j_4", [len(SHAPES) + 1]), ints("j_last", [LOOSE_SLOT]),
+    ]
+    node = helper.make_node
+    pick = [  # the loose rows' indices, as GatherND wants them: (k, 1)
+        node("Gather", ["claim", "j_slot"], ["j_loose_slot"], axis=1),
+        node("Greater", ["j_loose_slot", "j_half"], ["j_loose"]),
+        node("NonZero", ["j_loose"], ["j_rows_t"]),
+        node("Transpose", ["j_rows_t"], ["j_rows"], perm=[1, 0]),
+        node("GatherND", ["crops", "j_rows"], ["veto_crops"]),
+        node("GatherND", ["claim", "j_rows"], ["veto_claim"]),
+    ]
+    write = [  # the loose rows: X = min(main, veto); 'none' gets what X lost; O and TRIANGLE are main's
+        node("GatherND", [pm, "j_rows"], ["j_main_rows"]),
+        node("Slice", ["j_main_rows", "j_0", "j_1", "j_1"], ["j_main_x"]),
+        node("Slice", [pv, "j_0", "j_1", "j_1"], ["j_veto_x"]),
+        node("Min", ["j_main_x", "j_veto_x"], ["j_x"]),
+        node("Slice", ["j_main_rows", "j_1", "j_last", "j_1"], ["j_shapes"]),
+        node("Slice", ["j_main_rows", "j_last", "j_4", "j_1"], ["j_none"]),
+        node("Sub", ["j_main_x", "j_x"], ["j_lost"]),
+        node("Add", ["j_none", "j_lost"], ["j_none2"]),
+        node("Concat", ["j_x", "j_shapes", "j_none2"], ["j_rows_new"], axis=1),
+        node("ScatterND", [pm, "j_rows", "j_rows_new"], ["probabilities"]),
+    ]
+    out = helper.make_tensor_value_info("probabilities", TensorProto.FLOAT, ["n", len(SHAPES) + 1])
+    graph = helper.make_graph(
+        pick + list(m.graph.node) + list(v.graph.node) + write,
+        "verifier_loose_x_veto",
+        list(main.graph.input),
+        [out],
+        list(m.graph.initializer) + list(v.graph.initializer) + consts,
+    )
+    joined = helper.make_model(graph, opset_imports=main.opset_import, producer_name="services.vision.ensemble")
+    joined.ir_version = main.ir_version
+    for p in main.metadata_props:
+        value = p.value
+        if p.key == "loose_thresholds":
+            value = ",".join([f"{loose_x:g}", *p.value.split(",")[1:]])
+        joined.metadata_props.add(key=p.key, value=value)
+    joined.doc_string = "vision mark verifier: python -m services.vision.ensemble MAIN VETO (round vision23f)"
+    return joined
+
+
+def main(
+    main_model: Annotated[Path, typer.Argument(help="the network that judges every row (the default recipe)")],
+    veto_model: Annotated[Path, typer.Argument(help="the network whose X a loose row also needs (--everyday)")],
+    loose_x: Annotated[float, typer.Option(help="the X probability (the lower of the two) a loose row needs")] = 0.1,
+    out: Annotated[Path, typer.Option(help="where to write the joined model")] = MODEL_PATH,
+) -> None:
+    import onnx  # type: ignore[import-not-found,unused-ignore]
+
+    for path in (main_model, veto_model):
+        Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
+    joined = join(onnx.load(str(main_model)), onnx.load(str(veto_model)), loose_x)
+    onnx.checker.check_model(joined)
+    onnx.save(joined, str(out))
+    v = Verifier.load(out)
+    typer.echo(f"wrote {out} ({out.stat().st_size} bytes; thresholds {v.thresholds}, loose {v.loose_thresholds})")
+
+
+if __name__ == "__main__":
+    typer.run(main)
