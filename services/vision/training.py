@@ -1,5 +1,8 @@
 """Train the mark verifier (`verifier.onnx`) on candidates from the TUNING generator only.
 
+The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday`,
+joined by `python -m services.vision.ensemble` (round vision23g; see there).
+
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]

@@ -13,7 +13,10 @@ Model (`Verifier`): a small convolutional network (three 3x3 convolution + max-p
 hidden layer that also sees the claim), softmax over {X, O, TRIANGLE, none}, in `verifier.onnx` and run
 with onnxruntime on one thread, every candidate of a frame in one call (`probabilities`). It was
 trained by `python -m services.vision.training` (PyTorch, fixed seed) on candidates harvested from the
-tuning generator only (`synthetic.py`); see the vision README. A candidate is kept when the model gives
+tuning generator only (`synthetic.py`); see the vision README. Since round vision23g the committed file
+holds two such networks joined by `ensemble.py`: the second, trained with stars, check marks and clock
+faces too (`--everyday`), runs on the loose rows only and caps their X probability (a loose candidate is
+named X only if both agree); everything else is the first's. A candidate is kept when the model gives
 its claimed shape at least that shape's threshold (`thresholds`) of probability; a loose candidate is
 named after its likeliest shape if that reaches the stricter `loose_thresholds`. Both sets of
 thresholds are stored in the model file's metadata.
