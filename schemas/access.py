@@ -189,8 +189,8 @@ RATE_LIMITS: dict[str, float] = {
 from an allowed identity (a bug, a stolen password) is cut to this before it reaches the reasoner or
 anyone else's link. Downsampling drops any put that comes sooner than 1/rate after the last one let
 through, whatever it says, so the limits sit far above what a real publisher does: the voice service
-puts once per utterance, and a command that answers a question follows the question's decision, which
-takes milliseconds to come back; a camera gives some tens of frames a second, and a mark observation
+puts once per utterance, and a command that answers a question follows the question spoken aloud (the
+decision alone can come back within a millisecond of the command that caused it); a camera gives some tens of frames a second, and a mark observation
 only repeats the state of the one before. Motion goals, the reasoner's outputs and the simulator's
 scene are not limited: a stop must never be dropped, and the operator may change the scene twice in
 a millisecond."""
