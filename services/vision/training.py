@@ -4,7 +4,7 @@ The committed `verifier.onnx` is two networks this command makes, the default re
 joined by `python -m services.vision.ensemble` (round vision23g; see there).
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
-    python -m services.vision.training [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
+    python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
                                        [--everyday]
@@ -44,7 +44,7 @@ from services.vision.detector import Candidate, DetectorConfig, MarkDetector, pa
 from services.vision.printed import print_words, typefaces
 from services.vision.proposer import Proposer
 from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
-from services.vision.verifier import CLASSES, INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, SHAPES, Verifier
+from services.vision.verifier import CLASSES, INPUT_FORMAT, N_CLAIM, PATCH, SHAPES, Verifier
 
 if TYPE_CHECKING:
     import torch  # type: ignore[import-not-found,unused-ignore]
@@ -388,6 +388,13 @@ def report(verifier: Verifier, val: list[tuple[np.ndarray, ...]], out: Path) -> 
 
 
 def main(
+    out: Annotated[
+        Path,
+        typer.Option(
+            help="where to write the model; never the committed verifier.onnx by default: that file is two trainings "
+            "joined (python -m services.vision.ensemble MAIN VETO)"
+        ),
+    ],
     frames: Annotated[int, typer.Option(help="tuning frames to harvest")] = 16000,
     seed: Annotated[int, typer.Option(help="base seed (generator chunks and the network)")] = 20261123,
     jobs: Annotated[int, typer.Option(help="harvesting processes")] = 2,
@@ -425,7 +432,6 @@ def main(
         bool,
         typer.Option(help="the cluttered chunks also draw stars, check marks and clock faces (round vision23)"),
     ] = False,
-    out: Annotated[Path, typer.Option(help="where to write the model")] = MODEL_PATH,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
     threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.8,
