@@ -29,7 +29,13 @@ def _hear(robot: Robot, command: Command, confidence: float) -> float:
 def _decision(robot: Robot, t0: float, command: Command, timeout: float = 8.0) -> Decision:
     found = robot.rec.wait(lambda: next((d for d in robot.rec.since(t0, "decision") if d.command is command), None),
                            timeout)
-    assert found is not None, f"no decision for {command.value}; see {robot.log_path}"
+    if found is None:  # where it was lost: on the way (received), in the queue (dropped) or in the agent
+        health = robot.health("reasoner")
+        seen = [m.command for m in robot.rec.since(t0, "heard")]
+        where = (f"reasoner received {health.received}, rejected {health.rejected}, detail {health.detail}"
+                 if health else "the reasoner did not answer its health query")
+        raise AssertionError(f"no decision for {command.value} (the recorder heard {seen}; {where}); "
+                             f"see {robot.log_path}")
     return found
 
 
