@@ -52,7 +52,7 @@ class ScenarioRunner:
         self.spool = spool
         self.voice = voice
         self._scene = ctx.publisher(ctx.keys.vision_scene, SceneCommand)
-        self._voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
+        self._voice = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)  # as the voice service
 
     # ------------------------------------------------------------------ readiness
     def wait_ready(self, timeout: float = 90.0) -> list[str]:

@@ -154,7 +154,9 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     engine = _engine_until_ready(ctx, settings)
     if engine is None:
         return
-    pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand)
+    # Congestion blocks rather than drops (as for motion goals): a spoken command, "stop" included,
+    # is one message per utterance and must not vanish on a busy link; listening waits meanwhile.
+    pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     stats = _Stats()
 
     def on_bad_file(path: Path, exc: AudioError) -> None:
