@@ -161,13 +161,10 @@ def spy(
     robot: RobotOption = None,
     connect: ConnectOption = None,
 ) -> None:
-    """Live, readable view of the traffic (and services coming and going) until Ctrl-C."""
-    stop = threading.Event()
+    """Live, readable view of the traffic (and services coming and going) until Ctrl-C or SIGTERM."""
+    stop = _stop_on_signals()
     with bus(robot, connect) as (session, keys):
-        try:
-            probe.spy(session, keyexpr or keys.all, keys.prefix, console, stop)
-        except KeyboardInterrupt:
-            stop.set()
+        probe.spy(session, keyexpr or keys.all, keys.prefix, console, stop)
 
 
 OUT_HELP = ("Folder for the spoken WAVs, the timeline, the service logs and the robot's own state; a run "
@@ -427,13 +424,22 @@ def view(
     raise typer.Exit(code)
 
 
-def _wait_for_signal() -> int:
-    """Block until Ctrl-C or SIGTERM."""
+def _stop_on_signals() -> threading.Event:
+    """An event that Ctrl-C (SIGINT) or SIGTERM sets, so the caller leaves its loop and closes its
+    session. Installed explicitly: a process started in the background of a script inherits SIGINT
+    ignored, and Python then raises no KeyboardInterrupt; SIGTERM would otherwise end the process
+    without closing anything."""
     import signal
 
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
+    return stop
+
+
+def _wait_for_signal() -> int:
+    """Block until Ctrl-C or SIGTERM."""
+    stop = _stop_on_signals()
     while not stop.wait(0.5):
         pass
     return 0
