@@ -80,8 +80,11 @@ def test_up_probe_and_ctrl_c(launched, robot_id: str) -> None:
     assert {json.loads(line)["key"].rsplit("/", 1)[1] for line in out.stdout.splitlines()} == set(SERVICES)
 
     # ... and the JSON traffic.
+    # SIGINT restored for it: the third-party CLI stops only through KeyboardInterrupt, which a suite
+    # started from a script's background job (SIGINT ignored, inherited) would never raise.
     sub = subprocess.Popen([ZENOH_CLI, "--config", observer, "subscribe", "-k",
-                            f"hri/{robot_id}/voice/**", "--decoder", "json"], stdout=subprocess.PIPE, text=True)
+                            f"hri/{robot_id}/voice/**", "--decoder", "json"], stdout=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         time.sleep(1.5)
         hri("send", "command", "yes", "--connect", endpoint, env=env)
