@@ -323,7 +323,7 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
 
 
 def early_look_arg(text: str) -> float | None:
-    """`--early-look`: seconds of quiet, or `off`."""
+    """`--early-look`, `--clear-window`: seconds of quiet, or `off`."""
     return None if text.strip().lower() == "off" else float(text)
 
 
@@ -383,6 +383,8 @@ def main() -> int:
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the stream latency's early look: seconds of quiet, or off (default: the service's)")
+    ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
+                    help="the stream latency's end window in a clear stream: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--enrol-head", help="the head --enrol adapts (default: as `enroll`, the speech-embedding head)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -397,7 +399,8 @@ def main() -> int:
             if s.family == "ALL":
                 row.update(extra)
                 row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA],
-                                                       config=SegmenterConfig(vad=args.vad, early_quiet_s=args.early_look))
+                                                       config=SegmenterConfig(vad=args.vad, early_quiet_s=args.early_look,
+                                                                              clear_quiet_s=args.clear_window))
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:

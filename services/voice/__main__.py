@@ -49,7 +49,13 @@ EarlyLookOption = Annotated[
     str | None,
     typer.Option("--early-look", envvar="HRI_VOICE_EARLY_LOOK",
                  help="live stream: seconds of quiet after which the utterance so far is decoded and, if the engine "
-                      "is sure of a command, ended there; or 'off' [default: 0.09, the end window is 0.15]"),
+                      "is sure of a command, ended there; or 'off' [default: off; the end window is 0.15]"),
+]
+ClearWindowOption = Annotated[
+    str | None,
+    typer.Option("--clear-window", envvar="HRI_VOICE_CLEAR_WINDOW",
+                 help="live stream (Silero): seconds of quiet that end an utterance when the speech is at least 30 dB "
+                      "over the noise floor, or 'off' [default: 0.09; elsewhere the end window is 0.15]"),
 ]
 VoskModelOption = Annotated[
     str | None,
@@ -66,12 +72,14 @@ LexiconOption = Annotated[
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
-         walk_gate: WalkGateOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None) -> None:
+         walk_gate: WalkGateOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None,
+         clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate, vad=vad, early_look=early_look)
+                             head=head, walk_gate=walk_gate, vad=vad, early_look=early_look,
+                             clear_window=clear_window)
     try:
         check_settings(settings)
     except EngineError as exc:

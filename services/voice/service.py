@@ -50,6 +50,9 @@ class VoiceSettings:
     early_look: str | None = None
     """`HRI_VOICE_EARLY_LOOK`: seconds of quiet before the segmenter's early look (`SegmenterConfig.early_quiet_s`),
     or `off`; None: the default."""
+    clear_window: str | None = None
+    """`HRI_VOICE_CLEAR_WINDOW`: seconds of quiet that end an utterance in a clear stream
+    (`SegmenterConfig.clear_quiet_s`), or `off`; None: the default."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -64,24 +67,33 @@ class VoiceSettings:
             walk_gate=os.environ.get("HRI_VOICE_WALK_GATE") or None,
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
+            clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
         )
 
     def segmenter(self) -> SegmenterConfig:
-        """The live stream's segmenter; `EngineError` for an early look that is not `off` or seconds shorter than
-        the end window."""
+        """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
+        seconds shorter than the end window."""
         base = SegmenterConfig(vad=self.vad)
-        if self.early_look is None:
-            return base
-        if self.early_look.strip().lower() == "off":
-            return replace(base, early_quiet_s=None)
-        try:
-            seconds = float(self.early_look)
-        except ValueError:
-            seconds = -1.0
-        if not 0.0 < seconds < base.quiet_s:
-            raise EngineError(f"HRI_VOICE_EARLY_LOOK={self.early_look!r}: 'off' or seconds of quiet above 0 and "
-                              f"below the end window ({base.quiet_s} s)")
-        return replace(base, early_quiet_s=seconds)
+        return replace(base, early_quiet_s=_shorter_quiet("HRI_VOICE_EARLY_LOOK", self.early_look, base.early_quiet_s,
+                                                          base.quiet_s),
+                       clear_quiet_s=_shorter_quiet("HRI_VOICE_CLEAR_WINDOW", self.clear_window, base.clear_quiet_s,
+                                                    base.quiet_s))
+
+
+def _shorter_quiet(variable: str, raw: str | None, default: float | None, quiet_s: float) -> float | None:
+    """`raw` as seconds of quiet shorter than the end window `quiet_s`; `off` -> None; None -> `default`."""
+    if raw is None:
+        return default
+    if raw.strip().lower() == "off":
+        return None
+    try:
+        seconds = float(raw)
+    except ValueError:
+        seconds = -1.0
+    if not 0.0 < seconds < quiet_s:
+        raise EngineError(f"{variable}={raw!r}: 'off' or seconds of quiet above 0 and below the end window "
+                          f"({quiet_s} s)")
+    return seconds
 
 
 def check_settings(settings: VoiceSettings) -> None:
@@ -140,8 +152,10 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
+    segmenter = settings.segmenter()
     ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad,
-                      early_look_s=settings.segmenter().early_quiet_s)
+                      early_look_s=segmenter.early_quiet_s,
+                      clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
     listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
@@ -197,6 +211,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         ctx.log.info("heard", origin=utt.origin, command=msg.command.value if msg.command else None,
                      text=msg.text, confidence=msg.confidence, decode_ms=round(rec.decode_s * 1000, 1),
                      latency_ms=round((time.time() - utt.stamp) * 1000, 1), early=utt.recognition is not None,
+                     snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
                      **rec.detail)
         ctx.update_detail(**stats.as_detail())
 

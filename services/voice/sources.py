@@ -50,6 +50,8 @@ class Utterance:
     """UNIX time the utterance was captured (stream: when its speech ended; file: when it was found)."""
     recognition: Recognition | None = None
     """Already decoded: the segmenter's early look took this utterance (`Segment.recognition`)."""
+    snr_db: float | None = None
+    """Streams with Silero: the speech level over the noise floor before it (`Segment.snr_db`)."""
 
     @property
     def seconds(self) -> float:
@@ -103,9 +105,9 @@ def stream_utterances(
     seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
     for chunk in chunks:
         for s in seg.feed(chunk):
-            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition)
+            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db)
     for s in seg.flush():
-        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s")
+        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db)
 
 
 TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9)

@@ -13,7 +13,8 @@ state carried from frame to frame, one speech probability per frame, about 0.15 
 `SileroEndpointer` has the interface the `Segmenter` uses of pocketsphinx's `Endpointer`, with Silero's
 documented thresholds: speech starts when `start_frames` (2) frames in a row reach `threshold` (0.5), and
 ends after `end_frames` (5: 0.15 s, `SegmenterConfig.quiet_s`) frames in a row below `threshold - 0.15`; the
-quiet frames that end it are not speech. These were set before any measurement, not tuned.
+quiet frames that end it are not speech. These were set before any measurement, not tuned. (The segmenter ends
+an utterance in a clear stream after 3 such frames: `SegmenterConfig.clear_quiet_s`.)
 """
 
 from __future__ import annotations

@@ -15,6 +15,7 @@ import pytest
 from schemas.messages import Health, HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice import synth
+from services.voice.segmenter import SegmenterConfig
 from tests.conftest import ROOT, service_env, wait_for
 
 pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
@@ -102,7 +103,9 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
     proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
                             stdout=log, stderr=subprocess.STDOUT,
                             env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin",
-                                            HRI_VOICE_EARLY_LOOK=early_look))
+                                            HRI_VOICE_EARLY_LOOK=early_look,
+                                            # the early look alone: the clear window would end these words first
+                                            HRI_VOICE_CLEAR_WINDOW="off" if early_look else ""))
     try:
         assert proc.stdin is not None
         proc.stdin.write(pcm)
@@ -114,6 +117,7 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
         assert health.detail["vad"] == "silero"  # the stream's default VAD
         if not early_look:  # off by default
             assert health.detail["early_look_s"] is None and health.detail["early_looks"] == 0
+            assert health.detail["clear_window_s"] == SegmenterConfig.clear_quiet_s
         else:  # on: the sure commands were taken at the early look
             assert health.detail["early_look_s"] == 0.09
             assert health.detail["early_looks"] >= health.detail["early_taken"] >= 1
