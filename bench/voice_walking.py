@@ -188,6 +188,8 @@ def main() -> int:
     ap.add_argument("--vad", default="webrtc,silero", help="the segmenter's VADs to compare")
     ap.add_argument("--silero-threshold", type=float, default=SegmenterConfig.threshold,
                     help="Silero's speech threshold (SegmenterConfig.threshold)")
+    ap.add_argument("--silero-end-threshold", type=float, default=SegmenterConfig.end_threshold,
+                    help="Silero's end threshold (SegmenterConfig.end_threshold; default: the start threshold - 0.15)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the segmenter's early look: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
@@ -208,7 +210,8 @@ def main() -> int:
     alone: list[dict[str, object]] = []
     level = np.sqrt(speech_power([c for c in clips if c.label < OTHER]) / 10 ** (args.noise_only_snr / 10))
     for vad in args.vad.split(","):
-        config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, early_quiet_s=args.early_look,
+        config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
+                                 early_quiet_s=args.early_look,
                                  clear_quiet_s=args.clear_window)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise)

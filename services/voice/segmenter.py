@@ -42,6 +42,9 @@ class SegmenterConfig:
     threshold: float = 0.5
     """Silero: speech probability that starts an utterance (it ends below `threshold - 0.15`); 0.5 is Silero's
     documented default."""
+    end_threshold: float | None = None
+    """Silero: an utterance's quiet frames are those below this speech probability (None: `threshold - 0.15`,
+    Silero's documented rule)."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""
@@ -111,7 +114,7 @@ class Segmenter:
     def __post_init__(self) -> None:
         self._ep: Any
         if self.config.vad == "silero":
-            self._ep = SileroEndpointer(threshold=self.config.threshold,
+            self._ep = SileroEndpointer(threshold=self.config.threshold, end_threshold=self.config.end_threshold,
                                         end_frames=max(1, round(self.config.quiet_s * SAMPLE_RATE / FRAME_SAMPLES)))
         elif self.config.vad == "webrtc":
             self._ep = Endpointer(

@@ -76,9 +76,11 @@ class SileroEndpointer:
     (s) of the current utterance's first frame; `end_stream` hands over what is left."""
 
     def __init__(self, threshold: float = 0.5, start_frames: int = 2, end_frames: int = 5,
-                 vad: SileroVad | None = None) -> None:
+                 vad: SileroVad | None = None, end_threshold: float | None = None) -> None:
         self.threshold = threshold
-        self.neg_threshold = threshold - 0.15
+        self.neg_threshold = threshold - 0.15 if end_threshold is None else end_threshold
+        if self.neg_threshold > threshold:
+            raise ValueError(f"the end threshold {self.neg_threshold} is above the start threshold {threshold}")
         self.start_frames = start_frames
         self.end_frames = end_frames
         self._vad = vad or SileroVad()
