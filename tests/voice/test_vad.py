@@ -84,6 +84,28 @@ def test_silero_endpointer_frames_and_errors() -> None:
     assert silero_model_path().name == "silero_vad.onnx"
 
 
+def test_silero_end_threshold_defaults_to_silero_rule_and_may_not_exceed_the_start() -> None:
+    assert SileroEndpointer(threshold=0.5).neg_threshold == pytest.approx(0.35)
+    assert SileroEndpointer(threshold=0.4, end_threshold=0.35).neg_threshold == 0.35
+    with pytest.raises(ValueError, match="end threshold 0.45 is above the start threshold 0.4"):
+        SileroEndpointer(threshold=0.4, end_threshold=0.45)
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_lower_start_threshold_starts_no_later_and_ends_where_the_end_threshold_says() -> None:
+    pcm, start, end = _word_in_walking_noise("stop", 15.0)
+    step = 960
+
+    def over(config: SegmenterConfig) -> list[Segment]:
+        seg = Segmenter(config)
+        segs = [s for i in range(0, len(pcm), step) for s in seg.feed(pcm[i : i + step])] + seg.flush()
+        return [s for s in segs if s.start_s < end and s.end_s > start]
+
+    (high,) = over(SegmenterConfig(threshold=0.5, end_threshold=0.35))
+    (low,) = over(SegmenterConfig(threshold=0.4, end_threshold=0.35))
+    assert low.start_s <= high.start_s and abs(low.end_s - high.end_s) < 0.1
+
+
 def test_unknown_vad_is_refused() -> None:
     with pytest.raises(ValueError, match="unknown VAD 'energy'"):
         Segmenter(SegmenterConfig(vad="energy"))
