@@ -213,7 +213,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
                      latency_ms=round((time.time() - utt.stamp) * 1000, 1), early=utt.recognition is not None,
                      snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
                      **rec.detail)
-        ctx.update_detail(**stats.as_detail())
+        # the stream's last speech-to-noise estimate: whether the room counts as clear (`clear_window_s`)
+        ctx.update_detail(**stats.as_detail(), **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
 
     delay, last_error = settings.retry_s, ""
     while not ctx.stopping.is_set():
