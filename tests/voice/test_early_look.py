@@ -84,7 +84,8 @@ def test_early_look_setting() -> None:
             VoiceSettings(early_look=bad).segmenter()
 
 
-def test_a_bad_early_look_setting_exits_2_naming_the_variable() -> None:
+@pytest.mark.parametrize(("variable", "value"), [("HRI_VOICE_EARLY_LOOK", "soon"), ("HRI_VOICE_CLEAR_WINDOW", "short")])
+def test_a_bad_stream_window_setting_exits_2_naming_the_variable(variable: str, value: str) -> None:
     import os
     import subprocess
     import sys
@@ -92,7 +93,6 @@ def test_a_bad_early_look_setting_exits_2_naming_the_variable() -> None:
     from tests.conftest import ROOT
 
     out = subprocess.run([sys.executable, "-m", "services.voice"], cwd=ROOT, capture_output=True, text=True,
-                         check=False, timeout=60,
-                         env={**os.environ, "HRI_VOICE_EARLY_LOOK": "soon", "HRI_VOICE_SOURCE": "stdin"})
+                         check=False, timeout=60, env={**os.environ, variable: value, "HRI_VOICE_SOURCE": "stdin"})
     assert out.returncode == 2
-    assert out.stderr.strip().count("\n") == 0 and "HRI_VOICE_EARLY_LOOK='soon'" in out.stderr
+    assert out.stderr.strip().count("\n") == 0 and f"{variable}={value!r}" in out.stderr
