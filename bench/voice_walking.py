@@ -189,7 +189,7 @@ def main() -> int:
     ap.add_argument("--silero-threshold", type=float, default=SegmenterConfig.threshold,
                     help="Silero's speech threshold (SegmenterConfig.threshold)")
     ap.add_argument("--silero-end-threshold", type=float, default=SegmenterConfig.end_threshold,
-                    help="Silero's end threshold (SegmenterConfig.end_threshold; default: the start threshold - 0.15)")
+                    help="Silero's end threshold, at most the start threshold (default: the service's, SegmenterConfig.end_threshold)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the segmenter's early look: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,

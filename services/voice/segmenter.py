@@ -125,14 +125,9 @@ class Segmenter:
         else:
             raise ValueError(f"unknown VAD {self.config.vad!r}: one of {', '.join(VADS)}")
         self._frame = self._ep.frame_bytes
-        self._early_frames = 0  # quiet frames before the early look; 0: none
-        if self.recognise is not None and self.config.vad == "silero" and self.config.early_quiet_s is not None:
-            early = max(1, round(self.config.early_quiet_s * SAMPLE_RATE / FRAME_SAMPLES))
-            self._early_frames = early if early < self._ep.end_frames else 0
-        self._clear_frames = 0  # quiet frames that end an utterance in a clear stream; 0: none
-        if self.config.vad == "silero" and self.config.clear_quiet_s is not None:
-            clear = max(1, round(self.config.clear_quiet_s * SAMPLE_RATE / FRAME_SAMPLES))
-            self._clear_frames = clear if clear < self._ep.end_frames else 0
+        # quiet frames before the early look; 0: none
+        self._early_frames = self._frames_before_end(self.config.early_quiet_s) if self.recognise is not None else 0
+        self._clear_frames = self._frames_before_end(self.config.clear_quiet_s)  # ends a clear utterance; 0: none
         self._floor: deque[float] = deque(maxlen=max(1, round(self.config.noise_floor_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._speech_power = 0.0  # sum of the current utterance's speech frames' mean square
         self._speech_frames = 0
@@ -142,6 +137,13 @@ class Segmenter:
         self._consumed = 0  # bytes handed to the endpointer
         self._history = bytearray()  # the most recent raw audio, for pre- and post-roll
         self._history_start = 0  # stream offset (bytes) of _history[0]
+
+    def _frames_before_end(self, seconds: float | None) -> int:
+        """Silero: `seconds` of quiet as frames, if fewer than the end window's; else (or None, or WebRTC) 0."""
+        if self.config.vad != "silero" or seconds is None:
+            return 0
+        frames = max(1, round(seconds * SAMPLE_RATE / FRAME_SAMPLES))
+        return frames if frames < self._ep.end_frames else 0
 
     @property
     def frame_bytes(self) -> int:
