@@ -4,6 +4,10 @@
     python -m services.vision.training --out main.onnx                # the default recipe
     python -m services.vision.training --everyday --out everyday.onnx  # stars, check marks, clocks (round vision23)
     python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out services/vision/verifier.onnx]
+    python -m services.vision.ensemble new-main.onnx services/vision/verifier.onnx --out joined.onnx  # keep its veto
+
+Either input may itself be a joined model: its own network in that role is taken out of it (`part`), so a new
+main network can be joined to the committed veto (round vision24) without retraining the veto.
 
 The first network (`main`) judges every row as before. The second (`veto`) runs on the loose rows only (claim
 slot 'loose' set: loose candidates, parts `_split` cut off, the proposer's proposals) and gives those rows'
@@ -29,6 +33,49 @@ import typer
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
 LOOSE_SLOT = len(SHAPES)  # the claim's 'loose' slot (verifier.claim)
+JOINED = "verifier_loose_x_veto"  # the graph name `join` gives
+ROLES = ("main_", "veto_")  # the prefixes `join` gives each network's names
+
+
+def part(joined: Any, role: str) -> Any:
+    """One network of a joined model (`onnx.ModelProto` made by `join`) as a verifier model of its own:
+    `role` "main_" or "veto_"; its names keep the prefix, its inputs are `crops` and `claim` again and its
+    output is `probabilities`; the metadata is the joined model's."""
+    from onnx import helper  # type: ignore[import-not-found,unused-ignore]
+
+    if role not in ROLES:
+        raise ValueError(f"role {role!r}: one of {ROLES}")
+    g = joined.graph
+    if g.name != JOINED:
+        raise ValueError(f"not a joined verifier (graph {g.name!r}, expected {JOINED!r})")
+    own = {f"{role}crops": "crops", f"{role}claim": "claim", f"{role}probabilities": "probabilities"}
+    nodes = []
+    for n in g.node:
+        if not n.name.startswith(role):
+            continue
+        copy = helper.make_node(
+            n.op_type, [own.get(i, i) for i in n.input], [own.get(o, o) for o in n.output], name=n.name,
+            domain=n.domain or None,
+        )
+        copy.attribute.extend(n.attribute)
+        nodes.append(copy)
+    if not nodes or "probabilities" not in nodes[-1].output:
+        raise ValueError(f"no {role!r} network ending in {role}probabilities in {g.name!r}")
+    graph = helper.make_graph(
+        nodes, f"verifier_{role.rstrip('_')}", list(g.input), list(g.output),
+        [t for t in g.initializer if t.name.startswith(role)],
+    )
+    model = helper.make_model(graph, opset_imports=joined.opset_import, producer_name="services.vision.ensemble")
+    model.ir_version = joined.ir_version
+    for p in joined.metadata_props:
+        model.metadata_props.add(key=p.key, value=p.value)
+    model.doc_string = f"the {role.rstrip('_')} network of a joined verifier (services.vision.ensemble.part)"
+    return model
+
+
+def network(model: Any, role: str) -> Any:
+    """`model` itself, or its network in `role` if it is a joined verifier."""
+    return part(model, role) if model.graph.name == JOINED else model
 
 
 def join(main: Any, veto: Any, loose_x: float) -> Any:
@@ -73,7 +120,7 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
     out = helper.make_tensor_value_info("probabilities", TensorProto.FLOAT, ["n", len(SHAPES) + 1])
     graph = helper.make_graph(
         pick + list(m.graph.node) + list(v.graph.node) + write,
-        "verifier_loose_x_veto",
+        JOINED,
         list(main.graph.input),
         [out],
         list(m.graph.initializer) + list(v.graph.initializer) + consts,
@@ -90,8 +137,12 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
 
 
 def main(
-    main_model: Annotated[Path, typer.Argument(help="the network that judges every row (the default recipe)")],
-    veto_model: Annotated[Path, typer.Argument(help="the network whose X a loose row also needs (--everyday)")],
+    main_model: Annotated[
+        Path, typer.Argument(help="the network that judges every row (the default recipe; of a joined model: its main)")
+    ],
+    veto_model: Annotated[
+        Path, typer.Argument(help="the network whose X a loose row also needs (--everyday; of a joined model: its veto)")
+    ],
     loose_x: Annotated[float, typer.Option(help="the X probability (the lower of the two) a loose row needs")] = 0.1,
     out: Annotated[Path, typer.Option(help="where to write the joined model")] = MODEL_PATH,
 ) -> None:
@@ -99,7 +150,7 @@ def main(
 
     for path in (main_model, veto_model):
         Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
-    joined = join(onnx.load(str(main_model)), onnx.load(str(veto_model)), loose_x)
+    joined = join(network(onnx.load(str(main_model)), "main_"), network(onnx.load(str(veto_model)), "veto_"), loose_x)
     onnx.checker.check_model(joined)
     onnx.save(joined, str(out))
     v = Verifier.load(out)

@@ -219,17 +219,19 @@ def harvest_all(
     return parts
 
 
-def _net() -> torch.nn.Module:
+def _net(width: float = 1.0) -> torch.nn.Module:
     import torch  # type: ignore[import-not-found,unused-ignore]
     from torch import nn  # type: ignore[import-not-found,unused-ignore]
 
     class Net(nn.Module):
         """Three 3x3 conv + batch-norm + ReLU + 2x2 max-pool stages (32 -> 4 px), then a hidden layer
-        that also sees the claim, then the four classes (softmax in the exported graph)."""
+        that also sees the claim, then the four classes (softmax in the exported graph). `width` scales
+        every stage's channels and the hidden layer (1: 16, 32, 48 and 64, the committed recipe's)."""
 
         def __init__(self) -> None:
             super().__init__()
-            chans = (3, 16, 32, 48)
+            chans = (3, *(round(k * width) for k in (16, 32, 48)))
+            hidden = round(64 * width)
             layers: list[nn.Module] = []
             for a, b in itertools.pairwise(chans):
                 layers += [
@@ -239,8 +241,8 @@ def _net() -> torch.nn.Module:
                     nn.MaxPool2d(2),
                 ]
             self.features = nn.Sequential(*layers)
-            self.hidden = nn.Linear(chans[-1] * (PATCH // 8) ** 2 + N_CLAIM, 64)
-            self.out = nn.Linear(64, len(CLASSES))
+            self.hidden = nn.Linear(chans[-1] * (PATCH // 8) ** 2 + N_CLAIM, hidden)
+            self.out = nn.Linear(hidden, len(CLASSES))
             self.drop = nn.Dropout(0.3)
 
         def forward(self, crops: torch.Tensor, claim: torch.Tensor) -> torch.Tensor:
@@ -276,16 +278,16 @@ def _augment(x: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
 
 
 def fit(
-    x: np.ndarray, c: np.ndarray, y: np.ndarray, seed: int, epochs: int, log: Any = None
+    x: np.ndarray, c: np.ndarray, y: np.ndarray, seed: int, epochs: int, log: Any = None, width: float = 1.0
 ) -> torch.nn.Module:
-    """Train `_net` on crops x (uint8), claim indices c and labels y; fixed seed, one thread."""
+    """Train `_net(width)` on crops x (uint8), claim indices c and labels y; fixed seed, one thread."""
     import torch  # type: ignore[import-not-found,unused-ignore]
     import torch.nn.functional as F  # type: ignore[import-not-found,unused-ignore]
 
     torch.manual_seed(seed)
     torch.set_num_threads(1)
     gen = torch.Generator().manual_seed(seed)
-    net = _net()
+    net = _net(width)
     xs = torch.from_numpy(x)
     cs = F.one_hot(torch.from_numpy(c), N_CLAIM).float()
     ys = torch.from_numpy(y)
@@ -399,6 +401,9 @@ def main(
     seed: Annotated[int, typer.Option(help="base seed (generator chunks and the network)")] = 20261123,
     jobs: Annotated[int, typer.Option(help="harvesting processes")] = 2,
     epochs: Annotated[int, typer.Option(help="training epochs")] = 6,
+    width: Annotated[
+        float, typer.Option(help="the network's channels and hidden units, times the recipe's (round vision24)")
+    ] = 1.0,
     cache: Annotated[
         Path | None, typer.Option(help="keep the harvested candidates here (never commit)")
     ] = None,
@@ -462,7 +467,7 @@ def main(
     if missing:
         raise SystemExit(f"no training candidates of class {missing}: harvest more frames")
     typer.echo(f"harvested {len(y)} training candidates in {time.monotonic() - t0:.0f} s", err=True)
-    net = fit(x, c, y, seed, epochs, log=lambda m: typer.echo(m, err=True))
+    net = fit(x, c, y, seed, epochs, log=lambda m: typer.echo(m, err=True), width=width)
     export(net, out, (threshold_x, threshold_o, threshold_triangle), (loose_x, loose_o, loose_triangle))
     result = {"train_candidates": len(y), "train_by_class": np.bincount(y, minlength=len(CLASSES)).tolist()}
     result.update(report(Verifier.load(out), val, out))
