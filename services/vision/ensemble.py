@@ -50,8 +50,8 @@ def part(joined: Any, role: str) -> Any:
         raise ValueError(f"not a joined verifier (graph {g.name!r}, expected {JOINED!r})")
     own = {f"{role}crops": "crops", f"{role}claim": "claim", f"{role}probabilities": "probabilities"}
     nodes = []
-    for n in g.node:
-        if not n.name.startswith(role):
+    for n in g.node:  # the network's own nodes: what they make bears its prefix (its inputs are made by `join`)
+        if not any(o.startswith(role) for o in n.output) or any(own.get(o) in ("crops", "claim") for o in n.output):
             continue
         copy = helper.make_node(
             n.op_type, [own.get(i, i) for i in n.input], [own.get(o, o) for o in n.output], name=n.name,

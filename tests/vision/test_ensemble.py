@@ -16,8 +16,8 @@ from onnx import TensorProto, helper
 
 from schemas.messages import Shape
 from services.vision.detector import MarkDetector
-from services.vision.ensemble import join
-from services.vision.verifier import INPUT_FORMAT, N_CLAIM, PATCH, Verifier
+from services.vision.ensemble import join, network, part
+from services.vision.verifier import INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, Verifier
 
 
 def _net(weights: np.ndarray, loose: str = "0.5,0.95,0.9") -> Any:
@@ -88,6 +88,39 @@ def test_the_joined_model_keeps_the_first_networks_thresholds_but_the_loose_x(tm
     joined = _save(join(_net(w, loose="0.5,0.95,0.9"), _net(w), loose_x=0.2), tmp_path / "joined.onnx")
     assert joined.thresholds == (0.25, 0.8, 0.8)
     assert joined.loose_thresholds == (0.2, 0.95, 0.9)
+
+
+def test_each_network_comes_back_out_of_a_joined_model(tmp_path: Path) -> None:
+    """`part` undoes `join`: each network alone gives its own probabilities, and joining the two parts again gives
+    the joined model's, so a new main network can be joined to a committed veto (round vision24)."""
+    rng = np.random.default_rng(7)
+    wm, wv = rng.normal(0, 2, (N_CLAIM, 4)), rng.normal(0, 2, (N_CLAIM, 4))
+    joined = join(_net(wm), _net(wv), loose_x=0.1)
+    crops = rng.integers(0, 256, (9, 3, PATCH, PATCH)).astype(np.uint8)
+    claims = np.eye(N_CLAIM, dtype=np.float32)[rng.integers(0, N_CLAIM, 9)]
+    main, veto = part(joined, "main_"), part(joined, "veto_")
+    assert np.allclose(_save(main, tmp_path / "m.onnx").probabilities(crops, claims), _probs(wm, crops, claims), atol=1e-5)
+    assert np.allclose(_save(veto, tmp_path / "v.onnx").probabilities(crops, claims), _probs(wv, crops, claims), atol=1e-5)
+    again = _save(join(network(joined, "main_"), network(joined, "veto_"), loose_x=0.1), tmp_path / "again.onnx")
+    want = _save(joined, tmp_path / "joined.onnx").probabilities(crops, claims)
+    assert np.array_equal(again.probabilities(crops, claims), want)
+    assert network(main, "main_") is main  # a plain network is itself
+
+
+def test_the_committed_verifier_is_its_two_networks_joined(tmp_path: Path) -> None:
+    committed = onnx.load(str(MODEL_PATH))
+    again = _save(join(part(committed, "main_"), part(committed, "veto_"), loose_x=0.1), tmp_path / "again.onnx")
+    rng = np.random.default_rng(3)
+    crops = rng.integers(0, 256, (16, 3, PATCH, PATCH)).astype(np.uint8)
+    claims = np.eye(N_CLAIM, dtype=np.float32)[np.arange(16) % N_CLAIM]
+    assert np.array_equal(again.probabilities(crops, claims), Verifier.load().probabilities(crops, claims))
+
+
+def test_part_refuses_what_is_not_a_joined_model() -> None:
+    with pytest.raises(ValueError, match="not a joined verifier"):
+        part(_net(np.zeros((N_CLAIM, 4))), "main_")
+    with pytest.raises(ValueError, match="role"):
+        part(join(_net(np.zeros((N_CLAIM, 4))), _net(np.zeros((N_CLAIM, 4))), 0.1), "other_")
 
 
 def test_models_of_other_opsets_are_refused() -> None:
