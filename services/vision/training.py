@@ -7,7 +7,7 @@ joined by `python -m services.vision.ensemble` (round vision23g; see there).
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday]
+                                       [--everyday] [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and

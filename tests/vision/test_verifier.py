@@ -328,3 +328,21 @@ def test_a_filled_triangle_is_a_mark_on_a_card_but_not_on_a_wall(r: int) -> None
     assert [d.shape for d in MarkDetector(DetectorConfig(verify=False)).detect(_filled_triangle(300, r))] == [
         Shape.TRIANGLE
     ]
+
+
+def test_a_wider_network_is_a_verifier_of_the_same_inputs(tmp_path: Path) -> None:
+    """`training --width` (round vision24): every stage's channels and the hidden layer scaled; exported, it
+    loads and runs like the committed recipe's network, with about width squared as many weights."""
+    pytest.importorskip("torch")
+    pytest.importorskip("onnx")
+    from services.vision.training import _net, export
+
+    sizes = {}
+    for width in (1.0, 1.5):
+        net = _net(width).eval()
+        sizes[width] = sum(p.numel() for p in net.parameters())
+        export(net, tmp_path / f"w{width}.onnx", (0.25, 0.8, 0.8), (0.5, 0.95, 0.9))
+        v = Verifier.load(tmp_path / f"w{width}.onnx")
+        p = v.probabilities(np.zeros((2, 3, PATCH, PATCH), np.uint8), np.stack([claim(None)] * 2))
+        assert p.shape == (2, len(CLASSES)) and np.allclose(p.sum(axis=1), 1.0, atol=1e-5)
+    assert 1.8 < sizes[1.5] / sizes[1.0] < 2.6
