@@ -132,7 +132,7 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
         if p.key == "loose_thresholds":
             value = ",".join([f"{loose_x:g}", *p.value.split(",")[1:]])
         joined.metadata_props.add(key=p.key, value=value)
-    joined.doc_string = "vision mark verifier: python -m services.vision.ensemble MAIN VETO (round vision23f)"
+    joined.doc_string = "vision mark verifier: python -m services.vision.ensemble MAIN VETO (a loose X needs both)"
     return joined
 
 
