@@ -34,14 +34,15 @@ from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
 LOOSE_SLOT = len(SHAPES)  # the claim's 'loose' slot (verifier.claim)
 JOINED = "verifier_loose_x_veto"  # the graph name `join` gives
-ROLES = ("main_", "veto_")  # the prefixes `join` gives each network's names
+MAIN, VETO = "main_", "veto_"  # the prefixes `join` gives each network's names
+ROLES = (MAIN, VETO)
 
 
 def part(joined: Any, role: str) -> Any:
     """One network of a joined model (`onnx.ModelProto` made by `join`) as a verifier model of its own:
     `role` "main_" or "veto_"; its names keep the prefix, its inputs are `crops` and `claim` again and its
     output is `probabilities`; the metadata is the joined model's."""
-    from onnx import helper  # type: ignore[import-not-found,unused-ignore]
+    from onnx import NodeProto, helper  # type: ignore[import-not-found,unused-ignore]
 
     if role not in ROLES:
         raise ValueError(f"role {role!r}: one of {ROLES}")
@@ -53,11 +54,10 @@ def part(joined: Any, role: str) -> Any:
     for n in g.node:  # the network's own nodes: what they make bears its prefix (its inputs are made by `join`)
         if not any(o.startswith(role) for o in n.output) or any(own.get(o) in ("crops", "claim") for o in n.output):
             continue
-        copy = helper.make_node(
-            n.op_type, [own.get(i, i) for i in n.input], [own.get(o, o) for o in n.output], name=n.name,
-            domain=n.domain or None,
-        )
-        copy.attribute.extend(n.attribute)
+        copy = NodeProto()
+        copy.CopyFrom(n)  # everything as it was, but the network's own inputs and output renamed
+        copy.input[:] = [own.get(i, i) for i in n.input]
+        copy.output[:] = [own.get(o, o) for o in n.output]
         nodes.append(copy)
     if not nodes or "probabilities" not in nodes[-1].output:
         raise ValueError(f"no {role!r} network ending in {role}probabilities in {g.name!r}")
@@ -84,8 +84,8 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
 
     if main.opset_import[0].version != veto.opset_import[0].version:
         raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
-    m = compose.add_prefix(main, "main_", rename_inputs=False)  # reads `crops` and `claim` itself
-    v = compose.add_prefix(veto, "veto_")  # reads `veto_crops` and `veto_claim`, the loose rows
+    m = compose.add_prefix(main, MAIN, rename_inputs=False)  # reads `crops` and `claim` itself
+    v = compose.add_prefix(veto, VETO)  # reads `veto_crops` and `veto_claim`, the loose rows
     pm, pv = m.graph.output[0].name, v.graph.output[0].name
 
     def ints(name: str, values: list[int]) -> Any:
@@ -150,7 +150,7 @@ def main(
 
     for path in (main_model, veto_model):
         Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
-    joined = join(network(onnx.load(str(main_model)), "main_"), network(onnx.load(str(veto_model)), "veto_"), loose_x)
+    joined = join(network(onnx.load(str(main_model)), MAIN), network(onnx.load(str(veto_model)), VETO), loose_x)
     onnx.checker.check_model(joined)
     onnx.save(joined, str(out))
     v = Verifier.load(out)
