@@ -973,7 +973,7 @@ def _on_card(
     band_n = cv2.countNonZero(band)
     if band_n == 0:
         return "band"
-    paper = float(np.median(g_roi[band > 0]))
+    paper = _masked_median(g_roi, band, band_n)
     if paper < 20 or paper - ink < cfg.min_contrast:
         return "faint"
     dark = ink + 0.3 * (paper - ink)
@@ -1017,6 +1017,15 @@ def _on_card(
         if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return "ink"
     return float(mean[0][0])
+
+
+def _masked_median(g: np.ndarray, mask: np.ndarray, n: int) -> float:
+    """`np.median(g[mask > 0])` of a uint8 image over its `n` (> 0) masked pixels, from their histogram:
+    the same value (the mean of the two middle levels for an even count) without copying and sorting
+    them."""
+    counts = np.cumsum(cv2.calcHist([g], [0], mask, [256], [0, 256]).ravel())
+    low, high = np.searchsorted(counts, [(n - 1) // 2, n // 2], side="right")
+    return (float(low) + float(high)) / 2.0
 
 
 def _clear_margin(
@@ -1317,12 +1326,15 @@ def _in_text_line(
     `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
     (`_line_of_letters`)."""
-    if _line_of_letters(stats, i, g, labels, paper_share, 0.0):
+    rows = _around(stats, i)
+    if not len(rows):
+        return False
+    if _line_of_letters(stats, i, g, labels, paper_share, 0.0, rows):
         return True
     if not turned:
         return False
     x, y, w, h, area = (int(v) for v in stats[i][:5])
-    xs, ys, ws, hs, areas = (stats[:, k] for k in range(5))
+    xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
     dx = xs + ws / 2 - (x + w / 2)
     dy = ys + hs / 2 - (y + h / 2)
     dist = np.hypot(dx, dy)
@@ -1334,23 +1346,44 @@ def _in_text_line(
         & (dist >= 0.5 * size)
         & (dist <= 1.3 * size)
     )
-    letter[0] = letter[i] = False
     tried: list[float] = []
     for j in np.flatnonzero(letter)[:4]:
         angle = float(np.degrees(np.arctan2(dy[j], dx[j]))) % 180.0
         if all(abs(angle - a) > 3.0 for a in tried) and min(angle, 180.0 - angle) > 3.0:
             tried.append(angle)
-            if _line_of_letters(stats, i, g, labels, paper_share, angle):
+            if _line_of_letters(stats, i, g, labels, paper_share, angle, rows):
                 return True
     return False
 
 
+def _around(stats: np.ndarray, i: int) -> np.ndarray:
+    """The components (rows of `stats`, in label order, without the background and `i` itself) whose
+    centre lies within 3.5 x the size of `i` of its centre, in x and in y: every one the text-line
+    tests could count as a neighbour (the baseline test's farthest is 3.25 sizes away in x, the turned
+    test's 2.81 along its line), so they look at these few rows instead of every component of the
+    level - the same verdicts, several times faster on a frame of a thousand specks."""
+    x, y, w, h = (int(v) for v in stats[i][:4])
+    reach = 7 * max(w, h)  # in doubled coordinates, as the centres below
+    dx = 2 * stats[:, 0] + stats[:, 2] - (2 * x + w)
+    dy = 2 * stats[:, 1] + stats[:, 3] - (2 * y + h)
+    near = (np.abs(dx) <= reach) & (np.abs(dy) <= reach)
+    near[0] = near[i] = False
+    return np.flatnonzero(near)
+
+
 def _line_of_letters(
-    stats: np.ndarray, i: int, g: np.ndarray, labels: np.ndarray, paper_share: float, angle: float
+    stats: np.ndarray,
+    i: int,
+    g: np.ndarray,
+    labels: np.ndarray,
+    paper_share: float,
+    angle: float,
+    rows: np.ndarray,
 ) -> bool:
-    """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test)."""
+    """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test), over the
+    neighbours `rows` (`_around`)."""
     x, y, w, h, area = (int(v) for v in stats[i][:5])
-    xs, ys, ws, hs, areas = (stats[:, k] for k in range(5))
+    xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
     if angle == 0.0:
         cy = y + h / 2
         gap = np.maximum(xs - (x + w), x - (xs + ws))  # horizontal gap between the boxes (<0: overlap)
@@ -1385,7 +1418,6 @@ def _line_of_letters(
         & (areas >= 0.15 * area)
         & beside
     )
-    similar[0] = similar[i] = False
     if not (similar & close).any():
         return False
     # keep only neighbours written in the same ink as the candidate (and, with `paper_share`, printed
@@ -1394,11 +1426,12 @@ def _line_of_letters(
     ink = _component_mean(g, labels, stats, i)
     paper = float(np.percentile(box, 90))
     tolerance = max(8.0, 0.25 * (paper - ink))
-    for j in np.flatnonzero(similar):
-        if abs(_component_mean(g, labels, stats, int(j)) - ink) > tolerance or (
-            paper_share > 0 and _paper_round(g, labels, stats, int(j), (ink + paper) / 2) < paper_share
+    for k in np.flatnonzero(similar):
+        j = int(rows[k])
+        if abs(_component_mean(g, labels, stats, j) - ink) > tolerance or (
+            paper_share > 0 and _paper_round(g, labels, stats, j, (ink + paper) / 2) < paper_share
         ):
-            similar[j] = False
+            similar[k] = False
     near = similar & close
     if not near.any():
         return False

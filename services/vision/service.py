@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import zenoh
 
 from schemas.access import INPUT_PRIORITIES
@@ -67,6 +68,10 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
     settings = settings or VisionSettings()
+    # OpenCV's own worker threads off: on a small frame they cost more than they save (about a tenth
+    # more CPU a frame, taken from the other services on a two-core robot computer); the detector runs
+    # its proposer network on a thread of its own instead
+    cv2.setNumThreads(1)
     # express, above commands (the priority the router gives marks anyway): a busy link must not
     # queue a danger sign behind other traffic
     priority = getattr(zenoh.Priority, INPUT_PRIORITIES["vision/marks"].upper())
