@@ -1329,7 +1329,8 @@ def _in_text_line(
     rows = _around(stats, i)
     if not len(rows):
         return False
-    if _line_of_letters(stats, i, g, labels, paper_share, 0.0, rows):
+    letters = _Letters(g, labels, stats, i, paper_share)
+    if _line_of_letters(letters, 0.0, rows):
         return True
     if not turned:
         return False
@@ -1351,9 +1352,56 @@ def _in_text_line(
         angle = float(np.degrees(np.arctan2(dy[j], dx[j]))) % 180.0
         if all(abs(angle - a) > 3.0 for a in tried) and min(angle, 180.0 - angle) > 3.0:
             tried.append(angle)
-            if _line_of_letters(stats, i, g, labels, paper_share, angle, rows):
+            if _line_of_letters(letters, angle, rows):
                 return True
     return False
+
+
+class _Letters:
+    """What the text-line tests measure of candidate `i` and its neighbours that does not depend on the
+    line tried (the baseline and up to four turned ones): the candidate's ink and paper levels, and
+    each neighbour's mean grey and paper ring, each computed once, when first asked for."""
+
+    def __init__(
+        self, g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int, paper_share: float
+    ) -> None:
+        self.g, self.labels, self.stats, self.i, self.paper_share = g, labels, stats, i, paper_share
+        self._levels: tuple[float, float] | None = None
+        self._means: dict[int, float] = {}
+        self._rings: dict[int, float] = {}
+
+    def levels(self) -> tuple[float, float]:
+        """The candidate's mean grey (its ink) and the 90th percentile of its box (the paper)."""
+        if self._levels is None:
+            x, y, w, h = (int(v) for v in self.stats[self.i][:4])
+            ink = _component_mean(self.g, self.labels, self.stats, self.i)
+            self._levels = ink, _percentile(self.g[y : y + h, x : x + w], 90)
+        return self._levels
+
+    def mean(self, j: int) -> float:
+        if j not in self._means:
+            self._means[j] = _component_mean(self.g, self.labels, self.stats, j)
+        return self._means[j]
+
+    def paper_round(self, j: int) -> float:
+        """`_paper_round` of neighbour `j`, cut half-way between the candidate's ink and paper."""
+        if j not in self._rings:
+            ink, paper = self.levels()
+            self._rings[j] = _paper_round(self.g, self.labels, self.stats, j, (ink + paper) / 2)
+        return self._rings[j]
+
+
+def _percentile(g: np.ndarray, q: float) -> float:
+    """`np.percentile(g, q)` of a uint8 image (its default, linear method), from the image's histogram:
+    the same value, bit for bit (tests/vision), without converting and partitioning every pixel."""
+    n = g.size
+    virtual = (n - 1) * (q / 100)  # numpy's index into the sorted pixels, and its rounding
+    below = min(math.floor(virtual), n - 1)
+    gamma = virtual - below
+    counts = np.cumsum(cv2.calcHist([g], [0], None, [256], [0, 256]).ravel())
+    low, high = (float(v) for v in np.searchsorted(counts, [below, min(below + 1, n - 1)], side="right"))
+    step = high - low  # numpy's interpolation, in its two forms
+    return high - step * (1 - gamma) if gamma >= 0.5 else low + step * gamma
 
 
 def _around(stats: np.ndarray, i: int) -> np.ndarray:
@@ -1371,18 +1419,11 @@ def _around(stats: np.ndarray, i: int) -> np.ndarray:
     return np.flatnonzero(near)
 
 
-def _line_of_letters(
-    stats: np.ndarray,
-    i: int,
-    g: np.ndarray,
-    labels: np.ndarray,
-    paper_share: float,
-    angle: float,
-    rows: np.ndarray,
-) -> bool:
+def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray) -> bool:
     """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test), over the
-    neighbours `rows` (`_around`)."""
-    x, y, w, h, area = (int(v) for v in stats[i][:5])
+    neighbours `rows` (`_around`) of the candidate `letters` measures."""
+    stats = letters.stats
+    x, y, w, h, area = (int(v) for v in stats[letters.i][:5])
     xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
     if angle == 0.0:
         cy = y + h / 2
@@ -1422,14 +1463,12 @@ def _line_of_letters(
         return False
     # keep only neighbours written in the same ink as the candidate (and, with `paper_share`, printed
     # on paper: light all round them, unlike the dark background beyond a card's edge)
-    box = g[y : y + h, x : x + w]
-    ink = _component_mean(g, labels, stats, i)
-    paper = float(np.percentile(box, 90))
+    ink, paper = letters.levels()
     tolerance = max(8.0, 0.25 * (paper - ink))
     for k in np.flatnonzero(similar):
         j = int(rows[k])
-        if abs(_component_mean(g, labels, stats, j) - ink) > tolerance or (
-            paper_share > 0 and _paper_round(g, labels, stats, j, (ink + paper) / 2) < paper_share
+        if abs(letters.mean(j) - ink) > tolerance or (
+            letters.paper_share > 0 and letters.paper_round(j) < letters.paper_share
         ):
             similar[k] = False
     near = similar & close

@@ -68,9 +68,9 @@ class _Stats:
 
 def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
     settings = settings or VisionSettings()
-    # OpenCV's own worker threads off: on a small frame they cost more than they save (about a tenth
-    # more CPU a frame, taken from the other services on a two-core robot computer); the detector runs
-    # its proposer network on a thread of its own instead
+    # OpenCV's own worker threads off: on a 640x480 frame they cost more than they save (about 6 % more
+    # CPU a frame for no shorter wait, measured on round vision25's two-core machine), and a robot's
+    # other services need that core; onnxruntime's sessions are on one thread too (`verifier.onnx_session`)
     cv2.setNumThreads(1)
     # express, above commands (the priority the router gives marks anyway): a busy link must not
     # queue a danger sign behind other traffic

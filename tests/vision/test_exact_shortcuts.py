@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from services.vision.detector import _around, _line_of_letters, _masked_median
+from services.vision.detector import _around, _Letters, _line_of_letters, _masked_median, _percentile
 
 
 @settings(max_examples=200, deadline=None, derandomize=True)
@@ -25,6 +25,26 @@ def test_masked_median_is_numpys_median(seed: int, h: int, w: int, share: float)
         mask[int(rng.integers(h)), int(rng.integers(w))] = 255
         n = 1
     assert _masked_median(g, mask, n) == float(np.median(g[mask > 0]))
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 80),
+    st.integers(1, 80),
+    st.one_of(st.just(90.0), st.just(0.0), st.just(100.0), st.floats(0.0, 100.0)),
+)
+def test_percentile_is_numpys_bit_for_bit(seed: int, h: int, w: int, q: float) -> None:
+    """A letter's paper level from a histogram is `np.percentile`'s, to the last bit, whatever the box's
+    size and grey range (`_in_text_line` compares it with other levels)."""
+    rng = np.random.default_rng(seed)
+    lo = int(rng.integers(0, 256))
+    g = rng.integers(lo, min(256, lo + int(rng.integers(1, 257))), (h, w), dtype=np.uint8)
+    expected = float(np.percentile(g, q))
+    assert _percentile(g, q) == expected
+    view = np.zeros((h + 4, w + 4), np.uint8)
+    view[2:-2, 2:-2] = g  # a box cut out of a bigger image, as the text-line test reads it
+    assert _percentile(view[2:-2, 2:-2], q) == expected
 
 
 def _letters(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -82,7 +102,8 @@ def _letters(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarr
 @given(st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.7]))
 def test_text_line_neighbourhood_changes_no_verdict(seed: int, paper_share: float) -> None:
     """`_around` keeps every component the text-line tests could count, at any angle: the verdict over
-    its rows is the verdict over every component of the level."""
+    its rows is the verdict over every component of the level; and the levels `_Letters` keeps from one
+    line to the next give each line the verdict fresh ones would."""
     rng = np.random.default_rng(seed)
     g, labels, stats, turn = _letters(rng)
     i = 1
@@ -91,7 +112,8 @@ def test_text_line_neighbourhood_changes_no_verdict(seed: int, paper_share: floa
     assert set(near.tolist()) <= set(every.tolist())
     assert list(near) == sorted(near)
     angles = [0.0, turn, 90.0]
+    measured = _Letters(g, labels, stats, i, paper_share)  # one for every line, as `_in_text_line` has
     for angle in angles:
-        assert _line_of_letters(stats, i, g, labels, paper_share, angle, near) == _line_of_letters(
-            stats, i, g, labels, paper_share, angle, every
+        assert _line_of_letters(measured, angle, near) == _line_of_letters(
+            _Letters(g, labels, stats, i, paper_share), angle, every  # fresh: nothing carried over
         ), angle
