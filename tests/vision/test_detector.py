@@ -444,6 +444,11 @@ def test_a_mark_joined_to_a_finger_is_cut_free(detector: MarkDetector, name: str
     assert MarkDetector(premise).detect(img) == []
     found = detector.detect(img)
     assert [d.shape for d in found] == [shape]
+    # with `danger_first` the frame may end at a coarser level's X, finger and all (the robot stops all
+    # the same): the shape is asserted, not the box
+    assert [d.shape for d in MarkDetector(dataclasses.replace(detector.config, danger_first=True)).detect(img)] == [
+        shape
+    ]
     x, y, w, h = found[0].box
     assert (
         abs(x + w / 2 - 320) < 25 and abs(y + h / 2 - 240) < 25 and max(w, h) < 170

@@ -138,7 +138,8 @@ class _Counting:
 
 def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
     """A small X (full resolution), a big O (quarter scale) and a small triangle smeared by motion
-    blur (a loose candidate: no shape test reads it), each on its own card: one network call."""
+    blur (a loose candidate: no shape test reads it), each on its own card: one network call (with
+    `danger_first`, one call per level that has candidates, until a level confirms the X)."""
     img = np.full((480, 640), 110, np.uint8)
     cv2.rectangle(img, (70, 70), (150, 150), 235, -1)  # a border of about half the mark's width
     for a in (45, -45):
@@ -163,6 +164,13 @@ def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
     assert claims[:, 3].sum() >= 1 and claims[:, :3].sum() >= 2  # loose and claimed candidates together
     assert det.detect(np.full((480, 640), 200, np.uint8)) == []
     assert len(counting.claims) == 1  # no candidates: no call
+    # level by level, coarsest first: the O at a sixth and a quarter, then half resolution, where the X
+    # (25 px there) ends the frame before the full-resolution triangle is judged
+    per_level = _Counting(v.session)
+    det = MarkDetector(DetectorConfig(danger_first=True), verifier=dataclasses.replace(v, session=per_level))
+    assert sorted(d.shape.value for d in det.detect(img)) == ["O", "X"]
+    assert len(per_level.claims) == 3
+    assert sum(len(c) for c in per_level.claims) < len(claims)  # the finer level's candidates never judged
 
 
 @pytest.mark.parametrize(("length", "stroke", "half"), [(40, 7, 40), (40, 7, 100), (56, 9, 90), (56, 9, 150)])
