@@ -97,6 +97,11 @@ class DetectorConfig:
     upright words were no mark, but turned by 10 degrees (a camera's roll, a sign hung askew) most big
     printed words gave a false O or X. Round vision20: on fresh held-out seeds false marks 94 -> 89 with
     one more missed O in 4,000 frames; two-letter words turned by 15 degrees or more are still a mark"""
+    text_whole: bool = False
+    """text line: count as a neighbouring letter only a component wholly inside the frame (at its level);
+    one that runs out of it is the background, a person or an object, not the next letter (as for the
+    word test beside a mark, `_letter_beside`). Round vision25b: the demo scene's X card was refused at
+    the coarser levels for the rocket and the face cut by the frame's edges"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
@@ -509,7 +514,13 @@ class MarkDetector:
             over[0] = False
             for i in np.flatnonzero(over):
                 if _in_text_line(
-                    st, int(i), level.g, level.labels, self.config.text_paper, self.config.text_turned
+                    st,
+                    int(i),
+                    level.g,
+                    level.labels,
+                    self.config.text_paper,
+                    self.config.text_turned,
+                    self.config.text_whole,
                 ):
                     return True
         return False
@@ -582,7 +593,13 @@ class MarkDetector:
     def _text_line(self, level: _Level, i: int) -> bool:
         """Component `i` is a letter in a line of text (on the levels the test runs on: `text_max_f`)."""
         return level.text_check and _in_text_line(
-            level.stats, i, level.g, level.labels, self.config.text_paper, self.config.text_turned
+            level.stats,
+            i,
+            level.g,
+            level.labels,
+            self.config.text_paper,
+            self.config.text_turned,
+            self.config.text_whole,
         )
 
     # ------------------------------------------------------------------ one pyramid level
@@ -1338,6 +1355,7 @@ def _in_text_line(
     labels: np.ndarray,
     paper_share: float = 0.0,
     turned: bool = False,
+    whole: bool = False,
 ) -> bool:
     """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
     two of them, the nearest less than half a letter height away and the other within two; or one
@@ -1345,8 +1363,13 @@ def _in_text_line(
     holding a card come close to a mark; and the dark background at a card's corners is not ink.)
     `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
-    (`_line_of_letters`)."""
+    (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours
+    (`DetectorConfig.text_whole`)."""
     rows = _around(stats, i)
+    if whole:
+        H, W = labels.shape[:2]
+        sx, sy, sw, sh = (stats[rows, k] for k in range(4))
+        rows = rows[(sx > 0) & (sy > 0) & (sx + sw < W) & (sy + sh < H)]
     if not len(rows):
         return False
     letters = _Letters(g, labels, stats, i, paper_share)
