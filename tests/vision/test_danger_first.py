@@ -83,3 +83,20 @@ def test_frames_without_a_danger_mark_get_the_same_detections(detectors: tuple[_
         assert first.detect(img) == expected
         compared += 1
     assert compared >= 20
+
+
+def test_only_whole_letters_make_a_line_of_text() -> None:
+    """`text_whole` (round vision25b): the demo scene's X card, at half resolution, has 'neighbours' on a
+    turned line - the rocket cut by the frame's top edge, the face cut by its left edge - and the text-line
+    test took it for a letter; counting only components wholly in the frame, it is the X it is."""
+    from services.vision.sources import open_source
+
+    source = open_source("synthetic:none")
+    source.open()
+    source.set_shape(Shape.X)
+    img = source.read(0.1).image
+    half = ((2, 31),)
+    found, trace = MarkDetector(DetectorConfig(levels=half, propose=0.0)).trace(img)
+    assert found == [] and any(t.shape is Shape.X and t.stage == "text line" for t in trace)
+    found = MarkDetector(DetectorConfig(levels=half, propose=0.0, text_whole=True)).detect(img)
+    assert [d.shape for d in found] == [Shape.X]
