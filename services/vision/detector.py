@@ -97,11 +97,12 @@ class DetectorConfig:
     upright words were no mark, but turned by 10 degrees (a camera's roll, a sign hung askew) most big
     printed words gave a false O or X. Round vision20: on fresh held-out seeds false marks 94 -> 89 with
     one more missed O in 4,000 frames; two-letter words turned by 15 degrees or more are still a mark"""
-    text_whole: bool = False
-    """text line: count as a neighbouring letter only a component wholly inside the frame (at its level);
-    one that runs out of it is the background, a person or an object, not the next letter (as for the
-    word test beside a mark, `_letter_beside`). Round vision25b: the demo scene's X card was refused at
-    the coarser levels for the rocket and the face cut by the frame's edges"""
+    text_whole: str = ""
+    """text line: count as a neighbouring letter only a component wholly inside the frame (at its level)
+    on the turned lines ("turned") or on every line ("all"; "": off); one that runs out of the frame is
+    the background, a person or an object, not the next letter (as for the word test beside a mark,
+    `_letter_beside`). Rounds vision25b ("all") and 25c ("turned"): the demo scene's X card was refused
+    at the coarser levels by the turned test, for the rocket and the face cut by the frame's edges"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
@@ -195,6 +196,8 @@ class DetectorConfig:
         for f, block, *_ in self.levels:
             if f < 1 or block % 2 == 0 or block < 3:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
+        if self.text_whole not in ("", "turned", "all"):
+            raise ValueError(f"text_whole: {self.text_whole!r}: '' (off), 'turned' or 'all'")
         unknown = set(self.card_rescue_from) - set(CARD_TESTS)
         if unknown:
             raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
@@ -1355,7 +1358,7 @@ def _in_text_line(
     labels: np.ndarray,
     paper_share: float = 0.0,
     turned: bool = False,
-    whole: bool = False,
+    whole: str = "",
 ) -> bool:
     """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
     two of them, the nearest less than half a letter height away and the other within two; or one
@@ -1363,19 +1366,22 @@ def _in_text_line(
     holding a card come close to a mark; and the dark background at a card's corners is not ink.)
     `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
-    (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours
-    (`DetectorConfig.text_whole`)."""
+    (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours on the
+    turned lines ("turned") or on every line ("all"; `DetectorConfig.text_whole`)."""
     rows = _around(stats, i)
     if whole:
         H, W = labels.shape[:2]
         sx, sy, sw, sh = (stats[rows, k] for k in range(4))
-        rows = rows[(sx > 0) & (sy > 0) & (sx + sw < W) & (sy + sh < H)]
-    if not len(rows):
-        return False
+        in_view = rows[(sx > 0) & (sy > 0) & (sx + sw < W) & (sy + sh < H)]
+        rows = in_view if whole == "all" else rows
     letters = _Letters(g, labels, stats, i, paper_share)
-    if _line_of_letters(letters, 0.0, rows):
+    if len(rows) and _line_of_letters(letters, 0.0, rows):
         return True
     if not turned:
+        return False
+    if whole:
+        rows = in_view
+    if not len(rows):
         return False
     x, y, w, h, area = (int(v) for v in stats[i][:5])
     xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))

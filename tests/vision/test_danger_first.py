@@ -98,5 +98,5 @@ def test_only_whole_letters_make_a_line_of_text() -> None:
     half = ((2, 31),)
     found, trace = MarkDetector(DetectorConfig(levels=half, propose=0.0)).trace(img)
     assert found == [] and any(t.shape is Shape.X and t.stage == "text line" for t in trace)
-    found = MarkDetector(DetectorConfig(levels=half, propose=0.0, text_whole=True)).detect(img)
+    found = MarkDetector(DetectorConfig(levels=half, propose=0.0, text_whole="turned")).detect(img)
     assert [d.shape for d in found] == [Shape.X]
