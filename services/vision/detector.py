@@ -97,12 +97,13 @@ class DetectorConfig:
     upright words were no mark, but turned by 10 degrees (a camera's roll, a sign hung askew) most big
     printed words gave a false O or X. Round vision20: on fresh held-out seeds false marks 94 -> 89 with
     one more missed O in 4,000 frames; two-letter words turned by 15 degrees or more are still a mark"""
-    text_whole: str = ""
+    text_whole: str = "turned"
     """text line: count as a neighbouring letter only a component wholly inside the frame (at its level)
     on the turned lines ("turned") or on every line ("all"; "": off); one that runs out of the frame is
     the background, a person or an object, not the next letter (as for the word test beside a mark,
-    `_letter_beside`). Rounds vision25b ("all") and 25c ("turned"): the demo scene's X card was refused
-    at the coarser levels by the turned test, for the rocket and the face cut by the frame's edges"""
+    `_letter_beside`). The demo scene's X card was refused at the coarser levels by the turned test, for
+    the rocket and the face cut by the frame's edges. "turned" since round vision25c; "all" (round
+    vision25b) also let words running out of the frame through: 3 more held-out frames with a false mark"""
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
@@ -174,16 +175,18 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
     proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
-    danger_first: bool = False
+    danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
     are not run on it. A frame with no danger mark gets the very detections it gets with this off (all
     levels, finest first, one verifier call, then the proposer). The reasoner lets danger win over an O
     in one observation, so what a danger frame no longer reports could not change a decision; an O held
     up beside an X is not counted towards its confirmation until the X is gone (the safe direction).
-    Round vision25 (the vision README; not landed by its rule): 1.55 x the frames per CPU-second on
-    held-out frames, the same misses, fewer false marks; but the demo scene's X card is confirmed only
-    at full resolution, and the stack's X -> stop write p50 fell by 8 ms, where its rule asked 10."""
+    On since round vision25c, with `text_whole` "turned" (the vision README): on fresh held-out seeds
+    1.6 x the frames per CPU-second, 4 fewer missed X and triangles and 5 fewer missed O in 4,000 frames,
+    2 more frames with a false mark; the stack's X shown -> stop write p50 77 -> 34 ms, p99 113 -> 68 ms
+    on a slow two-core machine. Alone (round vision25) it saved the demo scene's X card little: the
+    turned text-line test refused that X at every coarser level."""
     verify: bool = True
     """last check: the learned patch classifier (verifier.py) must agree. The card limits above
     (band paper, surround ink, margin texture, frame ink) were loosened when it came in (from 0.75,

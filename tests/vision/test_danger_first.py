@@ -1,6 +1,6 @@
-"""`DetectorConfig.danger_first` (round vision25; off by default): a frame is reported at the first X or
-TRIANGLE the verifier keeps, coarsest pyramid level first; a frame without one is judged exactly as
-without the option."""
+"""`DetectorConfig.danger_first` (on since round vision25c): a frame is reported at the first X or TRIANGLE
+the verifier keeps, coarsest pyramid level first; a frame without one is judged exactly as without the
+option. And `text_whole`, which lets the demo scene's X card be confirmed at the coarser levels."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def _card_with(mark: str) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def detectors() -> tuple[_Spy, _Spy]:
-    return _Spy(DetectorConfig(danger_first=True)), _Spy(DetectorConfig())
+    return _Spy(DetectorConfig()), _Spy(DetectorConfig(danger_first=False))
 
 
 def test_a_danger_mark_ends_the_frame_at_the_level_that_confirmed_it(detectors: tuple[_Spy, _Spy]) -> None:
@@ -86,7 +86,7 @@ def test_frames_without_a_danger_mark_get_the_same_detections(detectors: tuple[_
 
 
 def test_only_whole_letters_make_a_line_of_text() -> None:
-    """`text_whole` (round vision25b): the demo scene's X card, at half resolution, has 'neighbours' on a
+    """`text_whole` (rounds vision25b and 25c): the demo scene's X card, at half resolution, has 'neighbours' on a
     turned line - the rocket cut by the frame's top edge, the face cut by its left edge - and the text-line
     test took it for a letter; counting only components wholly in the frame, it is the X it is."""
     from services.vision.sources import open_source
@@ -96,7 +96,7 @@ def test_only_whole_letters_make_a_line_of_text() -> None:
     source.set_shape(Shape.X)
     img = source.read(0.1).image
     half = ((2, 31),)
-    found, trace = MarkDetector(DetectorConfig(levels=half, propose=0.0)).trace(img)
+    found, trace = MarkDetector(DetectorConfig(levels=half, propose=0.0, text_whole="")).trace(img)
     assert found == [] and any(t.shape is Shape.X and t.stage == "text line" for t in trace)
     found = MarkDetector(DetectorConfig(levels=half, propose=0.0, text_whole="turned")).detect(img)
     assert [d.shape for d in found] == [Shape.X]

@@ -156,7 +156,7 @@ def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
     img[200:280, 280:360] = cv2.filter2D(img, -1, kernel)[200:280, 280:360]
     v = Verifier.load()
     counting = _Counting(v.session)
-    det = MarkDetector(verifier=dataclasses.replace(v, session=counting))
+    det = MarkDetector(DetectorConfig(danger_first=False), verifier=dataclasses.replace(v, session=counting))
     found = det.detect(img)
     assert sorted(d.shape.value for d in found) == ["O", "TRIANGLE", "X"]
     assert len(counting.claims) == 1
@@ -167,7 +167,7 @@ def test_every_candidate_of_a_frame_goes_in_one_call() -> None:
     # level by level, coarsest first: the O at a sixth and a quarter, then half resolution, where the X
     # (25 px there) ends the frame before the full-resolution triangle is judged
     per_level = _Counting(v.session)
-    det = MarkDetector(DetectorConfig(danger_first=True), verifier=dataclasses.replace(v, session=per_level))
+    det = MarkDetector(verifier=dataclasses.replace(v, session=per_level))
     assert sorted(d.shape.value for d in det.detect(img)) == ["O", "X"]
     assert len(per_level.claims) == 3
     assert sum(len(c) for c in per_level.claims) < len(claims)  # the finer level's candidates never judged
