@@ -1460,8 +1460,8 @@ def _around(stats: np.ndarray, i: int) -> np.ndarray:
     """The components (rows of `stats`, in label order, without the background and `i` itself) whose
     centre lies within 3.5 x the size of `i` of its centre, in x and in y: every one the text-line
     tests could count as a neighbour (the baseline test's farthest is 3.25 sizes away in x, the turned
-    test's 2.81 along its line), so they look at these few rows instead of every component of the
-    level - the same verdicts, several times faster on a frame of a thousand specks."""
+    test's 2.81 along its line), so they compute on these few rows instead of every component of the
+    level: the same verdicts (tests/vision/test_exact_shortcuts.py)."""
     x, y, w, h = (int(v) for v in stats[i][:4])
     reach = 7 * max(w, h)  # in doubled coordinates, as the centres below
     dx = 2 * stats[:, 0] + stats[:, 2] - (2 * x + w)
