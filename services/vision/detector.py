@@ -1062,13 +1062,19 @@ def _on_card(
     return float(mean[0][0])
 
 
-def _masked_median(g: np.ndarray, mask: np.ndarray, n: int) -> float:
-    """`np.median(g[mask > 0])` of a uint8 image over its `n` (> 0) masked pixels, from their histogram:
-    the same value (the mean of the two middle levels for an even count) without copying and sorting
-    them."""
+def _ranked(g: np.ndarray, mask: np.ndarray | None, ranks: list[int]) -> tuple[float, float]:
+    """The grey levels at two 0-based `ranks` of a uint8 image's pixels sorted (those under `mask` if
+    given), from their histogram: no copy, no sort."""
     counts = np.cumsum(cv2.calcHist([g], [0], mask, [256], [0, 256]).ravel())
-    low, high = np.searchsorted(counts, [(n - 1) // 2, n // 2], side="right")
-    return (float(low) + float(high)) / 2.0
+    low, high = np.searchsorted(counts, ranks, side="right")
+    return float(low), float(high)
+
+
+def _masked_median(g: np.ndarray, mask: np.ndarray, n: int) -> float:
+    """`np.median(g[mask > 0])` of a uint8 image over its `n` (> 0) masked pixels: the same value (the
+    mean of the two middle levels for an even count)."""
+    low, high = _ranked(g, mask, [(n - 1) // 2, n // 2])
+    return (low + high) / 2.0
 
 
 def _clear_margin(
@@ -1444,14 +1450,14 @@ class _Letters:
 
 
 def _percentile(g: np.ndarray, q: float) -> float:
-    """`np.percentile(g, q)` of a uint8 image (its default, linear method), from the image's histogram:
-    the same value, bit for bit (tests/vision), without converting and partitioning every pixel."""
+    """`np.percentile(g, q)` of a uint8 image (its default, linear method), from the image's histogram
+    (`_ranked`): the same value, bit for bit (tests/vision), without converting and partitioning every
+    pixel."""
     n = g.size
     virtual = (n - 1) * (q / 100)  # numpy's index into the sorted pixels, and its rounding
     below = min(math.floor(virtual), n - 1)
     gamma = virtual - below
-    counts = np.cumsum(cv2.calcHist([g], [0], None, [256], [0, 256]).ravel())
-    low, high = (float(v) for v in np.searchsorted(counts, [below, min(below + 1, n - 1)], side="right"))
+    low, high = _ranked(g, None, [below, min(below + 1, n - 1)])
     step = high - low  # numpy's interpolation, in its two forms
     return high - step * (1 - gamma) if gamma >= 0.5 else low + step * gamma
 
