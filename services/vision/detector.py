@@ -518,17 +518,8 @@ class MarkDetector:
             over = (inter >= 0.5 * np.minimum(st[:, 2] * st[:, 3], w * h)) & (size >= 0.5 * max(w, h))
             over &= size <= 2 * max(w, h)
             over[0] = False
-            for i in np.flatnonzero(over):
-                if _in_text_line(
-                    st,
-                    int(i),
-                    level.g,
-                    level.labels,
-                    self.config.text_paper,
-                    self.config.text_turned,
-                    self.config.text_whole,
-                ):
-                    return True
+            if any(self._text_line(level, int(i)) for i in np.flatnonzero(over)):
+                return True
         return False
 
     def _verify(self, pending: list[_Pending]) -> list[Detection]:
@@ -1377,21 +1368,19 @@ def _in_text_line(
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
     (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours on the
     turned lines ("turned") or on every line ("all"; `DetectorConfig.text_whole`)."""
-    rows = _around(stats, i)
+    rows = turned_rows = _around(stats, i)
     if whole:
         H, W = labels.shape[:2]
         sx, sy, sw, sh = (stats[rows, k] for k in range(4))
-        in_view = rows[(sx > 0) & (sy > 0) & (sx + sw < W) & (sy + sh < H)]
-        rows = in_view if whole == "all" else rows
+        turned_rows = rows[(sx > 0) & (sy > 0) & (sx + sw < W) & (sy + sh < H)]
+        if whole == "all":
+            rows = turned_rows
     letters = _Letters(g, labels, stats, i, paper_share)
     if len(rows) and _line_of_letters(letters, 0.0, rows):
         return True
-    if not turned:
+    if not turned or not len(turned_rows):
         return False
-    if whole:
-        rows = in_view
-    if not len(rows):
-        return False
+    rows = turned_rows
     x, y, w, h, area = (int(v) for v in stats[i][:5])
     xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
     dx = xs + ws / 2 - (x + w / 2)
