@@ -6,7 +6,9 @@
   the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
   service when the driver writes it), alternating "yes" (nod) and "no" (shake) while standing;
 - X shown -> halted: the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
-  while the robot walks; time to the first frame reported with the confirmed X, to the reasoner's
+  while the robot walks, at a random phase of its frame clock (1 s plus up to one frame period after
+  walking began: the robot's own messages, and so a fixed wait, can be in step with the frames);
+  time to the first frame reported with the confirmed X (its exposure), to the reasoner's
   `stop` goal, to the first servo write of that goal, and to the
   robot standing still in double support (walking ends at the next half-cycle boundary);
 - spoken -> heard: a synthesised WAV dropped in the voice spool to its `VoiceCommand`;
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import random
 import tempfile
 import time
 from dataclasses import dataclass
@@ -54,6 +57,7 @@ class Figures:
     halted: list[float]
     heard: list[float]
     rss: dict[str, float]
+    vision: dict[str, object]  # the vision service's health detail at the end (frames per second, ...)
 
 
 def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
@@ -91,6 +95,7 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
         settle(Posture.STANDING)
 
     seen_lat, stop_goal_lat, stop_write_lat, halted_lat = [], [], [], []
+    phase = random.Random(args.seed)
     for _ in range(args.stops):
         scene.put(SceneCommand(shape=Shape.O))
         time.sleep(0.6)
@@ -98,7 +103,7 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
         say("go")
         if not settle(Posture.WALKING):
             continue
-        time.sleep(1.0)
+        time.sleep(1.0 + phase.uniform(0.0, 1.0 / args.vision_fps))
         t_mono = time.monotonic()
         shown = time.time()
         scene.put(SceneCommand(shape=Shape.X))
@@ -130,10 +135,12 @@ def measure(sim: SimulatedRobot, args: argparse.Namespace) -> Figures:
             heard_lat.append(heard.stamp - t_wall)
         settle(Posture.STANDING)
 
+    health = ctx.query_health("vision")
+    vision = dict(health.detail) if health is not None else {}
     pids = {n: launcher.pid(n) for n in SERVICES}
     rss = {n: rss_mib(p) for n, p in pids.items() if p}
     rss["launcher+router"] = rss_mib(os.getpid())
-    return Figures(cmd_lat, seen_lat, stop_goal_lat, stop_write_lat, halted_lat, heard_lat, rss)
+    return Figures(cmd_lat, seen_lat, stop_goal_lat, stop_write_lat, halted_lat, heard_lat, rss, vision)
 
 
 def main() -> None:
@@ -142,6 +149,7 @@ def main() -> None:
     ap.add_argument("--stops", type=int, default=8)
     ap.add_argument("--utterances", type=int, default=8)
     ap.add_argument("--vision-fps", type=float, default=30.0, help="the synthetic camera's frame rate")
+    ap.add_argument("--seed", type=int, default=0, help="the random phases at which the X is shown")
     args = ap.parse_args()
     out = Path(tempfile.mkdtemp(prefix="hri-bench-"))
     env = {"HRI_LOG_LEVEL": "warning", "HRI_VISION_FPS": f"{args.vision_fps:g}"}
@@ -154,6 +162,10 @@ def main() -> None:
           f"   ({args.vision_fps:g} fps camera)")
     print(f"X shown -> standing still (double support):           {pcts(f.halted)}")
     print(f"WAV in spool -> VoiceCommand published:               {pcts(f.heard)}")
+    v = f.vision
+    print(f"vision at the end: {v.get('fps')} frames per second published, detection {v.get('detect_ms_mean')} ms a"
+          f" frame (mean), looked ahead {v.get('lookahead_looks', 'n/a')}, published ahead for danger"
+          f" {v.get('lookahead_dangers', 'n/a')}")
     print("resident memory (MiB): " + ", ".join(f"{n} {v:.0f}" for n, v in f.rss.items())
           + f"; total {sum(f.rss.values()):.0f}")
     print(f"(the bench process hosts the launcher and router; logs in {out / 'services.log'})")

@@ -62,6 +62,15 @@ LoopOption = Annotated[
     typer.Option("--loop/--no-loop", envvar="HRI_VISION_LOOP", help="replay a video file or image folder"),
 ]
 SeedOption = Annotated[int, typer.Option("--seed", help="random seed of the synthetic scene")]
+LookaheadOption = Annotated[
+    bool,
+    typer.Option(
+        "--lookahead/--no-lookahead",
+        envvar="HRI_VISION_LOOKAHEAD",
+        help="on a live source, judge a newer frame's coarser levels between an older frame's steps "
+        "and publish it at once if it shows an X or a triangle (lookahead.py)",
+    ),
+]
 DetectorOption = Annotated[
     str,
     typer.Option(
@@ -101,6 +110,7 @@ def main(
     seed: SeedOption = 0,
     detector: DetectorOption = "",
     calibration: CalibrationOption = None,
+    lookahead: LookaheadOption = True,
 ) -> None:
     """Run the vision service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
@@ -126,6 +136,7 @@ def main(
         seed=seed,
         detector=config,
         calibration=lens,
+        lookahead=lookahead,
     )
     raise typer.Exit(run_service(NAME, partial(serve, settings=settings), robot=robot, connect=connect))
 

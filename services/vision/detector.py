@@ -40,9 +40,11 @@ isolated letter O / digit 0 or X with a clear margin is indistinguishable from a
 
 from __future__ import annotations
 
+import copy
+import enum
 import math
 import re
-from collections.abc import Iterable
+from collections.abc import Generator, Iterable
 from dataclasses import dataclass, fields, replace
 
 import cv2
@@ -53,6 +55,29 @@ from services.vision.proposer import Proposer
 from services.vision.verifier import CLASSES, MODEL_PATH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
+
+
+class Step(enum.Enum):
+    """Where a stepped detection (`MarkDetector.steps`) pauses: between two pieces of its work (each
+    pyramid level, each judged component, each verifier call, the proposer)."""
+
+    TICK = "tick"
+    FINE = "fine"
+    """with `danger_first`: every level but the finest is judged and verified, no danger mark among
+    them; what is left is the finest level and the proposer (most of an ordinary frame's time)"""
+
+
+Steps = Generator[Step, None, "list[Detection]"]
+"""A frame's detection in steps: yields `Step`s, returns the detections (`finish` runs one to the end)."""
+
+
+def finish(steps: Steps) -> list[Detection]:
+    """Run a stepped detection to its end and return its detections."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
 
 
 @dataclass(frozen=True)
@@ -401,7 +426,7 @@ class MarkDetector:
         self._seen = []
         verifier, self.verifier = self.verifier, None
         try:
-            self._detect_gray(gray)
+            finish(self._detect_gray(gray))
             return self._seen
         finally:
             self._seen, self.verifier = None, verifier
@@ -414,12 +439,18 @@ class MarkDetector:
             raise ValueError(f"trace() wants frames of at most {self.config.max_side} px")
         self._trace = []
         try:
-            found = self._detect_gray(gray)
+            found = finish(self._detect_gray(gray))
             return found, self._trace
         finally:
             self._trace = None
 
     def detect(self, image: np.ndarray) -> list[Detection]:
+        return finish(self.steps(image))
+
+    def steps(self, image: np.ndarray) -> Steps:
+        """`detect` in steps, for a caller that wants to do something else between them (the vision
+        service looks at a newer frame's coarser levels: `lookahead.py`): the very same work and
+        detections. Another frame's steps may run meanwhile only on another instance (`twin`)."""
         gray = to_gray(image)
         # work at about 640x480 whatever the camera gives: the thresholds are tuned for that scale
         # (and a large frame would cost more); boxes are mapped back to the input's pixels
@@ -428,7 +459,7 @@ class MarkDetector:
             scale = max(gray.shape) / self.config.max_side
             size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
             gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
-        found = self._detect_gray(gray)
+        found = yield from self._detect_gray(gray)
         if scale == 1.0:
             return found
         return [
@@ -436,9 +467,17 @@ class MarkDetector:
             for d in found
         ]
 
-    def _detect_gray(self, gray: np.ndarray) -> list[Detection]:
+    def twin(self) -> MarkDetector:
+        """A second detector with the same settings and the same loaded networks (no more memory for
+        them), for a second frame in flight: a frame's working state lives on its detector."""
+        other = copy.copy(self)
+        other._greys, other._levels, other._vetoes = {}, [], []
+        return other
+
+    def _detect_gray(self, gray: np.ndarray) -> Steps:
         """Every pyramid level, then one batched verifier call for all of their candidates, then the
-        proposer; or, with `danger_first`, level by level from the coarsest, stopping at a danger mark."""
+        proposer; or, with `danger_first`, level by level from the coarsest, stopping at a danger mark
+        (then `Step.FINE` before the finest level: none was found in the others)."""
         found: list[Detection] = []
         pending: list[_Pending] = []
         self._greys, self._vetoes, self._levels = {}, [], []
@@ -446,7 +485,9 @@ class MarkDetector:
         early = self.config.danger_first and self.verifier is not None
         if early:
             levels = tuple(sorted(levels, key=lambda level: -level[0]))
+        finest = min(f for f, *_ in levels)
         for f, block, *cap in levels:
+            yield Step.FINE if early and f == finest and len(levels) > 1 else Step.TICK
             if f == 1:
                 g = cv2.GaussianBlur(gray, (3, 3), 0)
             else:
@@ -459,15 +500,20 @@ class MarkDetector:
             self._max_size = cap[0] if cap else 0
             if f == 1 and len(self.config.levels) > 1 and self.config.full_res_max:
                 self._max_size = self.config.full_res_max
-            found += self._detect_scale(g, block, text_check=f <= self.config.text_max_f, pending=pending)
+            found += yield from self._detect_scale(
+                g, block, text_check=f <= self.config.text_max_f, pending=pending
+            )
             if early and pending:
+                yield Step.TICK
                 found += self._verify(pending)
                 pending = []
                 if any(d.shape is not Shape.O for d in found):
                     return _merge(found, self.config.overlap)
         if pending:
+            yield Step.TICK
             found += self._verify(pending)
         if self.proposer is not None and self.verifier is not None:
+            yield Step.TICK
             found += self._proposed(gray, found)
         return _merge(found, self.config.overlap)
 
@@ -602,7 +648,7 @@ class MarkDetector:
     # ------------------------------------------------------------------ one pyramid level
     def _detect_scale(
         self, g: np.ndarray, block: int, text_check: bool, pending: list[_Pending]
-    ) -> list[Detection]:
+    ) -> Generator[Step, None, list[Detection]]:
         """The detections of one level the verifier need not see (it is off), in this level's pixels
         scaled to the input's; the candidates it must judge are added to `pending`."""
         cfg = self.config
@@ -644,6 +690,7 @@ class MarkDetector:
         self._levels.append(level)
         out: list[Detection] = []
         for i in judged_here.tolist():
+            yield Step.TICK
             judged = self._judge(level, i, at_edge=bool(cut[i]))
             stage = self._why
             wait: _Pending | None = None

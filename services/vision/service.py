@@ -21,10 +21,12 @@ from services.runtime import ServiceContext, TypedPublisher
 from services.vision.calibration import Calibration, Undistorter
 from services.vision.debounce import Confirmation, Debouncer
 from services.vision.detector import DetectorConfig, MarkDetector, changed_settings
+from services.vision.lookahead import Job, LookAhead
 from services.vision.preview import PreviewPublisher
 from services.vision.sources import (
     ALTERNATIVES,
     EndOfStream,
+    Frame,
     FrameSource,
     SourceError,
     SyntheticSource,
@@ -46,6 +48,7 @@ class VisionSettings:
     seed: int = 0  # synthetic scenes
     detector: DetectorConfig = field(default_factory=DetectorConfig)
     calibration: Calibration | None = None  # the lens's: frames are undistorted before detection
+    lookahead: bool = True  # a live source's newer frame is judged between an older one's steps (lookahead.py)
 
 
 @dataclass
@@ -85,6 +88,7 @@ def serve(ctx: ServiceContext, settings: VisionSettings | None = None) -> None:
         fps_cap=settings.fps,
         detector=changed_settings(settings.detector) or "defaults",
         calibration=settings.calibration.path if settings.calibration is not None else None,
+        lookahead=settings.lookahead,
     )
 
     holder = _SourceHolder(settings)
@@ -138,11 +142,33 @@ def _run(
     preview: PreviewPublisher | None = None,
 ) -> None:
     undistort = Undistorter(settings.calibration) if settings.calibration is not None else None
+
+    def skipped(frame: Frame, error: str) -> None:
+        ctx.log.warning("frame skipped", frame=frame.index, error=error)
+
+    frames = LookAhead(
+        detector,
+        prepare=undistort if undistort is not None else (lambda image: image),
+        enabled=settings.lookahead,
+        on_skip=skipped,
+    )
     opened = False
     retry = _Backoff(settings.retry_s, settings.max_retry_s)
     source: FrameSource | None = None
+    pacer = _Pacer()
     last_frame = time.monotonic()
-    next_due = time.monotonic()
+
+    def newer() -> Frame | None:
+        """A newer frame of a live source, if one is due now (between another frame's steps)."""
+        nonlocal last_frame
+        if source is None or not pacer.due() or not source.fresh():
+            return None
+        frame = source.read(timeout=0.0)
+        if frame is not None:
+            pacer.took()
+            last_frame = time.monotonic()
+        return frame
+
     while not ctx.stopping.is_set():
         if not opened:
             try:
@@ -164,74 +190,120 @@ def _run(
             opened = True
             retry.reset()
             debounce.reset()  # a reopened source starts a new scene
-            last_frame = next_due = time.monotonic()
+            frames.reset()
+            pacer.start(settings.fps or source.default_fps)
+            last_frame = time.monotonic()
             ctx.set_status(
                 HealthStatus.OK, error=None, alternatives=None, retry_in_s=None, source=settings.source
             )
             ctx.log.info("vision source open", source=settings.source)
         assert source is not None
-        try:
-            frame = source.read(timeout=0.5)
-        except EndOfStream:
-            ctx.log.info("vision source finished", source=settings.source, frames=stats.frames)
-            ctx.update_detail(finished=True)
-            source.close()
-            while not ctx.wait(1.0):
-                pass
-            return
-        except SourceError as exc:
-            ctx.set_status(HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES)
-            ctx.log.warning("vision source failed, reopening", source=settings.source, error=str(exc))
-            source.close()
-            opened = False
-            ctx.wait(settings.retry_s)
-            continue
-        now = time.monotonic()
-        if frame is None:
-            silent = now - last_frame
-            if silent > settings.stall_s:
-                ctx.set_status(
-                    HealthStatus.DEGRADED,
-                    error=f"no frames from {settings.source} for {silent:.1f} s",
-                    alternatives=ALTERNATIVES,
-                )
-            if silent > 3 * settings.stall_s:
-                ctx.log.warning(
-                    "vision source silent, reopening", source=settings.source, silent_s=round(silent, 1)
-                )
+        job = frames.take_ahead()  # a newer frame already taken (and its coarser levels judged)
+        if job is None:
+            if ctx.wait(pacer.wait_s()):
+                return
+            try:
+                frame = source.read(timeout=0.5)
+            except EndOfStream:
+                ctx.log.info("vision source finished", source=settings.source, frames=stats.frames)
+                ctx.update_detail(finished=True)
+                source.close()
+                while not ctx.wait(1.0):
+                    pass
+                return
+            except SourceError as exc:
+                ctx.set_status(HealthStatus.DEGRADED, error=str(exc), alternatives=ALTERNATIVES)
+                ctx.log.warning("vision source failed, reopening", source=settings.source, error=str(exc))
                 source.close()
                 opened = False
-            continue
+                ctx.wait(settings.retry_s)
+                continue
+            now = time.monotonic()
+            if frame is None:
+                silent = now - last_frame
+                if silent > settings.stall_s:
+                    ctx.set_status(
+                        HealthStatus.DEGRADED,
+                        error=f"no frames from {settings.source} for {silent:.1f} s",
+                        alternatives=ALTERNATIVES,
+                    )
+                if silent > 3 * settings.stall_s:
+                    ctx.log.warning(
+                        "vision source silent, reopening", source=settings.source, silent_s=round(silent, 1)
+                    )
+                    source.close()
+                    opened = False
+                continue
+            pacer.took()
+            last_frame = now
+            try:
+                job = frames.start(frame)
+            except ValueError as exc:
+                skipped(frame, str(exc))
+                continue
         if ctx.status is not HealthStatus.OK:
             ctx.set_status(HealthStatus.OK, error=None, alternatives=None)
-        last_frame = now
-        t0 = time.perf_counter()
         try:
-            image = undistort(frame.image) if undistort is not None else frame.image
-            found = detector.detect(image)
-        except ValueError as exc:
-            ctx.log.warning("frame skipped", frame=frame.index, error=str(exc))
+            job = frames.finish(job, newer)
+        except SourceError as exc:  # a newer frame could not be read: the next read says so again
+            ctx.log.warning("vision source failed while looking ahead", source=settings.source, error=str(exc))
             continue
-        stats.add(time.perf_counter() - t0)
-        # here the frame (frame.image) and this frame's detections (found) are both at hand
-        confirmed = debounce.update(found)
-        obs = pub.put(
-            MarkObservation(stamp=frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
-        )
-        if preview is not None:
-            preview.offer(image, obs.frame, obs.marks, obs.stamp)
+        except ValueError as exc:
+            skipped(job.frame, str(exc))
+            continue
+        _publish(ctx, job, debounce, pub, stats, preview)
         if stats.frames % 15 == 0:
-            ctx.update_detail(
-                frames=stats.frames,
-                fps=round(stats.fps, 1),
-                detect_ms_mean=round(1000 * stats.detect_s / stats.frames, 2),
-            )
-        cap = settings.fps or source.default_fps
-        if cap:
-            next_due = max(next_due + 1.0 / cap, time.monotonic() - 1.0 / cap)
-            delay = next_due - time.monotonic()
-            if delay > 0 and ctx.wait(delay):
-                return
+            ctx.update_detail(**frames.counts.as_detail())
+
+
+def _publish(
+    ctx: ServiceContext,
+    job: Job,
+    debounce: Debouncer,
+    pub: TypedPublisher[MarkObservation],
+    stats: _Stats,
+    preview: PreviewPublisher | None,
+) -> None:
+    """One detected frame out: through the debounce, as a `MarkObservation`, and to the preview."""
+    assert job.found is not None
+    stats.add(job.busy_s)
+    # here the frame (job.image) and this frame's detections (job.found) are both at hand
+    confirmed = debounce.update(job.found)
+    obs = pub.put(
+        MarkObservation(stamp=job.frame.stamp, frame=stats.frames, marks=[d.to_mark() for d in confirmed])
+    )
+    if preview is not None:
+        preview.offer(job.image, obs.frame, obs.marks, obs.stamp)
+    if stats.frames % 15 == 0:
+        ctx.update_detail(
+            frames=stats.frames,
+            fps=round(stats.fps, 1),
+            detect_ms_mean=round(1000 * stats.detect_s / stats.frames, 2),
+        )
+
+
+class _Pacer:
+    """The fps cap: frames are taken at most `cap` times a second (none: as fast as they come)."""
+
+    def __init__(self) -> None:
+        self.period = 0.0
+        self.next_due = time.monotonic()
+
+    def start(self, cap: float | None) -> None:
+        self.period = 1.0 / cap if cap else 0.0
+        self.next_due = time.monotonic()
+
+    def due(self) -> bool:
+        return time.monotonic() >= self.next_due
+
+    def wait_s(self) -> float:
+        return max(0.0, self.next_due - time.monotonic())
+
+    def took(self) -> None:
+        """A frame was taken now: the next is due one period after this one's due time (or after now,
+        less a period, when the loop has fallen behind: it does not race to catch up)."""
+        if self.period:
+            self.next_due = max(self.next_due + self.period, time.monotonic() - self.period)
 
 
 class _Backoff:

@@ -64,6 +64,12 @@ class FrameSource(Protocol):
 
     def open(self) -> None: ...
     def read(self, timeout: float) -> Frame | None: ...
+    def fresh(self) -> bool:
+        """Whether a live source has a frame newer than the last one read, ready now (the vision loop
+        then looks at it between another frame's steps: `lookahead.py`); always False for a file or a
+        folder, whose frames are all taken, in order."""
+        ...
+
     def close(self) -> None: ...
 
 
@@ -172,6 +178,10 @@ class CameraSource:
                     return None
                 self._cond.wait(left)
 
+    def fresh(self) -> bool:
+        with self._cond:
+            return self._latest is not None and self._latest.index > self._delivered
+
     def close(self) -> None:
         self._stop.set()
         if self._thread is not None:
@@ -216,6 +226,9 @@ class VideoFileSource:
         self._index += 1
         return Frame(image, time.time(), self._index)
 
+    def fresh(self) -> bool:
+        return False
+
     def close(self) -> None:
         if self._cap is not None:
             self._cap.release()
@@ -250,6 +263,9 @@ class ImageFolderSource:
             self._index += 1
             return Frame(image, time.time(), self._index)
         raise EndOfStream(self.spec)
+
+    def fresh(self) -> bool:
+        return False
 
     def close(self) -> None:
         pass
@@ -421,6 +437,9 @@ class SyntheticSource:
         image = cv2.add(still, noise, dtype=cv2.CV_8U)  # saturating
         self._index += 1
         return Frame(image, stamp, self._index)
+
+    def fresh(self) -> bool:
+        return True  # rendered when read: the scene as it is now (the fps cap paces it)
 
     def close(self) -> None:
         pass
