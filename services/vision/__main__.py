@@ -110,7 +110,7 @@ def main(
     seed: SeedOption = 0,
     detector: DetectorOption = "",
     calibration: CalibrationOption = None,
-    lookahead: LookaheadOption = True,
+    lookahead: LookaheadOption = False,
 ) -> None:
     """Run the vision service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:

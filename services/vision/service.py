@@ -4,7 +4,8 @@ Publishes one `MarkObservation` per processed frame on `hri/<robot>/vision/marks
 no mark is confirmed), stamped with the frame's capture time. A source that cannot be opened, or a
 camera that stops delivering, turns health `degraded` (naming the source and the alternatives) and
 is retried; the service itself keeps running. With a `synthetic:` source it also follows
-`SceneCommand` on `hri/<robot>/vision/scene`.
+`SceneCommand` on `hri/<robot>/vision/scene`. With `lookahead` (off by default) a live source's newer frame is
+judged between an older frame's detection steps and published at once if it shows a danger mark (`lookahead.py`).
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ class VisionSettings:
     seed: int = 0  # synthetic scenes
     detector: DetectorConfig = field(default_factory=DetectorConfig)
     calibration: Calibration | None = None  # the lens's: frames are undistorted before detection
-    lookahead: bool = True  # a live source's newer frame is judged between an older one's steps (lookahead.py)
+    lookahead: bool = False  # judge a live source's newer frame between an older one's steps (lookahead.py; off)
 
 
 @dataclass

@@ -119,6 +119,28 @@ def test_synthetic_scene_follows_scene_commands(
     assert _stop(proc) == 0
 
 
+def test_with_the_look_ahead_a_shown_x_is_published_and_newer_frames_are_looked_at(
+    bus: ServiceContext, keys: Keys, start_service: Callable[..., subprocess.Popen[bytes]]
+) -> None:
+    got = Collector()
+    bus.subscribe(keys.vision_marks, MarkObservation, got)
+    scene = bus.publisher(keys.vision_scene, SceneCommand)
+    # a cap faster than an ordinary frame's detection: newer frames are due while one is detected
+    env = {"HRI_VISION_SOURCE": "synthetic:none", "HRI_VISION_FPS": "200", "HRI_VISION_LOOKAHEAD": "1"}
+    proc = start_service("vision", env=env)
+    wait_for(lambda: len(got.snapshot()) >= 20, timeout=30)
+    scene.put(SceneCommand(shape=Shape.X))
+    n = len(got.snapshot())
+    wait_for(lambda: len(got.snapshot()) > n + 3 and got.shapes()[-1] == {Shape.X}, timeout=10)
+    scene.put(SceneCommand(shape=None))
+    wait_for(lambda: got.shapes()[-1] == set(), timeout=10)
+    stamps = [o.stamp for o in got.snapshot()]
+    assert stamps == sorted(stamps)  # a frame published ahead never goes out before an older one
+    h = bus.query_health("vision")
+    assert h is not None and h.detail["lookahead"] is True and h.detail["lookahead_looks"] > 0
+    assert _stop(proc) == 0
+
+
 def test_a_calibrated_camera_s_frames_are_undistorted_and_still_seen(
     bus: ServiceContext,
     keys: Keys,
