@@ -1,11 +1,9 @@
-"""A danger mark never waits behind an ordinary frame: between one frame's steps, look at the newest.
+"""A danger mark need not wait behind an ordinary frame: between one frame's steps, look at the newest.
 
-The vision loop is one core's work, and on a slow machine an ordinary frame of a cluttered room costs
-more than a 30 fps camera's frame period (22-45 ms on round vision26's two-core machine, in the running
-stack: the loop is busy 97 % of the time). An X held up just after such a frame was taken then waited
-for all of it, its full resolution level and its proposer, before its own frame was even taken: the
-stack's X shown -> frame exposure reached 59 ms. Yet the detector confirms a held-up X on the coarser
-levels in 3-7 ms (`DetectorConfig.danger_first`).
+The vision loop is one core's work, and where an ordinary frame of a cluttered room costs more than the
+camera's frame period, an X held up just after such a frame was taken waits for all of it, its full
+resolution level and its proposer, before its own frame is even taken. Yet the detector confirms a
+held-up X on the coarser levels in 3-7 ms (`DetectorConfig.danger_first`).
 
 So on a live source (a camera, the synthetic scene; `FrameSource.fresh`), while a frame is detected, a
 newer frame that is due is taken between two of its steps (`MarkDetector.steps`: each pyramid level,
@@ -16,7 +14,12 @@ a second detector sharing the networks (`MarkDetector.twin`):
 - otherwise the newer frame waits (`ahead`), its coarser levels done, and is finished after the older
   one; a still newer frame replaces it (the loop always catches up with the newest, as before).
 Every frame that is published gets exactly the detections `MarkDetector.detect` gives it. Files and
-folders are never looked ahead in (their frames are all taken, in order). Off: `enabled=False`.
+folders are never looked ahead in (their frames are all taken, in order).
+
+Off by default (the service's `--lookahead`): on round vision26's machine the loop kept up with a 30 fps
+camera in the running stack (27 ms a frame) and the look ahead did not lower the stop's p99; standalone,
+with frames due faster than the loop finishes them, it cut X shown -> published from p50 18 / max 36 ms
+to 14 / 26 ms (services/vision/README.md, "Vision26").
 """
 
 from __future__ import annotations
@@ -81,9 +84,9 @@ class LookAhead:
     prepare: Callable[[np.ndarray], np.ndarray] = lambda image: image
     enabled: bool = True
     on_skip: Callable[[Frame, str], None] = lambda frame, error: None
-    ahead: Job | None = None
-    counts: Counts = field(default_factory=Counts)
-    _free: list[MarkDetector] = field(default_factory=list)
+    ahead: Job | None = field(default=None, init=False)
+    counts: Counts = field(default_factory=Counts, init=False)
+    _free: list[MarkDetector] = field(default_factory=list, init=False)  # detectors no frame is on
 
     def __post_init__(self) -> None:
         # looking ahead needs coarser levels judged first: without danger_first (or without the verifier,
