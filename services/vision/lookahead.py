@@ -115,7 +115,7 @@ class LookAhead:
     def finish(self, job: Job, newer: Callable[[], Frame | None]) -> Job:
         """Finish `job`, taking a newer frame from `newer` between its steps when one is due (None when
         not): the job to publish, `job` itself or a newer frame with a danger mark (`job` dropped).
-        ValueError from `job`'s detector propagates (`job` is dropped)."""
+        ValueError from `job`'s detector, or anything `newer` raises, propagates (`job` is dropped)."""
         try:
             while job.step() is not None:
                 if not self.enabled:
@@ -130,7 +130,7 @@ class LookAhead:
                     self._drop(job)
                     self._free.append(ahead.detector)
                     return ahead
-        except ValueError:
+        except BaseException:
             self._drop(job)
             raise
         self._free.append(job.detector)

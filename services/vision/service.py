@@ -164,7 +164,10 @@ def _run(
         nonlocal last_frame
         if source is None or not pacer.due() or not source.fresh():
             return None
-        frame = source.read(timeout=0.0)
+        try:
+            frame = source.read(timeout=0.0)
+        except (SourceError, EndOfStream):  # the loop's own next read meets it again and handles it
+            return None
         if frame is not None:
             pacer.took()
             last_frame = time.monotonic()
@@ -246,9 +249,6 @@ def _run(
             ctx.set_status(HealthStatus.OK, error=None, alternatives=None)
         try:
             job = frames.finish(job, newer)
-        except SourceError as exc:  # a newer frame could not be read: the next read says so again
-            ctx.log.warning("vision source failed while looking ahead", source=settings.source, error=str(exc))
-            continue
         except ValueError as exc:
             skipped(job.frame, str(exc))
             continue

@@ -166,3 +166,19 @@ def test_live_sources_offer_newer_frames_and_files_never(tmp_path: Path) -> None
     assert folder.fresh() is False
     synthetic = SyntheticSource("synthetic:none", width=160, height=120)
     assert synthetic.fresh() is True  # rendered when read: the fps cap paces it
+
+
+def test_an_error_while_looking_ahead_frees_the_frame_s_detector(
+    detector: MarkDetector, scenes: dict[str, np.ndarray]
+) -> None:
+    frames = LookAhead(detector)
+
+    def broken() -> Frame | None:
+        raise RuntimeError("the camera went away")
+
+    with pytest.raises(RuntimeError):
+        frames.finish(frames.start(_frame(scenes["none"], 1)), broken)
+    # nothing is left in flight: two frames can be started again, and finished as detect would
+    one, two = frames.start(_frame(scenes["O"], 2)), frames.start(_frame(scenes["X"], 3))
+    assert _key(frames.finish(one, lambda: None).found or []) == _key(detector.detect(scenes["O"]))
+    assert _key(frames.finish(two, lambda: None).found or []) == _key(detector.detect(scenes["X"]))
