@@ -5,7 +5,7 @@
 - command -> servo: a `VoiceCommand` published (as the voice service would) to the first SYNC_WRITE on
   the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
   service when the driver writes it), alternating "yes" (nod) and "no" (shake) while standing;
-- X shown -> halted: the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
+- X shown -> halted (p50, p90, p99): the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
   while the robot walks, at a random phase of its frame clock (1 s plus up to one frame period after
   walking began: the robot's own messages, and so a fixed wait, can be in step with the frames);
   time to the first frame reported with the confirmed X (its exposure), to the reasoner's
@@ -43,7 +43,8 @@ def pcts(xs: list[float]) -> str:
     if not xs:
         return "no samples"
     p = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]  # noqa: E731
-    return f"p50 {p(0.5) * 1000:7.1f} ms   p99 {p(0.99) * 1000:7.1f} ms   (n={len(xs)}, max {xs[-1] * 1000:.1f} ms)"
+    return (f"p50 {p(0.5) * 1000:7.1f} ms   p90 {p(0.9) * 1000:7.1f} ms   p99 {p(0.99) * 1000:7.1f} ms   "
+            f"(n={len(xs)}, max {xs[-1] * 1000:.1f} ms)")
 
 
 @dataclass
