@@ -5,7 +5,7 @@
 - command -> servo: a `VoiceCommand` published (as the voice service would) to the first SYNC_WRITE on
   the simulated bus carrying the resulting motion (`MotionState.first_write`, stamped by the motion
   service when the driver writes it), alternating "yes" (nod) and "no" (shake) while standing;
-- X shown -> halted (p50, p90, p99): the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
+- X shown -> halted: the synthetic camera (30 fps by default, `--vision-fps`) starts showing an X
   while the robot walks, at a random phase of its frame clock (1 s plus up to one frame period after
   walking began: the robot's own messages, and so a fixed wait, can be in step with the frames);
   time to the first frame reported with the confirmed X (its exposure), to the reasoner's
@@ -13,6 +13,8 @@
   robot standing still in double support (walking ends at the next half-cycle boundary);
 - spoken -> heard: a synthesised WAV dropped in the voice spool to its `VoiceCommand`;
 - the resident memory (RSS) of the launcher with its router and the five services.
+
+Each figure is printed as p50, p90 and p99 (of n samples: with 25 stops the p99 is the slowest one).
 """
 
 from __future__ import annotations
