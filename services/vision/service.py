@@ -252,13 +252,17 @@ def _run(
         except ValueError as exc:
             skipped(job.frame, str(exc))
             continue
-        _publish(ctx, job, debounce, pub, stats, preview)
+        _publish(job, debounce, pub, stats, preview)
         if stats.frames % 15 == 0:
-            ctx.update_detail(**frames.counts.as_detail())
+            ctx.update_detail(
+                frames=stats.frames,
+                fps=round(stats.fps, 1),
+                detect_ms_mean=round(1000 * stats.detect_s / stats.frames, 2),
+                **frames.counts.as_detail(),
+            )
 
 
 def _publish(
-    ctx: ServiceContext,
     job: Job,
     debounce: Debouncer,
     pub: TypedPublisher[MarkObservation],
@@ -275,12 +279,6 @@ def _publish(
     )
     if preview is not None:
         preview.offer(job.image, obs.frame, obs.marks, obs.stamp)
-    if stats.frames % 15 == 0:
-        ctx.update_detail(
-            frames=stats.frames,
-            fps=round(stats.fps, 1),
-            detect_ms_mean=round(1000 * stats.detect_s / stats.frames, 2),
-        )
 
 
 class _Pacer:
