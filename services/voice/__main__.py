@@ -159,6 +159,9 @@ def train(
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head) or speech-embedding (the "
              "walk gate and enrolment base; crops)")] = "whisper-tiny.en",
+    more_voices: Annotated[bool, typer.Option(
+        "--more-voices", help="round voice19's candidate: six more recorded speakers (MBROLA, RHVoice; Debian "
+                              "non-free) among the training voices (corpus.RECORDED_MORE)")] = False,
     word_folds: Annotated[int | None, typer.Option(
         "--word-folds", min=0,
         help="folds of the near-command training words; the knots move to where words the head never heard "
@@ -169,11 +172,13 @@ def train(
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
-    from services.voice.training.dataset import Sizes
+    from services.voice.training.dataset import Sizes, with_more_recorded
     from services.voice.training.train import SHIPPED_HEADS, shipped_recipe
     from services.voice.training.train import train as run_training
 
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
+    if more_voices:
+        sizes = with_more_recorded(sizes)
     try:
         cfg = shipped_recipe(embedding, word_folds, seed=seed, workers=workers, sizes=sizes)
     except (ValueError, KeyError):

@@ -53,9 +53,16 @@ FOREIGN_TRAIN = ("foreign:cs_dita", "foreign:cs_krb", "foreign:cs_machac", "fore
 saying the English words from their CMU phonemes (`tts.foreign`): the `foreign` training split only (round 11),
 never tune, recorded-tune or held-out. The Italian (lp, pc) and Catalan (ona) voices were screened out: the
 committed head recognised fewer than 10 of 28 of their clean commands (services/voice/README.md, round 11)."""
+RECORDED_MORE = ("mbrola:us2", "mbrola:us3", "mbrola:en1", "rhvoice:alan", "rhvoice:bdl", "rhvoice:clb")
+"""Round voice19's candidate: six more recorded speakers, from two more engines (Debian non-free: MBROLA's diphones
+through espeak-ng, three men; RHVoice's statistical-parametric voices, two men and a woman), added to
+`RECORDED_TRAIN` by `dataset.with_more_recorded`. Never a held-out speaker: RHVoice's slt is flite's held-out slt,
+so it is held out too (`HELDOUT_EXTRA`), with MBROLA's us1 and the whole SVOX Pico engine."""
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
-HELDOUT_EXTRA = ("festival:slt_hts",)
-"""Held-out voices the bench reports in their own rows, outside its "ALL" (comparable with earlier runs)."""
+HELDOUT_EXTRA = ("festival:slt_hts", "pico:en-US", "pico:en-GB", "mbrola:us1", "rhvoice:slt")
+"""Held-out voices the bench reports in their own rows, outside its "ALL" (comparable with earlier runs): Festival's
+HTS slt (round v3), and since round voice19 SVOX Pico's two voices (an engine no split trains on), MBROLA's us1
+(the one MBROLA voice no split trains on) and RHVoice's slt (the held-out slt speaker through another engine)."""
 
 NEIGHBOURS_TRAIN: dict[str, tuple[str, ...]] = {
     "stand": ("sand", "stamp", "standing", "understand", "stem", "stab", "span", "tanned", "stained", "strand",
@@ -283,11 +290,12 @@ def espeak_voices(accents: tuple[str, ...], variants: tuple[str, ...]) -> list[s
     return [f"espeak:{a}+{v}" if v else f"espeak:{a}" for a in accents for v in variants]
 
 
-def voices(split: str) -> list[str]:
+def voices(split: str, recorded: tuple[str, ...] = RECORDED_TRAIN) -> list[str]:
+    """The voices of `split`; `recorded`: the recorded speakers train and tune share (`RECORDED_TRAIN`)."""
     if split == "train":
-        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(RECORDED_TRAIN)
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(recorded)
     if split == "tune":
-        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TUNE_VARIANTS) + list(RECORDED_TRAIN)
+        return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TUNE_VARIANTS) + list(recorded)
     if split == "heldout":
         return espeak_voices(ESPEAK_HELDOUT_ACCENTS, ESPEAK_HELDOUT_VARIANTS) + list(HELDOUT_OTHER_ENGINES)
     raise ValueError(f"unknown split {split!r}")

@@ -14,7 +14,7 @@ import hashlib
 import json
 import multiprocessing
 import random
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import cast
 
@@ -94,6 +94,18 @@ class Sizes:
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
+    recorded: tuple[str, ...] = corpus.RECORDED_TRAIN
+    """The recorded speakers of train and tune (`corpus.voices`): `engines`, `recorded-tune` and half the virtual
+    speakers are theirs (`with_more_recorded`: round voice19's candidate)."""
+
+
+def with_more_recorded(sizes: Sizes) -> Sizes:
+    """`sizes` with `corpus.RECORDED_MORE` among the recorded speakers, the `engines` split grown with them so
+    that each recorded speaker says as many commands and other words there as before (100 clips per command)."""
+    recorded = sizes.recorded + tuple(v for v in corpus.RECORDED_MORE if v not in sizes.recorded)
+    grow = len(recorded) / len(sizes.recorded)
+    return replace(sizes, recorded=recorded, engines_positives=round(sizes.engines_positives * grow),
+                   engines_repeats=round(sizes.engines_repeats * grow))
 
 
 VTL_RANGE = (0.84, 1.22)
@@ -151,7 +163,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         voices = list(corpus.FOREIGN_TRAIN)
     else:
         voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split))
+                                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split),
+                               sizes.recorded)
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)

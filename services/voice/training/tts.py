@@ -5,6 +5,11 @@ built-in voices: kal16 is a diphone voice, awb/rms/slt are clustergen voices bui
 of three different speakers) and Festival's `festival:kal` and `festival:ked` (diphone voices: ked is
 a third recorded American male speaker) and `festival:slt_hts` (the slt speaker through Festival's HTS
 statistical-parametric synthesiser: another engine than flite's clustergen slt; it ignores the speed).
+Three more engines come from Debian's contrib and non-free sections (round voice19): `mbrola:<voice>`
+(MBROLA's diphone voices, each one recorded speaker, through espeak-ng's front end: us1 an American woman,
+us2 and us3 American men, en1 a British man), `rhvoice:<voice>` (RHVoice's statistical-parametric voices
+trained on recordings: bdl, clb and slt the CMU ARCTIC speakers, alan a Scottish man) and `pico:<language>`
+(SVOX Pico, a third synthesiser family: en-US and en-GB, two women).
 Every engine returns float samples at 16 kHz; speed is a duration factor (1.0 = the engine's default,
 1.2 = 20 % slower) and pitch a factor on the engine's base pitch.
 
@@ -19,6 +24,7 @@ many (vocal-tract-length perturbation; held-out speakers differ from the trainin
 from __future__ import annotations
 
 import io
+import re
 import select
 import shutil
 import subprocess
@@ -48,9 +54,9 @@ def _wav_samples(data: bytes) -> np.ndarray:
     return x
 
 
-def _run(argv: list[str], stdin: bytes | None = None) -> bytes:
+def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> bytes:
     if shutil.which(argv[0]) is None:
-        raise TtsError(f"{argv[0]} is not installed (apt-get install espeak-ng flite festival)")
+        raise TtsError(f"{argv[0]} is not installed (apt-get install {package})")
     try:
         return subprocess.run(argv, input=stdin, capture_output=True, check=True, timeout=30).stdout
     except subprocess.CalledProcessError as exc:
@@ -96,6 +102,50 @@ def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
         except TtsError as exc:
             raise TtsError(f"{exc} (is Festival's {voice} voice installed? apt-get install "
                            f"{FESTIVAL_PACKAGES[voice]})") from None
+        return _wav_samples(out.read_bytes())
+
+
+MBROLA_VOICES = ("us1", "us2", "us3", "en1")
+"""`mbrola:<name>`: the MBROLA voice `/usr/share/mbrola/<name>` (Debian package `mbrola-<name>`, non-free)."""
+
+
+def mbrola(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """An MBROLA diphone voice through espeak-ng's front end (its voice `mb-<name>`)."""
+    if voice not in MBROLA_VOICES:
+        raise TtsError(f"unknown MBROLA voice {voice!r}: one of {', '.join(MBROLA_VOICES)}")
+    if not Path("/usr/share/mbrola", voice).exists():
+        raise TtsError(f"MBROLA voice {voice} is not installed (apt-get install mbrola mbrola-{voice}; Debian non-free)")
+    return espeak(text, f"mb-{voice}", speed, pitch)
+
+
+RHVOICE_VOICES = ("alan", "bdl", "clb", "slt")
+"""`rhvoice:<name>`: RHVoice's English voices (Debian packages `rhvoice rhvoice-english`, non-free)."""
+
+
+def rhvoice(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """RHVoice: rate and pitch are percentages of the voice's own (100); its rate stops at 50 (speed 2)."""
+    if voice not in RHVOICE_VOICES:
+        raise TtsError(f"unknown RHVoice voice {voice!r}: one of {', '.join(RHVOICE_VOICES)}")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "x.wav"
+        _run(["RHVoice-test", "-p", voice, "-r", str(round(100 / speed)), "-t", str(round(100 * pitch)),
+              "-o", str(out)], stdin=text.encode(), package="rhvoice rhvoice-english (Debian non-free)")
+        return _wav_samples(out.read_bytes())
+
+
+PICO_LANGUAGES = ("en-US", "en-GB")
+
+
+def pico(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """SVOX Pico (`pico2wave`), speed and pitch as its markup's percentages (`<speed level>` is a rate)."""
+    if voice not in PICO_LANGUAGES:
+        raise TtsError(f"unknown Pico voice {voice!r}: one of {', '.join(PICO_LANGUAGES)}")
+    if not re.fullmatch(r"[A-Za-z' -]+", text):
+        raise TtsError(f"Pico is given plain words only, not {text!r} (its markup is made here)")
+    marked = f'<speed level="{round(100 / speed)}"><pitch level="{round(100 * pitch)}">{text}</pitch></speed>'
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "x.wav"
+        _run(["pico2wave", "-l", voice, "-w", str(out), marked], package="libttspico-utils (Debian non-free)")
         return _wav_samples(out.read_bytes())
 
 
@@ -298,7 +348,8 @@ def foreign_available(voice: str) -> bool:
     return shutil.which("festival") is not None and any(Path("/usr/share/festival/voices").glob(f"*/{spec.function}"))
 
 
-ENGINES = {"espeak": espeak, "flite": flite, "festival": festival, "foreign": foreign}
+ENGINES = {"espeak": espeak, "flite": flite, "festival": festival, "foreign": foreign, "mbrola": mbrola,
+           "rhvoice": rhvoice, "pico": pico}
 
 
 VTL_MARK = "@vtl"
