@@ -15,6 +15,7 @@ import pytest
 
 from services.voice.synth import OOV_HELDOUT, OOV_TUNE
 from services.voice.training import corpus, dataset, train, tts
+from tests.voice.pitch import f0
 
 pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
 
@@ -98,14 +99,6 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
     high = tts.synthesise("stop", "foreign:cs_dita", pitch=1.3)
     assert 0.3 < len(x) / 16000 < 1.5 and np.max(np.abs(x)) == pytest.approx(0.5)
     assert len(slow) > 1.25 * len(x)
-
-    def f0(y: np.ndarray) -> float:  # autocorrelation pitch of the loudest 100 ms
-        i = int(np.argmax(np.convolve(y**2, np.ones(1600), "valid")))
-        seg = y[i : i + 1600] - y[i : i + 1600].mean()
-        ac = np.correlate(seg, seg, "full")[1600:]
-        lo, hi = 16000 // 400, 16000 // 70
-        return 16000 / (lo + int(np.argmax(ac[lo:hi])))
-
     assert f0(high) > 1.1 * f0(x)
     with pytest.raises(tts.TtsError, match="unknown foreign voice"):
         tts.synthesise("stop", "foreign:nobody")

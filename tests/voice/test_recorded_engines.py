@@ -1,0 +1,116 @@
+"""Round voice19's engines (MBROLA through espeak-ng, RHVoice, SVOX Pico: Debian contrib and non-free) and the
+candidate recipe that trains on six more recorded speakers. The argument mapping is checked on every machine; the
+engines themselves where they are installed (they are for training and the bench, not for the service)."""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from services.voice.training import corpus, dataset, train, tts
+from tests.voice.pitch import f0
+
+
+def test_rhvoice_and_pico_get_speed_as_a_rate_and_pitch_as_a_percentage(monkeypatch: pytest.MonkeyPatch) -> None:
+    calls: list[tuple[list[str], bytes | None]] = []
+
+    def run(argv: list[str], stdin: bytes | None = None, package: str = "") -> bytes:
+        calls.append((argv, stdin))
+        Path(argv[argv.index("-o" if "-o" in argv else "-w") + 1]).write_bytes(_wav(np.ones(1600)))
+        return b""
+
+    monkeypatch.setattr(tts, "_run", run)
+    tts.rhvoice("stand", "bdl", speed=1.25, pitch=0.8)
+    argv, stdin = calls[-1]
+    assert argv[:7] == ["RHVoice-test", "-p", "bdl", "-r", "80", "-t", "80"] and stdin == b"stand"
+    tts.pico("go kart", "en-GB", speed=0.8, pitch=1.3)
+    argv, _ = calls[-1]
+    assert argv[:3] == ["pico2wave", "-l", "en-GB"]
+    assert argv[-1] == '<speed level="125"><pitch level="130">go kart</pitch></speed>'
+    with pytest.raises(tts.TtsError, match="plain words"):
+        tts.pico('go</pitch><speed level="500">', "en-US", 1.0, 1.0)
+    with pytest.raises(tts.TtsError, match="unknown Pico voice"):
+        tts.synthesise("go", "pico:de-DE")
+    with pytest.raises(tts.TtsError, match="unknown RHVoice voice"):
+        tts.synthesise("go", "rhvoice:anna")
+
+
+def test_mbrola_is_espeak_ngs_mb_voice_and_a_missing_one_names_its_package(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen: list[tuple[str, str, float, float]] = []
+    monkeypatch.setattr(tts, "espeak", lambda text, voice, speed, pitch: seen.append((text, voice, speed, pitch))
+                        or np.ones(100))
+    monkeypatch.setattr(Path, "exists", lambda self: str(self) == "/usr/share/mbrola/us2")
+    tts.mbrola("no", "us2", 1.1, 0.9)
+    assert seen == [("no", "mb-us2", 1.1, 0.9)]
+    with pytest.raises(tts.TtsError, match="apt-get install mbrola mbrola-us3"):
+        tts.mbrola("no", "us3", 1.0, 1.0)
+    with pytest.raises(tts.TtsError, match="unknown MBROLA voice"):
+        tts.mbrola("no", "fr1", 1.0, 1.0)
+
+
+def _wav(x: np.ndarray, rate: int = 16000) -> bytes:
+    import io
+    import wave
+
+    buf = io.BytesIO()
+    with wave.open(buf, "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(rate)
+        w.writeframes((x * 1000).astype("<i2").tobytes())
+    return buf.getvalue()
+
+
+INSTALLED = {
+    "mbrola:us2": Path("/usr/share/mbrola/us2").exists() and shutil.which("espeak-ng") is not None,
+    "rhvoice:bdl": shutil.which("RHVoice-test") is not None,
+    "pico:en-US": shutil.which("pico2wave") is not None,
+}
+
+
+@pytest.mark.parametrize("voice", sorted(INSTALLED))
+def test_each_engine_says_a_word_at_the_asked_speed_and_pitch(voice: str) -> None:
+    if not INSTALLED[voice]:
+        pytest.skip(f"{voice.partition(':')[0]} is not installed (Debian contrib/non-free; services/voice/README.md)")
+    x = tts.synthesise("no", voice)  # all voiced: the loudest 100 ms has a pitch
+    slow = tts.synthesise("no", voice, speed=1.3)
+    high = tts.synthesise("no", voice, pitch=1.3)
+    assert 0.2 < len(x) / 16000 < 1.5 and np.max(np.abs(x)) == pytest.approx(0.5)
+    assert len(slow) > 1.15 * len(x)
+    assert f0(high) > 1.1 * f0(x)
+
+
+def test_more_recorded_speakers_train_and_tune_and_never_the_heldout_ones() -> None:
+    pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
+    base = dataset.Sizes()
+    sizes = dataset.with_more_recorded(base)
+    assert sizes.recorded == corpus.RECORDED_TRAIN + corpus.RECORDED_MORE
+    assert dataset.with_more_recorded(sizes) == sizes  # adding them twice adds nothing
+    assert (sizes.engines_positives, sizes.engines_repeats) == (3 * base.engines_positives, 3 * base.engines_repeats)
+    engines = dataset.recipes("engines", sizes, 12)
+    per_voice = {v: sum(r.voice == v and r.label < dataset.OTHER for r in engines) for v in sizes.recorded}
+    assert set(per_voice) == {r.voice for r in engines}
+    commands_each = sizes.engines_positives * len(corpus.VOCABULARY) / len(sizes.recorded)
+    assert all(0.8 * commands_each < n < 1.2 * commands_each for n in per_voice.values())  # drawn at random
+    held = set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
+    trained = {r.voice.partition(tts.VTL_MARK)[0] for split in ("train", "tune", "speakers", "speakers-tune")
+               for r in dataset.recipes(split, sizes, 12)}
+    assert set(corpus.RECORDED_MORE) <= trained and not held & trained
+    # the slt speaker is held out through every engine, and Pico is an engine no split trains on
+    assert {"flite:slt", "rhvoice:slt"} <= held and not any(v.startswith("pico:") for v in trained)
+    assert dataset.recipes("engines", base, 12) == dataset.recipes("engines", dataset.Sizes(), 12)
+
+
+def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: pytest.MonkeyPatch) -> None:
+    from typer.testing import CliRunner
+
+    from services.voice.__main__ import app
+
+    seen: list[train.TrainConfig] = []
+    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
+    assert CliRunner().invoke(app, ["train", "--more-voices", "--out", "/dev/null"]).exit_code == 0
+    assert seen == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes()))]
