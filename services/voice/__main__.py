@@ -159,9 +159,10 @@ def train(
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head) or speech-embedding (the "
              "walk gate and enrolment base; crops)")] = "whisper-tiny.en",
-    more_voices: Annotated[bool, typer.Option(
-        "--more-voices", help="round voice19's candidate: six more recorded speakers (MBROLA, RHVoice; Debian "
-                              "non-free) among the training voices (corpus.RECORDED_MORE)")] = False,
+    more_voices: Annotated[str, typer.Option(
+        "--more-voices", help="six more recorded speakers (MBROLA, RHVoice; Debian non-free; corpus.RECORDED_MORE): "
+                              "off, train (round voice19b: the training splits only) or train+tune (round voice19: "
+                              "the tune splits, which place the knots, too)")] = "off",
     word_folds: Annotated[int | None, typer.Option(
         "--word-folds", min=0,
         help="folds of the near-command training words; the knots move to where words the head never heard "
@@ -177,8 +178,10 @@ def train(
     from services.voice.training.train import train as run_training
 
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    if more_voices:
-        sizes = with_more_recorded(sizes)
+    try:
+        sizes = with_more_recorded(sizes, more_voices)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--more-voices") from None
     try:
         cfg = shipped_recipe(embedding, word_folds, seed=seed, workers=workers, sizes=sizes)
     except (ValueError, KeyError):

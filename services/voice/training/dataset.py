@@ -95,16 +95,30 @@ class Sizes:
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
     recorded: tuple[str, ...] = corpus.RECORDED_TRAIN
-    """The recorded speakers of train and tune (`corpus.voices`): `engines`, `recorded-tune` and half the virtual
-    speakers are theirs (`with_more_recorded`: round voice19's candidate)."""
+    """The recorded speakers of the training splits (`corpus.voices`): `engines` and half the virtual speakers are
+    theirs (`with_more_recorded`: round voice19's candidates)."""
+    tune_recorded: tuple[str, ...] = corpus.RECORDED_TRAIN
+    """The recorded speakers of the tune splits (`tune`, `neighbours-tune`, `speakers-tune`, `recorded-tune`), which
+    place the knots."""
 
 
-def with_more_recorded(sizes: Sizes) -> Sizes:
-    """`sizes` with `corpus.RECORDED_MORE` among the recorded speakers, the `engines` split grown with them so
-    that each recorded speaker says as many commands and other words there as before (100 clips per command)."""
+MORE_VOICES = ("off", "train", "train+tune")
+"""`train --more-voices`: where `corpus.RECORDED_MORE` speak (`with_more_recorded`)."""
+
+
+def with_more_recorded(sizes: Sizes, where: str = "train+tune") -> Sizes:
+    """`sizes` with `corpus.RECORDED_MORE` among the recorded speakers of the training splits, the `engines` split
+    grown with them so that each recorded speaker says as many commands and other words there as before (100 clips
+    per command); with `where` "train+tune" (round voice19) of the tune splits too, with "train" (round voice19b)
+    not: the knots are then placed on the same tune speech as before. ValueError for another `where`."""
+    if where not in MORE_VOICES:
+        raise ValueError(f"{where!r}: one of {', '.join(MORE_VOICES)}")
+    if where == "off":
+        return sizes
     recorded = sizes.recorded + tuple(v for v in corpus.RECORDED_MORE if v not in sizes.recorded)
     grow = len(recorded) / len(sizes.recorded)
-    return replace(sizes, recorded=recorded, engines_positives=round(sizes.engines_positives * grow),
+    tune = recorded if where == "train+tune" else sizes.tune_recorded
+    return replace(sizes, recorded=recorded, tune_recorded=tune, engines_positives=round(sizes.engines_positives * grow),
                    engines_repeats=round(sizes.engines_repeats * grow))
 
 
@@ -162,9 +176,9 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     if split == "foreign":
         voices = list(corpus.FOREIGN_TRAIN)
     else:
-        voices = corpus.voices({"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split),
-                               sizes.recorded)
+        side = {"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
+                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split)
+        voices = corpus.voices(side, sizes.tune_recorded if side == "tune" else sizes.recorded)
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
