@@ -87,9 +87,9 @@ def test_each_engine_says_a_word_at_the_asked_speed_and_pitch(voice: str) -> Non
 def test_more_recorded_speakers_train_and_tune_and_never_the_heldout_ones() -> None:
     pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
     base = dataset.Sizes()
-    sizes = dataset.with_more_recorded(base)
-    assert sizes.recorded == corpus.RECORDED_TRAIN + corpus.RECORDED_MORE
-    assert dataset.with_more_recorded(sizes) == sizes  # adding them twice adds nothing
+    sizes = dataset.with_more_recorded(base, "train+tune")
+    assert sizes.recorded == sizes.tune_recorded == corpus.RECORDED_TRAIN + corpus.RECORDED_MORE
+    assert dataset.with_more_recorded(sizes, "train+tune") == sizes  # adding them twice adds nothing
     assert (sizes.engines_positives, sizes.engines_repeats) == (3 * base.engines_positives, 3 * base.engines_repeats)
     engines = dataset.recipes("engines", sizes, 12)
     per_voice = {v: sum(r.voice == v and r.label < dataset.OTHER for r in engines) for v in sizes.recorded}
@@ -105,6 +105,22 @@ def test_more_recorded_speakers_train_and_tune_and_never_the_heldout_ones() -> N
     assert dataset.recipes("engines", base, 12) == dataset.recipes("engines", dataset.Sizes(), 12)
 
 
+def test_more_voices_in_training_only_leave_the_tune_splits_as_they_were() -> None:
+    pytest.importorskip("pocketsphinx")
+    base = dataset.Sizes()
+    both = dataset.with_more_recorded(base, "train+tune")
+    train_only = dataset.with_more_recorded(base, "train")
+    assert dataset.with_more_recorded(base, "off") == base
+    assert train_only.recorded == both.recorded == both.tune_recorded and train_only.tune_recorded == base.tune_recorded
+    for split in ("tune", "neighbours-tune", "speakers-tune", "recorded-tune"):
+        assert dataset.recipes(split, train_only, 12) == dataset.recipes(split, base, 12), split
+        assert dataset.recipes(split, both, 12) != dataset.recipes(split, base, 12), split
+    for split in ("train", "engines", "neighbours", "speakers"):
+        assert dataset.recipes(split, train_only, 12) == dataset.recipes(split, both, 12), split
+    with pytest.raises(ValueError, match="one of off, train, train"):
+        dataset.with_more_recorded(base, "tune")
+
+
 def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: pytest.MonkeyPatch) -> None:
     from typer.testing import CliRunner
 
@@ -112,5 +128,10 @@ def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: p
 
     seen: list[train.TrainConfig] = []
     monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
-    assert CliRunner().invoke(app, ["train", "--more-voices", "--out", "/dev/null"]).exit_code == 0
-    assert seen == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes()))]
+    runner = CliRunner()
+    for where in ("train+tune", "train", "off"):
+        assert runner.invoke(app, ["train", "--more-voices", where, "--out", "/dev/null"]).exit_code == 0
+    assert runner.invoke(app, ["train", "--more-voices", "tune"]).exit_code == 2  # refused before any training
+    assert seen == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes(), where))
+                    for where in ("train+tune", "train", "off")]
+    assert seen[-1] == train.shipped_recipe()

@@ -106,7 +106,7 @@ MORE_VOICES = ("off", "train", "train+tune")
 """`train --more-voices`: where `corpus.RECORDED_MORE` speak (`with_more_recorded`)."""
 
 
-def with_more_recorded(sizes: Sizes, where: str = "train+tune") -> Sizes:
+def with_more_recorded(sizes: Sizes, where: str) -> Sizes:
     """`sizes` with `corpus.RECORDED_MORE` among the recorded speakers of the training splits, the `engines` split
     grown with them so that each recorded speaker says as many commands and other words there as before (100 clips
     per command); with `where` "train+tune" (round voice19) of the tune splits too, with "train" (round voice19b)
