@@ -54,9 +54,9 @@ saying the English words from their CMU phonemes (`tts.foreign`): the `foreign` 
 never tune, recorded-tune or held-out. The Italian (lp, pc) and Catalan (ona) voices were screened out: the
 committed head recognised fewer than 10 of 28 of their clean commands (services/voice/README.md, round 11)."""
 RECORDED_MORE = ("mbrola:us2", "mbrola:us3", "mbrola:en1", "rhvoice:alan", "rhvoice:bdl", "rhvoice:clb")
-"""Round voice19's candidate: six more recorded speakers, from two more engines (Debian non-free: MBROLA's diphones
-through espeak-ng, three men; RHVoice's statistical-parametric voices, two men and a woman), added to
-`RECORDED_TRAIN` by `dataset.with_more_recorded`. Never a held-out speaker: RHVoice's slt is flite's held-out slt,
+"""Rounds voice19 and 19b's candidates: six more recorded speakers, from two more engines (Debian contrib/non-free:
+MBROLA's diphones through espeak-ng, three men; RHVoice's statistical-parametric voices, two men and a woman), added
+to `RECORDED_TRAIN` by `dataset.with_more_recorded` (neither landed). Never a held-out speaker: RHVoice's slt is flite's held-out slt,
 so it is held out too (`HELDOUT_EXTRA`), with MBROLA's us1 and the whole SVOX Pico engine."""
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
 HELDOUT_EXTRA = ("festival:slt_hts", "pico:en-US", "pico:en-GB", "mbrola:us1", "rhvoice:slt")
@@ -291,7 +291,8 @@ def espeak_voices(accents: tuple[str, ...], variants: tuple[str, ...]) -> list[s
 
 
 def voices(split: str, recorded: tuple[str, ...] = RECORDED_TRAIN) -> list[str]:
-    """The voices of `split`; `recorded`: the recorded speakers train and tune share (`RECORDED_TRAIN`)."""
+    """The voices of `split`; `recorded`: the split's recorded speakers (train and tune: `dataset.Sizes.recorded`
+    and `tune_recorded`, by default `RECORDED_TRAIN`; held-out has its own)."""
     if split == "train":
         return espeak_voices(ESPEAK_TRAIN_ACCENTS, ESPEAK_TRAIN_VARIANTS) + list(recorded)
     if split == "tune":
