@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from services.voice.audio import to_pcm, write_wav
 from services.voice.training import corpus, dataset, train, tts
 from tests.voice.pitch import f0
 
@@ -20,7 +21,7 @@ def test_rhvoice_and_pico_get_speed_as_a_rate_and_pitch_as_a_percentage(monkeypa
 
     def run(argv: list[str], stdin: bytes | None = None, package: str = "") -> bytes:
         calls.append((argv, stdin))
-        Path(argv[argv.index("-o" if "-o" in argv else "-w") + 1]).write_bytes(_wav(np.ones(1600)))
+        write_wav(argv[argv.index("-o" if "-o" in argv else "-w") + 1], to_pcm(np.full(1600, 0.1)))
         return b""
 
     monkeypatch.setattr(tts, "_run", run)
@@ -50,19 +51,6 @@ def test_mbrola_is_espeak_ngs_mb_voice_and_a_missing_one_names_its_package(monke
         tts.mbrola("no", "us3", 1.0, 1.0)
     with pytest.raises(tts.TtsError, match="unknown MBROLA voice"):
         tts.mbrola("no", "fr1", 1.0, 1.0)
-
-
-def _wav(x: np.ndarray, rate: int = 16000) -> bytes:
-    import io
-    import wave
-
-    buf = io.BytesIO()
-    with wave.open(buf, "wb") as w:
-        w.setnchannels(1)
-        w.setsampwidth(2)
-        w.setframerate(rate)
-        w.writeframes((x * 1000).astype("<i2").tobytes())
-    return buf.getvalue()
 
 
 INSTALLED = {
