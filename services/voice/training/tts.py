@@ -63,6 +63,18 @@ def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng 
         raise TtsError(f"{argv[0]} failed: {exc.stderr.decode(errors='replace')[:200]}") from None
 
 
+OUT = "<out.wav>"
+"""Stands in `_run_to_wav`'s argv for the WAV file the command writes."""
+
+
+def _run_to_wav(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> np.ndarray:
+    """Run a TTS command that writes a WAV file (`OUT` in `argv`, a file in a temporary folder); its samples."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "x.wav"
+        _run([str(out) if a == OUT else a for a in argv], stdin=stdin, package=package)
+        return _wav_samples(out.read_bytes())
+
+
 def espeak(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     wpm = round(165 / speed)
     return _wav_samples(_run(["espeak-ng", "-v", voice, "-s", str(wpm), "-p", str(round(50 * pitch)),
@@ -70,13 +82,10 @@ def espeak(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
 
 
 def flite(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "x.wav"
-        argv = ["flite", "-voice", voice, "-t", text, "-o", str(out), "--setf", f"duration_stretch={speed:.3f}"]
-        base = 100.0 if voice in ("kal", "kal16", "awb", "rms") else 170.0
-        argv += ["--setf", f"int_f0_target_mean={base * pitch:.1f}"]
-        _run(argv)
-        return _wav_samples(out.read_bytes())
+    argv = ["flite", "-voice", voice, "-t", text, "-o", OUT, "--setf", f"duration_stretch={speed:.3f}"]
+    base = 100.0 if voice in ("kal", "kal16", "awb", "rms") else 170.0
+    argv += ["--setf", f"int_f0_target_mean={base * pitch:.1f}"]
+    return _run_to_wav(argv)
 
 
 FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "slt_hts": "cmu_us_slt_arctic_hts"}
@@ -88,21 +97,17 @@ FESTIVAL_PACKAGES = {"kal": "festvox-kallpc16k", "ked": "festvox-kdlpc16k", "slt
 def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     if voice not in FESTIVAL_VOICES:
         raise TtsError(f"unknown Festival voice {voice!r}: one of {', '.join(FESTIVAL_VOICES)}")
-    argv = ["text2wave", "-o", "", "-eval", f"(voice_{FESTIVAL_VOICES[voice]})",
+    argv = ["text2wave", "-o", OUT, "-eval", f"(voice_{FESTIVAL_VOICES[voice]})",
             "-eval", f"(Parameter.set 'Duration_Stretch {speed:.3f})"]
     if round(pitch, 3) != 1.0 and FESTIVAL_VOICES[voice].endswith("_diphone"):
         # the diphone voices' intonation model (Int_Targets_LR) maps onto this mean and spread
         lr = f"(target_f0_mean {105 * pitch:.1f}) (target_f0_std {15 * pitch:.1f}) (model_f0_mean 170) (model_f0_std 34)"
         argv += ["-eval", f"(set! int_lr_params '({lr}))"]
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "x.wav"
-        argv[2] = str(out)
-        try:
-            _run(argv, stdin=text.encode())
-        except TtsError as exc:
-            raise TtsError(f"{exc} (is Festival's {voice} voice installed? apt-get install "
-                           f"{FESTIVAL_PACKAGES[voice]})") from None
-        return _wav_samples(out.read_bytes())
+    try:
+        return _run_to_wav(argv, stdin=text.encode())
+    except TtsError as exc:
+        raise TtsError(f"{exc} (is Festival's {voice} voice installed? apt-get install "
+                       f"{FESTIVAL_PACKAGES[voice]})") from None
 
 
 MBROLA_VOICES = ("us1", "us2", "us3", "en1")
@@ -126,11 +131,8 @@ def rhvoice(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     """RHVoice: rate and pitch are percentages of the voice's own (100); its rate stops at 50 (speed 2)."""
     if voice not in RHVOICE_VOICES:
         raise TtsError(f"unknown RHVoice voice {voice!r}: one of {', '.join(RHVOICE_VOICES)}")
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "x.wav"
-        _run(["RHVoice-test", "-p", voice, "-r", str(round(100 / speed)), "-t", str(round(100 * pitch)),
-              "-o", str(out)], stdin=text.encode(), package="rhvoice rhvoice-english (Debian non-free)")
-        return _wav_samples(out.read_bytes())
+    return _run_to_wav(["RHVoice-test", "-p", voice, "-r", str(round(100 / speed)), "-t", str(round(100 * pitch)),
+                        "-o", OUT], stdin=text.encode(), package="rhvoice rhvoice-english (Debian non-free)")
 
 
 PICO_LANGUAGES = ("en-US", "en-GB")
@@ -143,10 +145,7 @@ def pico(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     if not re.fullmatch(r"[A-Za-z' -]+", text):
         raise TtsError(f"Pico is given plain words only, not {text!r} (its markup is made here)")
     marked = f'<speed level="{round(100 / speed)}"><pitch level="{round(100 * pitch)}">{text}</pitch></speed>'
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "x.wav"
-        _run(["pico2wave", "-l", voice, "-w", str(out), marked], package="libttspico-utils (Debian non-free)")
-        return _wav_samples(out.read_bytes())
+    return _run_to_wav(["pico2wave", "-l", voice, "-w", OUT, marked], package="libttspico-utils (Debian non-free)")
 
 
 # --- Recorded speakers of other languages saying English words (`foreign:<name>`, training only) -------------
