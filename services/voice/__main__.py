@@ -159,10 +159,11 @@ def train(
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head) or speech-embedding (the "
              "walk gate and enrolment base; crops)")] = "whisper-tiny.en",
-    more_voices: Annotated[str, typer.Option(
+    more_voices: Annotated[str | None, typer.Option(
         "--more-voices", help="six more recorded speakers (MBROLA, RHVoice; Debian non-free; corpus.RECORDED_MORE): "
-                              "off, train (round voice19b: the training splits only) or train+tune (round voice19: "
-                              "the tune splits, which place the knots, too)")] = "off",
+                              "off, train (the training splits only; round voice19b) or train+tune (the tune splits, "
+                              "which place the knots, too; round voice19) [default: the shipped recipe's: train for "
+                              "whisper-tiny.en, off for speech-embedding]")] = None,
     word_folds: Annotated[int | None, typer.Option(
         "--word-folds", min=0,
         help="folds of the near-command training words; the knots move to where words the head never heard "
@@ -173,19 +174,16 @@ def train(
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
-    from services.voice.training.dataset import Sizes, with_more_recorded
+    from services.voice.training.dataset import MORE_VOICES, Sizes
     from services.voice.training.train import SHIPPED_HEADS, shipped_recipe
     from services.voice.training.train import train as run_training
 
+    if more_voices is not None and more_voices not in MORE_VOICES:
+        raise typer.BadParameter(f"{more_voices!r}: one of {', '.join(MORE_VOICES)}", param_hint="--more-voices")
+    if embedding not in SHIPPED_HEADS:
+        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(SHIPPED_HEADS)}", param_hint="--embedding")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    try:
-        sizes = with_more_recorded(sizes, more_voices)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--more-voices") from None
-    try:
-        cfg = shipped_recipe(embedding, word_folds, seed=seed, workers=workers, sizes=sizes)
-    except (ValueError, KeyError):
-        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(SHIPPED_HEADS)}", param_hint="--embedding") from None
+    cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes)
     report = run_training(cfg, out or SHIPPED_HEADS[embedding])
     typer.echo(json.dumps(report, indent=2))
 

@@ -107,7 +107,7 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
 def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """`train --foreign N` fits the default head's recipe with N foreign clips per command (round 12's candidate);
     without it, `train` fits exactly the default head's recipe (`shipped_recipe()`: `TrainConfig()` on Whisper's
-    encoder with five word folds) into the default head, and `--embedding speech-embedding` the walk gate's
+    encoder with five word folds and the six more recorded speakers in training) into the default head, and `--embedding speech-embedding` the walk gate's
     (`TrainConfig()` itself) into its file (training itself is replaced here)."""
     from typer.testing import CliRunner
 
@@ -125,8 +125,10 @@ def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.Mo
     assert runner.invoke(app, ["train", "--embedding", "mfcc"]).exit_code == 2
     assert len(seen) == 3
     (variant, variant_out), (default, default_out), (gate, gate_out) = seen
-    assert variant == replace(train.shipped_recipe(), workers=1, sizes=replace(dataset.Sizes(), foreign_positives=360))
+    foreign = replace(dataset.Sizes(), foreign_positives=360)
+    assert variant == replace(train.shipped_recipe(), workers=1, sizes=dataset.with_more_recorded(foreign, "train"))
     assert variant_out == out
     assert default == train.shipped_recipe() and default_out == DEFAULT_HEAD
     assert (default.embedding, default.crop_width, default.word_folds) == ("whisper-tiny.en", 0, 5)
+    assert default.sizes == dataset.with_more_recorded(dataset.Sizes(), "train")
     assert gate == train.TrainConfig() and gate_out == SPEECH_EMBEDDING_HEAD

@@ -110,6 +110,8 @@ def test_more_voices_in_training_only_leave_the_tune_splits_as_they_were() -> No
 
 
 def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The default head's recipe has the six more speakers in training only (round voice19b, landed by rule voice19c);
+    `--more-voices` changes that and nothing else; the speech-embedding head's recipe has none of them."""
     from typer.testing import CliRunner
 
     from services.voice.__main__ import app
@@ -119,7 +121,11 @@ def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: p
     runner = CliRunner()
     for where in ("train+tune", "train", "off"):
         assert runner.invoke(app, ["train", "--more-voices", where, "--out", "/dev/null"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--more-voices", "tune"]).exit_code == 2  # refused before any training
-    assert seen == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes(), where))
-                    for where in ("train+tune", "train", "off")]
-    assert seen[-1] == train.shipped_recipe()
+    assert runner.invoke(app, ["train", "--out", "/dev/null"]).exit_code == 0
+    assert runner.invoke(app, ["train", "--embedding", "speech-embedding", "--out", "/dev/null"]).exit_code == 0
+    result = runner.invoke(app, ["train", "--more-voices", "tune"])
+    assert result.exit_code == 2 and not seen[5:]  # refused before any training
+    assert seen[:3] == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes(), where))
+                        for where in ("train+tune", "train", "off")]
+    assert seen[3] == seen[1] == train.shipped_recipe()
+    assert seen[4] == train.TrainConfig() and seen[4].sizes.recorded == corpus.RECORDED_TRAIN

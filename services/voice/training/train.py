@@ -22,6 +22,9 @@
    heard need them (`folds`).
 6. Save the head (`spotter/head.npz` by default; `shipped_recipe` and `SHIPPED_HEADS` say which recipe makes
    which shipped head) and print the tune figures.
+
+The default head's recipe renders speech by MBROLA and RHVoice (`corpus.RECORDED_MORE`, Debian non-free packages;
+services/voice/README.md); without them, `--more-voices off` fits the recipe of the head before round voice19b.
 """
 
 from __future__ import annotations
@@ -104,15 +107,23 @@ def on_embedding(cfg: TrainConfig, embedding: str) -> TrainConfig:
 SHIPPED_WORD_FOLDS = {WHISPER: 5, SPEECH_EMBEDDING: 0}
 """Word folds of each shipped head's recipe: the default head (Whisper, round 14) places its knots with them; the
 speech-embedding head (the walk gate and enrolment base) was fitted without."""
+SHIPPED_MORE_VOICES = {WHISPER: "train", SPEECH_EMBEDDING: "off"}
+"""Where each shipped head's recipe puts `corpus.RECORDED_MORE` (`dataset.with_more_recorded`): the default head
+(round voice19b, confirmed by round voice19c) is fitted on them, its knots placed on the tune speech without them;
+the speech-embedding head was fitted before they existed."""
 SHIPPED_HEADS = {WHISPER: DEFAULT_HEAD, SPEECH_EMBEDDING: SPEECH_EMBEDDING_HEAD}
 
 
-def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, **changes: object) -> TrainConfig:
+def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, more_voices: str | None = None,
+                   **changes: object) -> TrainConfig:
     """The recipe of the head shipped for `embedding` (`TrainConfig()` is the speech-embedding head's; the default
-    head is `TrainConfig()` on Whisper's encoder with five word folds), with `changes`. ValueError for an unknown
-    embedding."""
+    head is `TrainConfig()` on Whisper's encoder with five word folds and the six more recorded speakers in its
+    training splits), with `changes`; `word_folds` and `more_voices` (`dataset.MORE_VOICES`) replace the shipped
+    choice when given. ValueError for an unknown embedding or `more_voices`."""
     cfg = on_embedding(replace(TrainConfig(), **changes), embedding)  # type: ignore[arg-type]
-    return replace(cfg, word_folds=SHIPPED_WORD_FOLDS[embedding] if word_folds is None else word_folds)
+    more = SHIPPED_MORE_VOICES[embedding] if more_voices is None else more_voices
+    return replace(cfg, word_folds=SHIPPED_WORD_FOLDS[embedding] if word_folds is None else word_folds,
+                   sizes=dataset.with_more_recorded(cfg.sizes, more))
 
 
 def speaker_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
