@@ -169,21 +169,30 @@ def train(
         help="folds of the near-command training words; the knots move to where words the head never heard "
              "need them (training/folds.py; 0: the tune split's knots only) [default: the shipped recipe's: "
              "5 for whisper-tiny.en, 0 for speech-embedding]")] = None,
+    fold_accept_exempt: Annotated[list[str] | None, typer.Option(
+        "--fold-accept-exempt",
+        help="a command whose accept knot the word folds leave at the tune split's place (its sure knot still "
+             "moves); repeat for more (round voice20: go)")] = None,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
+    from services.voice.training.corpus import VOCABULARY
     from services.voice.training.dataset import MORE_VOICES, Sizes
     from services.voice.training.train import SHIPPED_HEADS, shipped_recipe
     from services.voice.training.train import train as run_training
 
     if more_voices is not None and more_voices not in MORE_VOICES:
         raise typer.BadParameter(f"{more_voices!r}: one of {', '.join(MORE_VOICES)}", param_hint="--more-voices")
+    unknown = sorted(set(fold_accept_exempt or ()) - set(VOCABULARY))
+    if unknown:
+        raise typer.BadParameter(f"{', '.join(unknown)}: not a command", param_hint="--fold-accept-exempt")
     if embedding not in SHIPPED_HEADS:
         raise typer.BadParameter(f"{embedding!r}: one of {', '.join(SHIPPED_HEADS)}", param_hint="--embedding")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
-    cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes)
+    cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
+                         fold_accept_exempt=tuple(fold_accept_exempt or ()))
     report = run_training(cfg, out or SHIPPED_HEADS[embedding])
     typer.echo(json.dumps(report, indent=2))
 

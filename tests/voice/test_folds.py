@@ -88,6 +88,20 @@ def test_apply_puts_go_sure_above_the_worst_fold_and_shifts_accept_knots() -> No
     assert (head.sure > head.accept).all()  # the stop knots stay in order after its accept moved past 0.9
 
 
+def test_an_exempt_accept_knot_stays_where_tune_put_it_and_its_sure_knot_still_moves() -> None:
+    """Round voice20's candidate: "go" exempt from the folds' accept shift; every other command still shifted."""
+    worst = {w: 0.95 for w in corpus.VOCABULARY}
+    shifted = [folds.FoldResult(100, 3, 3.2, {w: 1.5 for w in corpus.VOCABULARY})]
+    plain, exempt = _head(), _head()
+    folds.apply(plain, shifted, worst, TrainConfig())
+    report = folds.apply(exempt, shifted, worst, TrainConfig(fold_accept_exempt=("go",)))
+    assert exempt.accept[GO] == pytest.approx(0.6) and plain.accept[GO] > 0.8
+    others = [c for c, w in enumerate(corpus.VOCABULARY) if w != "go"]
+    assert np.array_equal(exempt.accept[others], plain.accept[others]) and (plain.accept[others] > 0.8).all()
+    assert np.array_equal(exempt.sure, plain.sure)  # "go" walks unasked exactly as before
+    assert report["accept_shifts"]["go"] == 0.0 and report["exempt_shifts_not_applied"] == {"go": 1.5}
+
+
 def test_apply_never_lowers_the_recipes_go_margin() -> None:
     head = _head()
     worst = {w: 0.5 for w in corpus.VOCABULARY}
@@ -131,3 +145,24 @@ def test_run_folds_scores_each_fold_on_words_its_head_never_heard() -> None:
     published_seen = int(sum(np.sum((best == c) & (p[:, c] >= seen.accept[c])) for c in range(N)))
     assert sum(r.accepted for r in results) > published_seen
     assert max(r.shifts["go"] for r in results) > 0 and max(r.go_margin for r in results) > 0
+
+
+def test_train_fold_accept_exempt_option_sets_only_that(monkeypatch: pytest.MonkeyPatch) -> None:
+    from dataclasses import replace
+
+    from typer.testing import CliRunner
+
+    from services.voice.__main__ import app
+    from services.voice.training import train
+
+    seen: list[TrainConfig] = []
+    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
+    runner = CliRunner()
+    assert runner.invoke(app, ["train", "--fold-accept-exempt", "go", "--out", "/dev/null"]).exit_code == 0
+    assert runner.invoke(app, ["train", "--fold-accept-exempt", "go", "--fold-accept-exempt", "no",
+                               "--out", "/dev/null"]).exit_code == 0
+    refused = runner.invoke(app, ["train", "--fold-accept-exempt", "jump", "--out", "/dev/null"])
+    assert refused.exit_code == 2 and "jump: not a command" in refused.output
+    assert seen == [replace(train.shipped_recipe(), fold_accept_exempt=("go",)),
+                    replace(train.shipped_recipe(), fold_accept_exempt=("go", "no"))]
+    assert train.shipped_recipe().fold_accept_exempt == ()

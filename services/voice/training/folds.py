@@ -15,7 +15,7 @@ voices. The held-out words are other words, and round 13 showed the difference: 
 
 `apply` moves the final head's knots by what the folds found: "go"'s sure knot to the largest margin any fold
 needed plus `cfg.fold_sure_extra`, each accept knot by the largest shift any fold needed (the recipe's knots
-are kept where the folds need less). Nothing here looks at held-out data.
+are kept where the folds need less), except the accept knots of `cfg.fold_accept_exempt`. Nothing here looks at held-out data.
 """
 
 from __future__ import annotations
@@ -109,12 +109,16 @@ def apply(head: Head, results: Sequence[FoldResult], worst: dict[str, float], cf
     go = head.vocabulary.index("go")
     recipe_margin = dict(cfg.sure_margin).get("go", cfg.default_sure_margin)
     margin = max(recipe_margin, max(r.go_margin for r in results) + cfg.fold_sure_extra)
-    shifts = {w: max(r.shifts[w] for r in results) for w in head.vocabulary}
+    needed = {w: max(r.shifts[w] for r in results) for w in head.vocabulary}
+    shifts = {w: 0.0 if w in cfg.fold_accept_exempt else s for w, s in needed.items()}
     for c, w in enumerate(head.vocabulary):
         head.accept[c] = min(sigmoid(logit(float(head.accept[c])) + shifts[w]), 0.9999)
     sure_go = sigmoid(logit(worst["go"]) + margin)
     head.sure[go] = min(max(float(head.sure[go]), sure_go, float(head.accept[go]) + 0.01), 0.99999)
     for c in range(len(head.vocabulary)):
         head.sure[c] = max(float(head.sure[c]), min(float(head.accept[c]) + 0.01, 0.99999))
-    return {"go_margin": round(margin, 3), "accept_shifts": {w: round(s, 3) for w, s in shifts.items()},
-            "folds": [{"clips": r.clips, "accepted": r.accepted, "go_margin": round(r.go_margin, 3)} for r in results]}
+    report: dict[str, object] = {"go_margin": round(margin, 3), "accept_shifts": {w: round(s, 3) for w, s in shifts.items()}}
+    if cfg.fold_accept_exempt:
+        report["exempt_shifts_not_applied"] = {w: round(needed[w], 3) for w in cfg.fold_accept_exempt if w in needed}
+    report["folds"] = [{"clips": r.clips, "accepted": r.accepted, "go_margin": round(r.go_margin, 3)} for r in results]
+    return report
