@@ -54,9 +54,10 @@ saying the English words from their CMU phonemes (`tts.foreign`): the `foreign` 
 never tune, recorded-tune or held-out. The Italian (lp, pc) and Catalan (ona) voices were screened out: the
 committed head recognised fewer than 10 of 28 of their clean commands (services/voice/README.md, round 11)."""
 RECORDED_MORE = ("mbrola:us2", "mbrola:us3", "mbrola:en1", "rhvoice:alan", "rhvoice:bdl", "rhvoice:clb")
-"""Rounds voice19 and 19b's candidates: six more recorded speakers, from two more engines (Debian contrib/non-free:
-MBROLA's diphones through espeak-ng, three men; RHVoice's statistical-parametric voices, two men and a woman), added
-to `RECORDED_TRAIN` by `dataset.with_more_recorded` (neither landed). Never a held-out speaker: RHVoice's slt is flite's held-out slt,
+"""Six more recorded speakers, from two more engines (Debian contrib/non-free: MBROLA's diphones through espeak-ng,
+three men; RHVoice's statistical-parametric voices, two men and a woman), added to `RECORDED_TRAIN` by
+`dataset.with_more_recorded`: in the default head's training splits since round voice19c (`train.SHIPPED_MORE_VOICES`),
+not in its tune splits. Never a held-out speaker: RHVoice's slt is flite's held-out slt,
 so it is held out too (`HELDOUT_EXTRA`), with MBROLA's us1 and the whole SVOX Pico engine."""
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
 HELDOUT_EXTRA = ("festival:slt_hts", "pico:en-US", "pico:en-GB", "mbrola:us1", "rhvoice:slt")

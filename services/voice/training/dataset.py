@@ -96,7 +96,7 @@ class Sizes:
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
     recorded: tuple[str, ...] = corpus.RECORDED_TRAIN
     """The recorded speakers of the training splits (`corpus.voices`): `engines` and half the virtual speakers are
-    theirs (`with_more_recorded`: round voice19's candidates)."""
+    theirs (`with_more_recorded`; the default head's recipe adds `corpus.RECORDED_MORE` here)."""
     tune_recorded: tuple[str, ...] = corpus.RECORDED_TRAIN
     """The recorded speakers of the tune splits (`tune`, `neighbours-tune`, `speakers-tune`, `recorded-tune`), which
     place the knots."""
