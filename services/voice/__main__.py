@@ -157,8 +157,9 @@ def train(
         help="clips per command of the `foreign` split (recorded Czech and Finnish speakers; 0: not fitted on) "
              "[default: the committed recipe's, Sizes.foreign_positives]")] = None,
     embedding: Annotated[str, typer.Option(
-        help="the speech embedding the head reads: whisper-tiny.en (the default head) or speech-embedding (the "
-             "walk gate and enrolment base; crops)")] = "whisper-tiny.en",
+        help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
+             "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
+             "recipe; no head ships for it: give --out)")] = "whisper-tiny.en",
     more_voices: Annotated[str | None, typer.Option(
         "--more-voices", help="six more recorded speakers (MBROLA, RHVoice; Debian non-free; corpus.RECORDED_MORE): "
                               "off, train (the training splits only; round voice19b) or train+tune (the tune splits, "
@@ -178,6 +179,7 @@ def train(
     Takes minutes (run it with nice); never part of the tests."""
     from dataclasses import replace
 
+    from services.voice.spotter.embedders import EMBEDDINGS
     from services.voice.training.corpus import VOCABULARY
     from services.voice.training.dataset import MORE_VOICES, Sizes
     from services.voice.training.train import SHIPPED_HEADS, shipped_recipe
@@ -188,8 +190,10 @@ def train(
     unknown = sorted(set(fold_accept_exempt or ()) - set(VOCABULARY))
     if unknown:
         raise typer.BadParameter(f"{', '.join(unknown)}: not a command", param_hint="--fold-accept-exempt")
-    if embedding not in SHIPPED_HEADS:
-        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(SHIPPED_HEADS)}", param_hint="--embedding")
+    if embedding not in EMBEDDINGS:
+        raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
+    if out is None and embedding not in SHIPPED_HEADS:
+        raise typer.BadParameter(f"no head ships for {embedding}: say where to write it", param_hint="--out")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()))

@@ -137,3 +137,49 @@ def test_train_refuses_an_unknown_embedding() -> None:
     done = subprocess.run([sys.executable, "-m", "services.voice", "train", "--embedding", "mfcc"],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "--embedding" in done.stderr and "whisper-tiny.en" in done.stderr
+
+
+def test_the_100ms_embedding_is_the_same_encoder_pooled_finer(embedder: whisper.WhisperEmbedder) -> None:
+    """Round voice21's embedding: 20 averages of 100 ms; a pair of them averages to the default's 200 ms frame."""
+    fine = embedder_for(whisper.FINE_NAME)
+    assert isinstance(fine, whisper.WhisperEmbedder) and fine.frames == whisper.FINE_FRAMES
+    pcm = to_pcm(np.random.default_rng(5).normal(0, 0.05, 9000))
+    e = fine.utterance(pcm)
+    assert e.shape == (whisper.FINE_FRAMES, whisper.DIM)
+    np.testing.assert_allclose(e.reshape(whisper.FRAMES, 2, whisper.DIM).mean(axis=1), embedder.utterance(pcm),
+                               atol=1e-5)
+    assert not np.allclose(e[0::2], e[1::2], atol=1e-3)  # the halves of a 200 ms stretch differ: finer, not repeated
+    with pytest.raises(ValueError, match="do not divide"):
+        whisper.WhisperEmbedder(frames=7)
+
+
+def test_a_head_on_the_100ms_embedding_is_checked_against_its_shape(tmp_path: Path) -> None:
+    committed = Head.load(DEFAULT_HEAD)  # 10 x 384 inputs
+    path = tmp_path / "relabelled.npz"
+    np.savez(path, **{**dict(np.load(DEFAULT_HEAD)), "embedding": np.array(whisper.FINE_NAME)})
+    with pytest.raises(HeadError, match="is not 20 x 384"):
+        Head.load(path)
+    size = whisper.FINE_FRAMES * whisper.DIM
+    n = len(committed.classes)
+    head = Head(committed.vocabulary, np.zeros(size, np.float32), np.ones(size, np.float32),
+                [np.zeros((size, 4), np.float32), np.zeros((4, n), np.float32)],
+                [np.zeros(4, np.float32), np.zeros(n, np.float32)], np.full(n - 1, 0.5), np.full(n - 1, 0.9),
+                embedding=whisper.FINE_NAME)
+    head.save(path)
+    engine = SpotterEngine(Head.load(path))
+    assert isinstance(engine.embedder, whisper.WhisperEmbedder) and engine.embedder.frames == whisper.FINE_FRAMES
+    rec = engine.recognise(to_pcm(np.random.default_rng(6).normal(0, 0.05, 8000)))
+    assert rec.text in engine.head.classes
+
+
+def test_the_100ms_embedding_is_fitted_with_the_default_heads_recipe() -> None:
+    from dataclasses import replace
+
+    from services.voice.training.train import shipped_recipe
+
+    fine, default = shipped_recipe(whisper.FINE_NAME), shipped_recipe(whisper.NAME)
+    assert fine.embedding == whisper.FINE_NAME and fine.crop_width == 0
+    assert replace(fine, embedding=whisper.NAME) == default
+    done = subprocess.run([sys.executable, "-m", "services.voice", "train", "--embedding", whisper.FINE_NAME],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "--out" in done.stderr  # no head ships for it: never overwrites another's

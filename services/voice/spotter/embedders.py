@@ -2,7 +2,8 @@
 
 - `speech-embedding`: Google's speech-embedding model from the openwakeword 0.4.0 wheel (`features`);
   (16, 96) per utterance. Heads that record no embedding were trained on it.
-- `whisper-tiny.en`: the encoder of Whisper tiny.en, run by CTranslate2 (`whisper`); (10, 384).
+- `whisper-tiny.en`: the encoder of Whisper tiny.en, run by CTranslate2 (`whisper`); (10, 384), 200 ms averages.
+- `whisper-tiny.en-100ms`: the same encoder's output in 100 ms averages; (20, 384) (round voice21).
 """
 
 from __future__ import annotations
@@ -15,8 +16,9 @@ from services.voice.spotter import whisper
 from services.voice.spotter.features import EMBED_DIM, FRAMES, Embedder, FeatureError
 
 SPEECH_EMBEDDING = "speech-embedding"
-EMBEDDINGS = (SPEECH_EMBEDDING, whisper.NAME)
-SHAPES = {SPEECH_EMBEDDING: (FRAMES, EMBED_DIM), whisper.NAME: (whisper.FRAMES, whisper.DIM)}
+EMBEDDINGS = (SPEECH_EMBEDDING, whisper.NAME, whisper.FINE_NAME)
+SHAPES = {SPEECH_EMBEDDING: (FRAMES, EMBED_DIM), whisper.NAME: (whisper.FRAMES, whisper.DIM),
+          whisper.FINE_NAME: (whisper.FINE_FRAMES, whisper.DIM)}
 """What each embedding gives per utterance."""
 
 
@@ -32,4 +34,6 @@ def embedder_for(name: str, threads: int = 1) -> UtteranceEmbedder:
         return Embedder(threads=threads)
     if name == whisper.NAME:
         return whisper.WhisperEmbedder(threads=threads)
+    if name == whisper.FINE_NAME:
+        return whisper.WhisperEmbedder(threads=threads, frames=whisper.FINE_FRAMES)
     raise FeatureError(f"unknown speech embedding {name!r}: one of {', '.join(EMBEDDINGS)}")

@@ -37,6 +37,7 @@ import numpy as np
 
 from services.voice.spotter.embedders import EMBEDDINGS, SPEECH_EMBEDDING
 from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, Head
+from services.voice.spotter.whisper import FINE_NAME as WHISPER_FINE
 from services.voice.spotter.whisper import NAME as WHISPER
 from services.voice.training import corpus, dataset
 
@@ -117,6 +118,9 @@ SHIPPED_MORE_VOICES = {WHISPER: "train", SPEECH_EMBEDDING: "off"}
 (round voice19b, confirmed by round voice19c) is fitted on them, its knots placed on the tune speech without them;
 the speech-embedding head was fitted before they existed."""
 SHIPPED_HEADS = {WHISPER: DEFAULT_HEAD, SPEECH_EMBEDDING: SPEECH_EMBEDDING_HEAD}
+RECIPE_OF = {WHISPER_FINE: WHISPER}
+"""An embedding no head ships for is fitted with the recipe of this shipped head's (round voice21's 100 ms pooling:
+the default head's)."""
 
 
 def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, more_voices: str | None = None,
@@ -126,8 +130,9 @@ def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, more
     training splits), with `changes`; `word_folds` and `more_voices` (`dataset.MORE_VOICES`) replace the shipped
     choice when given. ValueError for an unknown embedding or `more_voices`."""
     cfg = on_embedding(replace(TrainConfig(), **changes), embedding)  # type: ignore[arg-type]
-    more = SHIPPED_MORE_VOICES[embedding] if more_voices is None else more_voices
-    return replace(cfg, word_folds=SHIPPED_WORD_FOLDS[embedding] if word_folds is None else word_folds,
+    shipped = RECIPE_OF.get(embedding, embedding)
+    more = SHIPPED_MORE_VOICES[shipped] if more_voices is None else more_voices
+    return replace(cfg, word_folds=SHIPPED_WORD_FOLDS[shipped] if word_folds is None else word_folds,
                    sizes=dataset.with_more_recorded(cfg.sizes, more))
 
 
