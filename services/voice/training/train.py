@@ -119,8 +119,8 @@ SHIPPED_MORE_VOICES = {WHISPER: "train", SPEECH_EMBEDDING: "off"}
 the speech-embedding head was fitted before they existed."""
 SHIPPED_HEADS = {WHISPER: DEFAULT_HEAD, SPEECH_EMBEDDING: SPEECH_EMBEDDING_HEAD}
 RECIPE_OF = {WHISPER_FINE: WHISPER}
-"""An embedding no head ships for is fitted with the recipe of this shipped head's (round voice21's 100 ms pooling:
-the default head's)."""
+"""An embedding no head ships for is fitted with this shipped embedding's recipe (round voice21's 100 ms pooling: the
+default head's)."""
 
 
 def shipped_recipe(embedding: str = WHISPER, word_folds: int | None = None, more_voices: str | None = None,
