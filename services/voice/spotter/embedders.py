@@ -32,8 +32,6 @@ def embedder_for(name: str, threads: int = 1) -> UtteranceEmbedder:
     """The embedder a head trained on `name` needs (FeatureError if it is unknown or cannot load)."""
     if name == SPEECH_EMBEDDING:
         return Embedder(threads=threads)
-    if name == whisper.NAME:
-        return whisper.WhisperEmbedder(threads=threads)
-    if name == whisper.FINE_NAME:
-        return whisper.WhisperEmbedder(threads=threads, frames=whisper.FINE_FRAMES)
+    if name in (whisper.NAME, whisper.FINE_NAME):  # one encoder, pooled into the frames SHAPES gives the name
+        return whisper.WhisperEmbedder(threads=threads, frames=SHAPES[name][0])
     raise FeatureError(f"unknown speech embedding {name!r}: one of {', '.join(EMBEDDINGS)}")
