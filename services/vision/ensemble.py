@@ -25,7 +25,9 @@ lower: `main`'s own was 0.5).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from types import MappingProxyType
 from typing import Annotated, Any
 
 import typer
@@ -36,6 +38,7 @@ LOOSE_SLOT = len(SHAPES)  # the claim's 'loose' slot (verifier.claim)
 JOINED = "verifier_loose_x_veto"  # the graph name `join` gives
 MAIN, VETO = "main_", "veto_"  # the prefixes `join` gives each network's names
 ROLES = (MAIN, VETO)
+CAPPED_KEY = "veto_shapes"  # the metadata naming the shapes the veto caps on loose rows
 
 
 def part(joined: Any, role: str) -> Any:
@@ -78,9 +81,30 @@ def network(model: Any, role: str) -> Any:
     return part(model, role) if model.graph.name == JOINED else model
 
 
-def join(main: Any, veto: Any, loose_x: float) -> Any:
-    """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset)."""
+def capped_text(capped: Mapping[str, float]) -> str:
+    """`capped` as `--veto-shapes` takes it: "X" or "X,TRIANGLE*9" (a scale of one left out)."""
+    return ",".join(s if k == 1.0 else f"{s}*{k:g}" for s, k in capped.items())
+
+
+def parse_capped(text: str) -> dict[str, float]:
+    """The inverse of `capped_text`."""
+    out = {}
+    for item in text.split(","):
+        shape, _, scale = item.partition("*")
+        out[shape.strip()] = float(scale) if scale else 1.0
+    return out
+
+
+def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = MappingProxyType({"X": 1.0})) -> Any:
+    """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset): on a loose row each
+    shape in `capped` (shape name: scale) gets the lower of `main`'s probability and `veto`'s times the scale. A
+    scale above one lets through what `veto` is only fairly sure of: with scale t / v a row reaches the threshold
+    t exactly when `main` reaches t and `veto` reaches v."""
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
+
+    names = [shape.value for shape in SHAPES]
+    if not capped or any(shape not in names for shape in capped) or any(k <= 0 for k in capped.values()):
+        raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {names}, each with a scale above 0")
 
     if main.opset_import[0].version != veto.opset_import[0].version:
         raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
@@ -94,7 +118,7 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
     consts = [
         helper.make_tensor("j_slot", TensorProto.INT64, [], [LOOSE_SLOT]),
         helper.make_tensor("j_half", TensorProto.FLOAT, [], [0.5]),
-        ints("j_0", [0]), ints("j_1", [1]), ints("j_4", [len(SHAPES) + 1]), ints("j_last", [LOOSE_SLOT]),
+        *(ints(f"j_{k}", [k]) for k in range(len(SHAPES) + 2)),
     ]
     node = helper.make_node
     pick = [  # the loose rows' indices, as GatherND wants them: (k, 1)
@@ -105,16 +129,30 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
         node("GatherND", ["crops", "j_rows"], ["veto_crops"]),
         node("GatherND", ["claim", "j_rows"], ["veto_claim"]),
     ]
-    write = [  # the loose rows: X = min(main, veto); 'none' gets what X lost; O and TRIANGLE are main's
-        node("GatherND", [pm, "j_rows"], ["j_main_rows"]),
-        node("Slice", ["j_main_rows", "j_0", "j_1", "j_1"], ["j_main_x"]),
-        node("Slice", [pv, "j_0", "j_1", "j_1"], ["j_veto_x"]),
-        node("Min", ["j_main_x", "j_veto_x"], ["j_x"]),
-        node("Slice", ["j_main_rows", "j_1", "j_last", "j_1"], ["j_shapes"]),
-        node("Slice", ["j_main_rows", "j_last", "j_4", "j_1"], ["j_none"]),
-        node("Sub", ["j_main_x", "j_x"], ["j_lost"]),
-        node("Add", ["j_none", "j_lost"], ["j_none2"]),
-        node("Concat", ["j_x", "j_shapes", "j_none2"], ["j_rows_new"], axis=1),
+    write = [node("GatherND", [pm, "j_rows"], ["j_main_rows"])]  # the loose rows of both networks
+    columns, lost = [], []
+    for k, shape in enumerate(names):  # a capped shape: min(main, veto); the others are main's
+        write.append(node("Slice", ["j_main_rows", f"j_{k}", f"j_{k + 1}", "j_1"], [f"j_main_{k}"]))
+        if shape not in capped:
+            columns.append(f"j_main_{k}")
+            continue
+        write.append(node("Slice", [pv, f"j_{k}", f"j_{k + 1}", "j_1"], [f"j_veto_{k}"]))
+        cap = f"j_veto_{k}"
+        if capped[shape] != 1.0:
+            consts.append(helper.make_tensor(f"j_scale_{k}", TensorProto.FLOAT, [], [capped[shape]]))
+            write.append(node("Mul", [cap, f"j_scale_{k}"], [f"j_cap_{k}"]))
+            cap = f"j_cap_{k}"
+        write += [
+            node("Min", [f"j_main_{k}", cap], [f"j_min_{k}"]),
+            node("Sub", [f"j_main_{k}", f"j_min_{k}"], [f"j_lost_{k}"]),
+        ]
+        columns.append(f"j_min_{k}")
+        lost.append(f"j_lost_{k}")
+    n = len(SHAPES)
+    write += [  # 'none' gets what the capped shapes lost, so a row still sums to one
+        node("Slice", ["j_main_rows", f"j_{n}", f"j_{n + 1}", "j_1"], ["j_none"]),
+        node("Sum", ["j_none", *lost], ["j_none2"]),
+        node("Concat", [*columns, "j_none2"], ["j_rows_new"], axis=1),
         node("ScatterND", [pm, "j_rows", "j_rows_new"], ["probabilities"]),
     ]
     out = helper.make_tensor_value_info("probabilities", TensorProto.FLOAT, ["n", len(SHAPES) + 1])
@@ -131,8 +169,10 @@ def join(main: Any, veto: Any, loose_x: float) -> Any:
         value = p.value
         if p.key == "loose_thresholds":
             value = ",".join([f"{loose_x:g}", *p.value.split(",")[1:]])
-        joined.metadata_props.add(key=p.key, value=value)
-    joined.doc_string = "vision mark verifier: python -m services.vision.ensemble MAIN VETO (a loose X needs both)"
+        if p.key != CAPPED_KEY:
+            joined.metadata_props.add(key=p.key, value=value)
+    joined.metadata_props.add(key=CAPPED_KEY, value=capped_text(capped))
+    joined.doc_string = f"vision mark verifier: python -m services.vision.ensemble MAIN VETO (loose {capped_text(capped)})"
     return joined
 
 
@@ -144,13 +184,19 @@ def main(
         Path, typer.Argument(help="the network whose X a loose row also needs (--everyday; of a joined model: its veto)")
     ],
     loose_x: Annotated[float, typer.Option(help="the X probability (the lower of the two) a loose row needs")] = 0.1,
+    veto_shapes: Annotated[
+        str,
+        typer.Option(help='the shapes whose probability on a loose row is the lower of the two: "X,TRIANGLE*9" '
+                     "(TRIANGLE: the lower of main's and 9 x veto's)"),
+    ] = "X",
     out: Annotated[Path, typer.Option(help="where to write the joined model")] = MODEL_PATH,
 ) -> None:
     import onnx  # type: ignore[import-not-found,unused-ignore]
 
     for path in (main_model, veto_model):
         Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
-    joined = join(network(onnx.load(str(main_model)), MAIN), network(onnx.load(str(veto_model)), VETO), loose_x)
+    joined = join(network(onnx.load(str(main_model)), MAIN), network(onnx.load(str(veto_model)), VETO), loose_x,
+                  parse_capped(veto_shapes))
     onnx.checker.check_model(joined)
     onnx.save(joined, str(out))
     v = Verifier.load(out)

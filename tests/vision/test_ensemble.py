@@ -16,7 +16,7 @@ from onnx import TensorProto, helper
 
 from schemas.messages import Shape
 from services.vision.detector import MarkDetector
-from services.vision.ensemble import join, network, part
+from services.vision.ensemble import join, network, parse_capped, part
 from services.vision.verifier import INPUT_FORMAT, MODEL_PATH, N_CLAIM, PATCH, Verifier
 
 
@@ -63,24 +63,42 @@ def _save(model: Any, path: Path) -> Verifier:
     return Verifier.load(path)
 
 
+@pytest.mark.parametrize("capped", [{"X": 1.0}, {"X": 1.0, "TRIANGLE": 1.0}, {"O": 1.0}, {"X": 1.0, "TRIANGLE": 4.0}])
 @pytest.mark.parametrize("rows", [[0, 3, 1, 3, 2, 0, 3], [0, 1, 2, 0], [3, 3, 3], []])
-def test_loose_rows_take_the_lower_x_and_all_else_is_the_first_network(tmp_path: Path, rows: list[int]) -> None:
+def test_loose_rows_take_the_lower_of_each_capped_shape_and_all_else_is_the_first_network(
+    tmp_path: Path, rows: list[int], capped: dict[str, float]
+) -> None:
     rng = np.random.default_rng(len(rows))
     wm, wv = rng.normal(0, 2, (N_CLAIM, 4)), rng.normal(0, 2, (N_CLAIM, 4))
-    wm[3, 0], wv[3, 0] = 3.0, -3.0  # on loose rows the first network leans X and the second does not
-    joined = _save(join(_net(wm), _net(wv), loose_x=0.1), tmp_path / "joined.onnx")
+    cols = [k for k, s in enumerate(("X", "O", "TRIANGLE")) if s in capped]
+    wm[3, cols], wv[3, cols] = 3.0, -3.0  # on loose rows the first network leans to the capped shapes, the second not
+    joined = _save(join(_net(wm), _net(wv), loose_x=0.1, capped=capped), tmp_path / "joined.onnx")
     crops = rng.integers(0, 256, (len(rows), 3, PATCH, PATCH)).astype(np.uint8)
     claims = np.eye(N_CLAIM, dtype=np.float32)[np.array(rows, int)].reshape(len(rows), N_CLAIM)
     pm, pv = _probs(wm, crops, claims), _probs(wv, crops, claims)
     want = pm.copy()
     loose = np.array(rows, int) == 3
-    want[loose, 0] = np.minimum(pm[loose, 0], pv[loose, 0])
-    want[loose, 3] += pm[loose, 0] - want[loose, 0]  # what X lost goes to 'none'
+    for k in cols:
+        want[loose, k] = np.minimum(pm[loose, k], capped[("X", "O", "TRIANGLE")[k]] * pv[loose, k])
+        want[loose, 3] += pm[loose, k] - want[loose, k]  # what a capped shape lost goes to 'none'
     got = joined.probabilities(crops, claims)
     assert got.shape == (len(rows), 4)
     assert np.allclose(got, want, atol=1e-5)
     assert np.allclose(got.sum(axis=1), 1.0, atol=1e-5)
-    assert (got[loose, 0] < pm[loose, 0] - 0.1).all()  # the veto cut every loose row's X
+    for k in cols:
+        assert (got[loose, k] < pm[loose, k] - 0.01).all()  # the veto cut every loose row's capped shapes
+    onnx_meta = {p.key: p.value for p in onnx.load(str(tmp_path / "joined.onnx")).metadata_props}
+    assert parse_capped(onnx_meta["veto_shapes"]) == capped
+
+
+def test_the_join_refuses_an_unknown_capped_shape() -> None:
+    w = np.zeros((N_CLAIM, 4))
+    with pytest.raises(ValueError, match="capped shapes"):
+        join(_net(w), _net(w), loose_x=0.1, capped={"SQUARE": 1.0})
+    with pytest.raises(ValueError, match="capped shapes"):
+        join(_net(w), _net(w), loose_x=0.1, capped={})
+    with pytest.raises(ValueError, match="capped shapes"):
+        join(_net(w), _net(w), loose_x=0.1, capped={"X": 0.0})
 
 
 def test_the_joined_model_keeps_the_first_networks_thresholds_but_the_loose_x(tmp_path: Path) -> None:
