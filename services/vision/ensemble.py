@@ -5,6 +5,7 @@
     python -m services.vision.training --everyday --out everyday.onnx  # stars, check marks, clocks (round vision23)
     python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out services/vision/verifier.onnx]
     python -m services.vision.ensemble new-main.onnx services/vision/verifier.onnx --out joined.onnx  # keep its veto
+    python -m services.vision.ensemble main.onnx everyday.onnx --veto-shapes "X,TRIANGLE*9" --out FILE  # cap more
 
 Either input may itself be a joined model: its own network in that role is taken out of it (`part`), so a new
 main network can be joined to the committed veto (round vision24) without retraining the veto.
@@ -17,10 +18,15 @@ Why (round vision23f, services/vision/README.md): the blind generator's filled s
 loose candidates that `main` names X; a network trained with stars (`--everyday`) refuses them, but used on
 its own it also refused held-out marks `main` keeps.
 
+`--veto-shapes` names the shapes the veto caps (default "X", the committed model); "X,TRIANGLE*9" also caps a loose
+row's TRIANGLE by nine times the veto's, so a loose triangle needs the veto's 0.1 where `main` needs 0.9. Round
+vision28 measured both on the tuning side (not committed): capping TRIANGLE takes most arrow heads back and more true
+triangles with them; scaled by 9 it keeps both.
+
 The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): `main`'s
 nodes on every row, NonZero and GatherND to pick the loose rows for `veto`, Min and ScatterND to write their
-X back. Its metadata is `main`'s, with the loose X threshold `--loose-x` (the lower of two probabilities is
-lower: `main`'s own was 0.5).
+capped shapes back. Its metadata is `main`'s, with the loose X threshold `--loose-x` (the lower of two
+probabilities is lower: `main`'s own was 0.5) and `veto_shapes` (what `--veto-shapes` asked).
 """
 
 from __future__ import annotations
