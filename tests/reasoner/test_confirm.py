@@ -48,6 +48,25 @@ def test_unsure_go_asks_and_a_confident_yes_walks(agent: SoarAgent, clock: Clock
     assert agent.step() == []
 
 
+@pytest.mark.parametrize("cycles", [0, 1, 2, 3, 4, 6, 9, 15])
+def test_a_yes_that_comes_while_the_question_is_being_asked_is_answered(
+    agent: SoarAgent, clock: Clock, cycles: int
+) -> None:
+    """A person may answer before the agent has settled after asking (the question's sub-goal, its timer):
+    the "yes" is put in after `cycles` decision cycles of the "go" and must still carry it out. (The system
+    test's lost "yes", stop 37, was looked for here: never lost.)"""
+    agent.step(posture="standing")
+    agent.submit(say("go", confidence=0.6, stamp=1.0))
+    if cycles:
+        ok, out = agent.execute(f"run {cycles}")
+        assert ok, out
+    agent.submit(say("yes", confidence=0.9, stamp=2.0))
+    outs = agent.pump()
+    yes = [d for d in decisions(outs) if d.command == "yes"]
+    assert [(d.verdict, d.action) for d in yes] == [("obey", "walk_forward")]
+    assert motions(outs) == ["walk_forward"]
+
+
 def test_sure_go_walks_and_too_unsure_go_is_not_understood(agent: SoarAgent) -> None:
     agent.step(posture="standing")
     assert only_decision(agent.step(say("go", confidence=0.49))).reason == "not_understood"
