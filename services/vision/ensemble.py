@@ -20,8 +20,8 @@ its own it also refused held-out marks `main` keeps.
 
 `--veto-shapes` names the shapes the veto caps (default "X", the committed model); "X,TRIANGLE*9" also caps a loose
 row's TRIANGLE by nine times the veto's, so a loose triangle needs the veto's 0.1 where `main` needs 0.9. Round
-vision28 measured both on the tuning side (not committed): capping TRIANGLE takes most arrow heads back and more true
-triangles with them; scaled by 9 it keeps both.
+vision28 measured both on the tuning side (neither is the committed model): capping TRIANGLE takes most arrow heads
+back and more true triangles with them; scaled by 9 it keeps both.
 
 The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): `main`'s
 nodes on every row, NonZero and GatherND to pick the loose rows for `veto`, Min and ScatterND to write their
@@ -93,12 +93,22 @@ def capped_text(capped: Mapping[str, float]) -> str:
 
 
 def parse_capped(text: str) -> dict[str, float]:
-    """The inverse of `capped_text`."""
+    """The inverse of `capped_text`; ValueError names what it could not read."""
     out = {}
     for item in text.split(","):
         shape, _, scale = item.partition("*")
-        out[shape.strip()] = float(scale) if scale else 1.0
+        try:
+            out[shape.strip()] = float(scale) if scale else 1.0
+        except ValueError:
+            raise ValueError(f"{text!r}: {scale!r} is not a scale (write SHAPE or SHAPE*SCALE, comma-separated)") from None
     return out
+
+
+def check_capped(capped: Mapping[str, float]) -> None:
+    """ValueError unless `capped` names one or more shapes, each with a scale above 0."""
+    names = [shape.value for shape in SHAPES]
+    if not capped or any(shape not in names for shape in capped) or any(k <= 0 for k in capped.values()):
+        raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {names}, each with a scale above 0")
 
 
 def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = MappingProxyType({"X": 1.0})) -> Any:
@@ -108,9 +118,8 @@ def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = Map
     t exactly when `main` reaches t and `veto` reaches v."""
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
 
+    check_capped(capped)
     names = [shape.value for shape in SHAPES]
-    if not capped or any(shape not in names for shape in capped) or any(k <= 0 for k in capped.values()):
-        raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {names}, each with a scale above 0")
 
     if main.opset_import[0].version != veto.opset_import[0].version:
         raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
@@ -137,7 +146,7 @@ def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = Map
     ]
     write = [node("GatherND", [pm, "j_rows"], ["j_main_rows"])]  # the loose rows of both networks
     columns, lost = [], []
-    for k, shape in enumerate(names):  # a capped shape: min(main, veto); the others are main's
+    for k, shape in enumerate(names):  # a capped shape: min(main, scale x veto); the others are main's
         write.append(node("Slice", ["j_main_rows", f"j_{k}", f"j_{k + 1}", "j_1"], [f"j_main_{k}"]))
         if shape not in capped:
             columns.append(f"j_main_{k}")
@@ -201,8 +210,13 @@ def main(
 
     for path in (main_model, veto_model):
         Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
+    try:
+        capped = parse_capped(veto_shapes)
+        check_capped(capped)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--veto-shapes") from None
     joined = join(network(onnx.load(str(main_model)), MAIN), network(onnx.load(str(veto_model)), VETO), loose_x,
-                  parse_capped(veto_shapes))
+                  capped)
     onnx.checker.check_model(joined)
     onnx.save(joined, str(out))
     v = Verifier.load(out)

@@ -99,6 +99,9 @@ def test_the_join_refuses_an_unknown_capped_shape() -> None:
         join(_net(w), _net(w), loose_x=0.1, capped={})
     with pytest.raises(ValueError, match="capped shapes"):
         join(_net(w), _net(w), loose_x=0.1, capped={"X": 0.0})
+    with pytest.raises(ValueError, match="'nine' is not a scale"):
+        parse_capped("X,TRIANGLE*nine")
+    assert parse_capped("X,TRIANGLE*9") == {"X": 1.0, "TRIANGLE": 9.0}
 
 
 def test_the_joined_model_keeps_the_first_networks_thresholds_but_the_loose_x(tmp_path: Path) -> None:
