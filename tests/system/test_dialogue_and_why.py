@@ -53,7 +53,7 @@ def _answer(robot: Robot, command: Command, confidence: float) -> tuple[float, D
     In 2 of 5 CI runs, and about 1 in 30 local ones, a "yes" sent 10 ms after the question was spoken got
     no decision at all, with no drop logged; a repeat is reported as a warning saying where it was lost,
     and the dialogue is still asserted on the answer the robot did hear (closing note, stop 37). Not seen
-    since: no repeat in the five CI-exact runs of stops 40-44, nor in 70 local runs of this test at stop 45
+    since: no repeat in the CI-exact runs of stops 39-44 (six), nor in 70 local runs of this test at stop 44
     (half of them with a busy loop on one core; 30 with this publisher dropping under congestion again, as
     it did before the repeat was added), and the Soar agent alone answers a "yes" put in after any of 0-15
     decision cycles of the "go" it answers. The cause is still unknown; the repeat stays, and warns."""
