@@ -45,6 +45,7 @@ JOINED = "verifier_loose_x_veto"  # the graph name `join` gives
 MAIN, VETO = "main_", "veto_"  # the prefixes `join` gives each network's names
 ROLES = (MAIN, VETO)
 CAPPED_KEY = "veto_shapes"  # the metadata naming the shapes the veto caps on loose rows
+SHAPE_NAMES = tuple(shape.value for shape in SHAPES)  # the probability columns before 'none', as named
 
 
 def part(joined: Any, role: str) -> Any:
@@ -106,9 +107,8 @@ def parse_capped(text: str) -> dict[str, float]:
 
 def check_capped(capped: Mapping[str, float]) -> None:
     """ValueError unless `capped` names one or more shapes, each with a scale above 0."""
-    names = [shape.value for shape in SHAPES]
-    if not capped or any(shape not in names for shape in capped) or any(k <= 0 for k in capped.values()):
-        raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {names}, each with a scale above 0")
+    if not capped or any(shape not in SHAPE_NAMES for shape in capped) or any(k <= 0 for k in capped.values()):
+        raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {list(SHAPE_NAMES)}, each with a scale above 0")
 
 
 def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = MappingProxyType({"X": 1.0})) -> Any:
@@ -119,7 +119,6 @@ def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = Map
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
 
     check_capped(capped)
-    names = [shape.value for shape in SHAPES]
 
     if main.opset_import[0].version != veto.opset_import[0].version:
         raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
@@ -146,7 +145,7 @@ def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = Map
     ]
     write = [node("GatherND", [pm, "j_rows"], ["j_main_rows"])]  # the loose rows of both networks
     columns, lost = [], []
-    for k, shape in enumerate(names):  # a capped shape: min(main, scale x veto); the others are main's
+    for k, shape in enumerate(SHAPE_NAMES):  # a capped shape: min(main, scale x veto); the others are main's
         write.append(node("Slice", ["j_main_rows", f"j_{k}", f"j_{k + 1}", "j_1"], [f"j_main_{k}"]))
         if shape not in capped:
             columns.append(f"j_main_{k}")
