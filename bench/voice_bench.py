@@ -125,18 +125,27 @@ SEPARATE = {NEIGHBOURS, *corpus.HELDOUT_EXTRA}
 """Families reported in their own rows only, not in "ALL"."""
 
 
+NEURAL_CONDITIONS = (("clean", 0.0), ("noisy", 1.0), ("noisy", 1.0), ("noisy", 1.0), ("clean", 0.0), ("noisy", 1.0))
+"""A neural voice (`corpus.HELDOUT_NEURAL`) says each word six times, each at a speed drawn from 0.85, 1.0, 1.15: it
+says a word the same way every time at one speed (its noise is off, for reproducible clips)."""
+
+
 def extra_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
-    """The commands and `OOV_HELDOUT` by each `corpus.HELDOUT_EXTRA` voice: once clean, three times noisy."""
+    """The commands and `OOV_HELDOUT` by each `corpus.HELDOUT_EXTRA` voice: once clean, three times noisy (a neural
+    voice: `NEURAL_CONDITIONS`)."""
     rng = random.Random(f"bench-extra:{seed}")
     forbidden = corpus.forbidden_negatives()
     out: list[tuple[dataset.Recipe, str]] = []
     for voice in corpus.HELDOUT_EXTRA:
-        for cond, strength in (("clean", 0.0), ("noisy", 1.0), ("noisy", 1.0), ("noisy", 1.0)):
+        neural = voice in corpus.HELDOUT_NEURAL
+        for cond, strength in NEURAL_CONDITIONS if neural else NEURAL_CONDITIONS[:4]:
             for i, word in enumerate(WORDS):
-                out.append((dataset.Recipe(word, i, voice, 1.0, 1.0, rng.randrange(2**31), strength), cond))
+                speed = rng.choice((0.85, 1.0, 1.15)) if neural else 1.0  # (no draw for the others: as before)
+                out.append((dataset.Recipe(word, i, voice, speed, 1.0, rng.randrange(2**31), strength), cond))
             for word in synth.OOV_HELDOUT:
                 if word not in forbidden:
-                    out.append((dataset.Recipe(word, OTHER, voice, 1.0, 1.0, rng.randrange(2**31), strength), cond))
+                    speed = rng.choice((0.85, 1.0, 1.15)) if neural else 1.0
+                    out.append((dataset.Recipe(word, OTHER, voice, speed, 1.0, rng.randrange(2**31), strength), cond))
     return out
 
 

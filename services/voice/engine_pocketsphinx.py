@@ -130,8 +130,10 @@ class PocketsphinxEngine:
         d = self._decoder
         d.activate_search(search)
         d.start_utt()
-        d.process_raw(pcm, full_utt=True)
-        d.end_utt()
+        try:
+            d.process_raw(pcm, full_utt=True)
+        finally:  # an utterance left open breaks every later search ("Unable to set search")
+            d.end_utt()
         hyp = d.hyp()
         if hyp is None:
             return "", 0.0
@@ -139,6 +141,8 @@ class PocketsphinxEngine:
 
     def recognise(self, pcm: bytes) -> Recognition:
         t0 = time.perf_counter()
+        if not pcm:  # pocketsphinx raises IndexError on an empty buffer
+            return self._result(None, "", 0.0, "no audio", {}, t0, pcm)
         audio = self._prepare(pcm)
         with self._lock:
             word, posterior = self._decode("commands", audio)

@@ -134,6 +134,7 @@ class Segmenter:
         self._pending = b""
         self._speech: list[bytes] = []
         self._start = 0.0
+        self._resume_s: float | None = None  # where speech cut at max_utterance_s goes on (stream time, s)
         self._consumed = 0  # bytes handed to the endpointer
         self._history = bytearray()  # the most recent raw audio, for pre- and post-roll
         self._history_start = 0  # stream offset (bytes) of _history[0]
@@ -186,7 +187,7 @@ class Segmenter:
         speech = self._ep.end_stream(tail) if tail else None
         if speech is not None:
             if not self._speech:
-                self._start = self._ep.speech_start
+                self._start = self._utterance_start()
             self._speech.append(speech)
         seg = self._emit()
         return [seg] if seg is not None else []
@@ -195,12 +196,23 @@ class Segmenter:
         if speech is None:
             return None
         if not self._speech:
-            self._start = float(self._ep.speech_start)
+            self._start = self._utterance_start()
         self._speech.append(speech)
-        too_long = sum(map(len, self._speech)) >= self.config.max_utterance_s * SAMPLE_RATE * SAMPLE_WIDTH
+        vad_bytes = sum(map(len, self._speech))
+        too_long = vad_bytes >= self.config.max_utterance_s * SAMPLE_RATE * SAMPLE_WIDTH
+        if too_long and self._ep.in_speech:  # cut here; the speech goes on, and so does the next utterance's
+            self._resume_s = self._start + vad_bytes / (SAMPLE_RATE * SAMPLE_WIDTH)
         if not self._ep.in_speech or too_long:
             return self._emit()
         return None
+
+    def _utterance_start(self) -> float:
+        """Where a new utterance's audio starts (s): the VAD's speech start, or where the utterance cut at
+        `max_utterance_s` ended if the same speech goes on (the VAD's start is that of the whole run: its
+        audio, decoded already, may be gone from the history, which left an empty utterance)."""
+        start = self._ep.speech_start if self._resume_s is None else self._resume_s
+        self._resume_s = None
+        return float(start)
 
     def _measure(self, frame: bytes, was_speech: bool) -> None:
         """Frames outside utterances feed the noise floor; an utterance's speech frames its speech level."""

@@ -184,8 +184,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         stats.early_looks += 1
         try:
             rec = engine.recognise(pcm)
-        except (RuntimeError, ValueError) as exc:
-            return Recognition(None, "(early look failed)", 0.0, engine.name, detail={"reason": str(exc)})
+        except Exception as exc:  # any of the decoders' own error types (pocketsphinx raised IndexError)
+            return Recognition(None, "(early look failed)", 0.0, engine.name, detail={"reason": repr(exc)})
         stats.decode_s += rec.decode_s
         return rec
 
@@ -196,9 +196,9 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         else:
             try:
                 rec = engine.recognise(utt.pcm)
-            except (RuntimeError, ValueError) as exc:  # a decoder error on odd audio: skip it, keep listening
+            except Exception as exc:  # a decoder error on odd audio, of any type: skip it, keep listening
                 stats.bad_audio += 1
-                ctx.log.warning("decode failed", origin=utt.origin, error=str(exc))
+                ctx.log.warning("decode failed", origin=utt.origin, error=repr(exc))
                 return
             stats.decode_s += rec.decode_s
         stats.utterances += 1

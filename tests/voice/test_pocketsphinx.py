@@ -42,6 +42,15 @@ def test_demo_voice_commands(engine: PocketsphinxEngine) -> None:
     assert {w: r.command for w, r in got.items()} == {w: Command(w) for w in got}
 
 
+def test_empty_audio_is_no_command_and_the_decoder_goes_on(engine: PocketsphinxEngine) -> None:
+    """pocketsphinx raises IndexError on an empty buffer and, raised mid-utterance, refused every later search."""
+    assert engine.recognise(b"").command is None
+    with pytest.raises(IndexError):  # the decoder itself, on the empty buffer the engine now keeps from it
+        engine._decode("commands", b"")
+    rec = engine.recognise(read_wav(synth.speech_clip("stop", "en-gb-x-rp+f2", 140).path))
+    assert rec.command == Command.STOP, rec
+
+
 def test_go_needs_the_decoy_search_to_agree(engine: PocketsphinxEngine) -> None:
     rec = engine.recognise(read_wav(synth.speech_clip("go", "en-us", 150).path))
     assert rec.detail["word"] == "go"  # the command grammar hears it ...

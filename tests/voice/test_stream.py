@@ -56,3 +56,22 @@ def test_pure_noise_stream_yields_nothing_long() -> None:
     step = 960
     found = list(stream_utterances((pcm[i : i + step] for i in range(0, len(pcm), step)), "noise"))
     assert len(found) <= 1
+
+
+def test_speech_longer_than_the_longest_utterance_is_cut_into_consecutive_parts() -> None:
+    """A person reading on: the segmenter cuts the speech every `max_utterance_s`, and each part is the audio that
+    follows the one before (it used to start where the whole speech started: the same audio again, then none at all
+    once that had left the history, and pocketsphinx raised on the empty utterance)."""
+    from tests.voice.streams import STEP, word_stream
+
+    pcm = word_stream(*["stand", "table", "window", "music", "morning", "yesterday"] * 2, gap_s=0.0)
+    config = SegmenterConfig(max_utterance_s=1.0)
+    seg = Segmenter(config)
+    found = [s for i in range(0, len(pcm), STEP) for s in seg.feed(pcm[i : i + STEP])] + seg.flush()
+    assert len(found) >= 4, [(s.start_s, s.end_s) for s in found]
+    rolls = config.pre_roll_s + config.post_roll_s
+    for before, after in zip(found, found[1:], strict=False):
+        assert after.start_s > before.start_s
+        assert after.start_s >= before.end_s - rolls - 0.01  # no audio handed over twice, beyond the rolls
+    for s in found:
+        assert len(s.pcm) == round((s.end_s - s.start_s) * SAMPLE_RATE) * SAMPLE_WIDTH > 0

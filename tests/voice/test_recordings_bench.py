@@ -1,0 +1,58 @@
+"""bench/voice_recordings.py: what a transcript says, how published commands are scored, and the service's path on
+the two recordings of the moonshine-voice wheel (a person reading; a neural TTS dialogue)."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import numpy as np
+import pytest
+
+from bench.voice_bench import Policy
+from bench.voice_recordings import (
+    ENDGAME,
+    Recording,
+    said,
+    score,
+    score_words,
+    stream,
+    wheel_recordings,
+    word_clips,
+)
+from schemas.messages import Command
+from services.voice.segmenter import SegmenterConfig
+
+REC = Recording("x.wav", "test", np.zeros(16000), ENDGAME)
+
+
+def test_a_command_word_alone_on_its_line_is_expected_and_inside_a_sentence_only_mentioned() -> None:
+    expected, mentioned = said(ENDGAME)
+    assert expected == {"yes": 2, "no": 1}
+    assert mentioned == {"yes": 2, "no": 2}  # "No, not heartily, just less heartily."; "Not now." is no "no"
+
+
+def test_published_commands_are_matched_to_what_was_said() -> None:
+    policy = Policy()
+    heard = [(0.0, Command.YES, 0.9, "yes"), (1.0, Command.NO, 0.7, "no"), (2.0, Command.NO, 0.6, "no"),
+             (3.0, Command.STOP, 0.8, "stop"), (4.0, Command.GO, 0.6, "go"), (5.0, Command.DOWN, 0.4, "down")]
+    row = score(heard, REC, policy)
+    assert row["heard"] == 2  # one yes, one no alone; the second "no" is the mentioned one
+    assert row["false"] == {"stop": 1, "go": 1}  # "down" at 0.4 is below what the reasoner acts on
+    assert (row["false_walks"], row["false_asks"]) == (0, 1)
+    walk = score([(0.0, Command.GO, 0.9, "go")], REC, policy)
+    assert (walk["false_walks"], walk["false_asks"]) == (1, 0)
+
+
+def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_reading() -> None:
+    if importlib.util.find_spec("moonshine_voice") is None:  # its audio is read; its library is never imported
+        pytest.skip("moonshine-voice (its audio) is in the test extra")
+    from services.voice.engine import make_engine
+
+    engine = make_engine("spotter")
+    rows = {r.name: score(stream(engine, r, SegmenterConfig()), r, Policy.from_knowledge()) for r in wheel_recordings()}
+    reading, dialogue = rows["two_cities.wav"], rows["endgame_nagg_nell.wav"]
+    assert reading["utterances"] >= 7 and reading["published"] == {}  # 44 s of a person reading: cut every 6 s
+    assert dialogue["published"] == {"yes": 2, "no": 1} and dialogue["heard"] == 3
+    reader = next(r for r in wheel_recordings() if r.name == "two_cities.wav")
+    alone = score_words(engine, word_clips(reader), Policy.from_knowledge())  # each of the person's words alone
+    assert alone["other_words"] >= 100 and alone["other_words_taken"] <= 3  # none on this machine (stop 45)
