@@ -395,6 +395,8 @@ def main() -> int:
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
                     help="the stream latency's end window in a clear stream: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--enrol-head", help="the head --enrol adapts (default: as `enroll`, the speech-embedding head)")
+    ap.add_argument("--enrol-voice", default="flite:slt",
+                    help="the unseen voice --enrol enrols, a held-out voice (e.g. piper:en_US-joe-medium, a neural one)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     print(f"reasoner policy: {policy}", flush=True)
@@ -413,15 +415,15 @@ def main() -> int:
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:
-        enrol = enrol_figure(items, args.enrol_head)
+        enrol = enrol_figure(items, args.enrol_head, args.enrol_voice)
         rows.append({"enrolment": enrol})
         print(json.dumps({"enrolment": enrol}), flush=True)
     print()
-    print(f"{'engine':13} {'family':16} {'cmd acc':>7} {'asked':>5} {'OOV acc':>7} {'noise':>6} {'walks':>5} "
+    print(f"{'engine':13} {'family':24} {'cmd acc':>7} {'asked':>5} {'OOV acc':>7} {'noise':>6} {'walks':>5} "
           f"{'f.asks':>6} {'RTF':>7}")
     for r in rows:
         if "engine" in r:
-            print(f"{r['engine']:13} {r['family']:16} {r['command_accuracy']:7.3f} {r['of_which_asked_and_confirmed']:5d} "
+            print(f"{r['engine']:13} {r['family']:24} {r['command_accuracy']:7.3f} {r['of_which_asked_and_confirmed']:5d} "
                   f"{r['oov_accepted']:7.3f} {r['noise_accepted']:6.3f} {r['false_walks_direct']:5d} "
                   f"{r['false_asks']:6d} {r['rtf']:7.4f}")
     if args.json:

@@ -156,6 +156,10 @@ def train(
         "--foreign", min=0,
         help="clips per command of the `foreign` split (recorded Czech and Finnish speakers; 0: not fitted on) "
              "[default: the committed recipe's, Sizes.foreign_positives]")] = None,
+    neural: Annotated[int | None, typer.Option(
+        "--neural", min=0,
+        help="clips per command of the `neural` split (Kokoro's three training voices, a neural TTS, as virtual "
+             "speakers; round voice22; 0: not fitted on) [default: the committed recipe's, Sizes.neural_positives]")] = None,
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
              "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
@@ -195,6 +199,8 @@ def train(
     if out is None and embedding not in SHIPPED_HEADS:
         raise typer.BadParameter(f"no head ships for {embedding}: say where to write it", param_hint="--out")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
+    if neural is not None:
+        sizes = replace(sizes, neural_positives=neural)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()))
     report = run_training(cfg, out or SHIPPED_HEADS[embedding])

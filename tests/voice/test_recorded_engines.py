@@ -115,14 +115,20 @@ def test_kokoro_says_english_phonemes_in_a_japanese_voice_the_same_every_time_at
         tts.synthesise("stand", "kokoro:af_heart")
 
 
-def test_kokoros_unheard_voices_are_in_no_split_and_its_heldout_ones_only_in_the_bench() -> None:
+def test_kokoros_training_voices_speak_only_the_neural_split_and_its_heldout_ones_only_in_the_bench() -> None:
     pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
-    sizes = dataset.with_more_recorded(dataset.Sizes(), "train+tune")
-    used = {r.voice.partition(tts.VTL_MARK)[0] for split in ("train", "tune", "speakers", "speakers-tune", "engines")
+    sizes = replace(dataset.with_more_recorded(dataset.Sizes(), "train+tune"), neural_positives=10)
+    splits = ("train", "tune", "speakers", "speakers-tune", "engines", "recorded-tune", "neighbours", "positives")
+    used = {r.voice.partition(tts.VTL_MARK)[0] for split in splits
             for r in dataset.recipes(split, sizes, 12)} | set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
     assert set(corpus.HELDOUT_NEURAL) <= set(corpus.HELDOUT_EXTRA)
-    assert not used & set(corpus.KOKORO_UNHEARD)
-    assert {v.partition(":")[2] for v in corpus.HELDOUT_NEURAL + corpus.KOKORO_UNHEARD if v.startswith("kokoro:")} \
+    assert not used & set(corpus.NEURAL_TRAIN)
+    neural = dataset.recipes("neural", sizes, 12)
+    assert {r.voice.partition(tts.VTL_MARK)[0] for r in neural} == set(corpus.NEURAL_TRAIN)
+    assert sum(r.label < dataset.OTHER for r in neural) == 10 * len(corpus.VOCABULARY)
+    assert len({r.voice for r in neural}) > 100  # virtual speakers: a vocal-tract factor each
+    assert "neural" in train.training_splits(sizes) and "neural" not in train.training_splits(dataset.Sizes())
+    assert {v.partition(":")[2] for v in corpus.HELDOUT_NEURAL + corpus.NEURAL_TRAIN if v.startswith("kokoro:")} \
         == set(tts.KOKORO_VOICES)
 
 

@@ -62,9 +62,11 @@ so it is held out too (`HELDOUT_EXTRA`), with MBROLA's us1 and the whole SVOX Pi
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
 HELDOUT_NEURAL = ("piper:en_US-joe-medium", "kokoro:jm_kumo", "kokoro:jf_nezumi")
 """Neural voices, held out (stop 45): Piper's joe (VITS, trained on an American man's recordings) and two of Kokoro-82M's
-five Japanese voices (a man's and a woman's) saying English phonemes. Kokoro's other three (`KOKORO_UNHEARD`) are in
-no split yet: kept unheard so that a round that trains on neural voices can take them and leave these three held out."""
-KOKORO_UNHEARD = ("kokoro:jf_alpha", "kokoro:jf_gongitsune", "kokoro:jf_tebukuro")
+five Japanese voices (a man's and a woman's) saying English phonemes. Kokoro's other three (`NEURAL_TRAIN`) were in no
+split when these were chosen, so that a round training on neural voices can take them and leave these three held out."""
+NEURAL_TRAIN = ("kokoro:jf_alpha", "kokoro:jf_gongitsune", "kokoro:jf_tebukuro")
+"""Kokoro's three other voices (all women): the `neural` training split's (round voice22; fitted on only when
+`Sizes.neural_positives` > 0, `train --neural N`), never tune or held-out."""
 HELDOUT_EXTRA = ("festival:slt_hts", "pico:en-US", "pico:en-GB", "mbrola:us1", "rhvoice:slt", *HELDOUT_NEURAL)
 """Held-out voices the bench reports in their own rows, outside its "ALL" (comparable with earlier runs): Festival's
 HTS slt (round v3), and since round voice19 SVOX Pico's two voices (an engine no split trains on), MBROLA's us1

@@ -91,6 +91,11 @@ class Sizes:
     foreign_neighbour_repeats: int = 1
     """Per hand-picked neighbour and per foreign voice, and per train one-edit neighbour, two-edit word and
     sampled dictionary word (by one foreign voice drawn at random), `foreign` split."""
+    neural_positives: int = 0
+    """Per command, `neural` split: virtual speakers made from Kokoro's three unheard voices (`corpus.NEURAL_TRAIN`,
+    a neural TTS) saying it; 0 (the committed recipe): no `neural` split is fitted on."""
+    neural_repeats: int = 1
+    """Per hand-picked neighbour, train one-edit neighbour, two-edit word and sampled dictionary word, `neural`."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -175,6 +180,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     kind = split.partition(":")[0]  # speakers:1 is another round of speakers
     if split == "foreign":
         voices = list(corpus.FOREIGN_TRAIN)
+    elif split == "neural":
+        voices = list(corpus.NEURAL_TRAIN)
     else:
         side = {"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
                 "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split)
@@ -183,7 +190,7 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         voices = [v for v in voices if not v.startswith("espeak:")]
     pool = corpus.common_words(sizes.common_words + sizes.tune_common_words, seed)
     out: list[Recipe] = []
-    draw = _speaker_draw if split.startswith("speakers") else _voice_draw
+    draw = _speaker_draw if split.startswith("speakers") or split == "neural" else _voice_draw
 
     said_as_command = corpus.tts_homophones(
         [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws] + list(corpus.PHRASES_TRAIN) + pool
@@ -227,6 +234,12 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
                 add(word, OTHER, sizes.foreign_neighbour_repeats, among=[voice])
         for word in list(neighbours(sizes, seed)["train"]) + two_edit(sizes) + pool[: sizes.common_words]:
             add(word, OTHER, sizes.foreign_neighbour_repeats)
+        n_noise = 0
+    elif split == "neural":  # virtual speakers of the three voices (`_speaker_draw`: a vocal-tract factor each)
+        add_commands(sizes.neural_positives)
+        hand_picked = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
+        for word in hand_picked + list(neighbours(sizes, seed)["train"]) + two_edit(sizes) + pool[: sizes.common_words]:
+            add(word, OTHER, sizes.neural_repeats)
         n_noise = 0
     elif split == "positives":
         add_commands(sizes.more_positives)

@@ -153,7 +153,7 @@ def sigmoid(z: float) -> float:
 def training_splits(sizes: dataset.Sizes) -> tuple[str, ...]:
     """The splits the MLPs are fitted on."""
     return ("train", "engines", "positives", "neighbours", *speaker_splits(sizes),
-            *(("foreign",) if sizes.foreign_positives else ()))
+            *(("foreign",) if sizes.foreign_positives else ()), *(("neural",) if sizes.neural_positives else ()))
 
 
 def crop_rows(x: np.ndarray, y: np.ndarray, cfg: TrainConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray,
