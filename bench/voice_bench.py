@@ -371,7 +371,8 @@ def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:s
     policy = Policy.from_knowledge()
     for name, head in (("before", base), ("after", enrolled), ("after_without_prompted_others", without)):
         scores, _ = score("spotter", SpotterEngine(head), mine, policy)
-        row = next(s for s in scores if s.family == "ALL").row()
+        own = voice if voice in SEPARATE else "ALL"  # a voice of its own row (a neural one) is outside "ALL"
+        row = next(s for s in scores if s.family == own).row()
         out[name] = {k: row[k] for k in ("command_accuracy", "oov_accepted", "false_walks_direct", "false_asks")}
     others = [it for it in items if it.voice != voice and it.family not in ("noise", *corpus.HELDOUT_EXTRA)][::3]
     for name, head in (("after_on_other_voices", enrolled), ("without_prompted_others_on_other_voices", without)):
