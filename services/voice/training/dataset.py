@@ -92,7 +92,7 @@ class Sizes:
     """Per hand-picked neighbour and per foreign voice, and per train one-edit neighbour, two-edit word and
     sampled dictionary word (by one foreign voice drawn at random), `foreign` split."""
     neural_positives: int = 0
-    """Per command, `neural` split: virtual speakers made from Kokoro's three unheard voices (`corpus.NEURAL_TRAIN`,
+    """Per command, `neural` split: virtual speakers made from Kokoro's three training voices (`corpus.NEURAL_TRAIN`,
     a neural TTS) saying it; 0 (the committed recipe): no `neural` split is fitted on."""
     neural_repeats: int = 1
     """Per hand-picked neighbour, train one-edit neighbour, two-edit word and sampled dictionary word, `neural`."""
@@ -173,7 +173,9 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     and espeak-ng alone does not teach what speech made from recordings sounds like. `recorded-tune`:
     the recorded voices (not warped) saying the commands and the tune non-commands. `foreign` (only fitted on
     when `Sizes.foreign_positives` > 0): recorded speakers of other languages (`corpus.FOREIGN_TRAIN`) saying
-    the commands and the training negatives.
+    the commands and the training negatives. `neural` (only fitted on when `Sizes.neural_positives` > 0, round
+    voice22): a neural TTS, Kokoro's three training voices (`corpus.NEURAL_TRAIN`) as virtual speakers, saying the
+    commands and the training negatives.
 
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
