@@ -46,7 +46,7 @@ sys.path.insert(0, str(ROOT))
 from bench.voice_bench import Policy  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
-from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 from services.voice.sources import CHUNK_S, stream_utterances, trim_to_speech  # noqa: E402
 from services.voice.spotter.whisper import DEFAULT_MODEL, resolve_model  # noqa: E402
@@ -158,7 +158,8 @@ def word_clips(rec: Recording) -> list[tuple[str, bytes]]:
     from faster_whisper import WhisperModel
 
     model = WhisperModel(str(resolve_model(DEFAULT_MODEL)), device="cpu", compute_type="int8", cpu_threads=1)
-    segments, _ = model.transcribe(rec.samples.astype(np.float32), language="en", beam_size=5, word_timestamps=True)
+    segments, _ = model.transcribe(rec.samples.astype(np.float32), language="en", beam_size=5, word_timestamps=True,
+                                   temperature=0.0)  # no sampled fallback: the same words every run
     margin = int(0.05 * SAMPLE_RATE)
     out = []
     for segment in segments:
@@ -172,12 +173,15 @@ def word_clips(rec: Recording) -> list[tuple[str, bytes]]:
 
 def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) -> dict[str, object]:
     """Command words heard as themselves, other words taken for a command (at `^min-confidence` or more)."""
+    def acted(r: Recognition) -> bool:
+        return r.command is not None and r.confidence >= policy.min_confidence
+
     commands = [(w, engine.recognise(pcm)) for w, pcm in clips if w in WORDS]
     others = [(w, engine.recognise(pcm)) for w, pcm in clips if w not in WORDS]
-    taken = [(w, r) for w, r in others if r.command is not None and r.confidence >= policy.min_confidence]
+    taken = [(w, r) for w, r in others if acted(r)]
     return {
         "words": len(clips), "command_words": len(commands),
-        "command_words_heard": sum(r.command is not None and r.command.value == w for w, r in commands),
+        "command_words_heard": sum(acted(r) and r.command is not None and r.command.value == w for w, r in commands),
         "other_words": len(others), "other_words_taken": len(taken),
         "taken": [f"{w}->{r.command.value}:{r.confidence:.2f}" for w, r in taken if r.command is not None],
         "go_walks": sum(r.command == Command.GO and r.confidence >= policy.confirm_below for _, r in taken),
