@@ -125,9 +125,12 @@ SEPARATE = {NEIGHBOURS, *corpus.HELDOUT_EXTRA}
 """Families reported in their own rows only, not in "ALL"."""
 
 
-NEURAL_CONDITIONS = (("clean", 0.0), ("noisy", 1.0), ("noisy", 1.0), ("noisy", 1.0), ("clean", 0.0), ("noisy", 1.0))
-"""A neural voice (`corpus.HELDOUT_NEURAL`) says each word six times, each at a speed drawn from 0.85, 1.0, 1.15: it
-says a word the same way every time at one speed (its noise is off, for reproducible clips)."""
+EXTRA_CONDITIONS = (("clean", 0.0), ("noisy", 1.0), ("noisy", 1.0), ("noisy", 1.0))
+"""Each `corpus.HELDOUT_EXTRA` voice says each word once clean and three times noisy, at speed 1.0..."""
+NEURAL_CONDITIONS = (*EXTRA_CONDITIONS, ("clean", 0.0), ("noisy", 1.0))
+"""...but a neural voice (`corpus.HELDOUT_NEURAL`) six times, each at a speed drawn from `NEURAL_SPEEDS`: it says a word
+the same way every time at one speed (its noise is off, for reproducible clips)."""
+NEURAL_SPEEDS = (0.85, 1.0, 1.15)
 
 
 def extra_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
@@ -135,17 +138,14 @@ def extra_recipes(seed: int) -> list[tuple[dataset.Recipe, str]]:
     voice: `NEURAL_CONDITIONS`)."""
     rng = random.Random(f"bench-extra:{seed}")
     forbidden = corpus.forbidden_negatives()
+    words = [*enumerate(WORDS), *((OTHER, w) for w in synth.OOV_HELDOUT if w not in forbidden)]
     out: list[tuple[dataset.Recipe, str]] = []
     for voice in corpus.HELDOUT_EXTRA:
         neural = voice in corpus.HELDOUT_NEURAL
-        for cond, strength in NEURAL_CONDITIONS if neural else NEURAL_CONDITIONS[:4]:
-            for i, word in enumerate(WORDS):
-                speed = rng.choice((0.85, 1.0, 1.15)) if neural else 1.0  # (no draw for the others: as before)
-                out.append((dataset.Recipe(word, i, voice, speed, 1.0, rng.randrange(2**31), strength), cond))
-            for word in synth.OOV_HELDOUT:
-                if word not in forbidden:
-                    speed = rng.choice((0.85, 1.0, 1.15)) if neural else 1.0
-                    out.append((dataset.Recipe(word, OTHER, voice, speed, 1.0, rng.randrange(2**31), strength), cond))
+        for cond, strength in NEURAL_CONDITIONS if neural else EXTRA_CONDITIONS:
+            for label, word in words:
+                speed = rng.choice(NEURAL_SPEEDS) if neural else 1.0  # no draw for the others: their clips as before
+                out.append((dataset.Recipe(word, label, voice, speed, 1.0, rng.randrange(2**31), strength), cond))
     return out
 
 

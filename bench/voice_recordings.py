@@ -173,17 +173,18 @@ def word_clips(rec: Recording) -> list[tuple[str, bytes]]:
 
 def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) -> dict[str, object]:
     """Command words heard as themselves, other words taken for a command (at `^min-confidence` or more)."""
-    def acted(r: Recognition) -> bool:
-        return r.command is not None and r.confidence >= policy.min_confidence
+    def acted(r: Recognition) -> str | None:
+        """The command word the reasoner acts on, if any."""
+        return r.command.value if r.command is not None and r.confidence >= policy.min_confidence else None
 
     commands = [(w, engine.recognise(pcm)) for w, pcm in clips if w in WORDS]
     others = [(w, engine.recognise(pcm)) for w, pcm in clips if w not in WORDS]
     taken = [(w, r) for w, r in others if acted(r)]
     return {
         "words": len(clips), "command_words": len(commands),
-        "command_words_heard": sum(acted(r) and r.command is not None and r.command.value == w for w, r in commands),
+        "command_words_heard": sum(acted(r) == w for w, r in commands),
         "other_words": len(others), "other_words_taken": len(taken),
-        "taken": [f"{w}->{r.command.value}:{r.confidence:.2f}" for w, r in taken if r.command is not None],
+        "taken": [f"{w}->{acted(r)}:{r.confidence:.2f}" for w, r in taken],
         "go_walks": sum(r.command == Command.GO and r.confidence >= policy.confirm_below for _, r in taken),
     }
 

@@ -20,5 +20,5 @@ def test_the_neural_voices_come_last_and_leave_the_earlier_voices_clips_unchange
     neural = now[len(before):]
     assert {r.voice for r, _ in neural} == set(corpus.HELDOUT_NEURAL)
     per_voice = len(neural) // len(corpus.HELDOUT_NEURAL)
-    assert per_voice == len(before) // len(earlier) * len(voice_bench.NEURAL_CONDITIONS) // 4
+    assert per_voice == len(before) // len(earlier) * len(voice_bench.NEURAL_CONDITIONS) // len(voice_bench.EXTRA_CONDITIONS)
     assert {r.speed for r, _ in neural} == {0.85, 1.0, 1.15}

