@@ -178,6 +178,10 @@ def train(
         "--fold-accept-exempt",
         help="a command whose accept knot the word folds leave at the tune split's place (its sure knot still "
              "moves); repeat for more (round voice20: go)")] = None,
+    fold_unscored: Annotated[list[str] | None, typer.Option(
+        "--fold-unscored",
+        help="a training split whose clips of a fold's words the word folds do not score (they place the knots "
+             "by the other splits' voices); repeat for more (round voice23: neural)")] = None,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
@@ -186,7 +190,7 @@ def train(
     from services.voice.spotter.embedders import EMBEDDINGS
     from services.voice.training.corpus import VOCABULARY
     from services.voice.training.dataset import MORE_VOICES, Sizes
-    from services.voice.training.train import SHIPPED_HEADS, shipped_recipe
+    from services.voice.training.train import SHIPPED_HEADS, shipped_recipe, training_splits
     from services.voice.training.train import train as run_training
 
     if more_voices is not None and more_voices not in MORE_VOICES:
@@ -202,7 +206,15 @@ def train(
     if neural is not None:
         sizes = replace(sizes, neural_positives=neural)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
-                         fold_accept_exempt=tuple(fold_accept_exempt or ()))
+                         fold_accept_exempt=tuple(fold_accept_exempt or ()),
+                         fold_unscored=tuple(fold_unscored or ()))
+    if cfg.fold_unscored and not cfg.word_folds:
+        raise typer.BadParameter("only the word folds score clips: give --word-folds N", param_hint="--fold-unscored")
+    splits = training_splits(cfg.sizes)
+    unknown = sorted(set(cfg.fold_unscored) - set(splits))
+    if unknown:
+        raise typer.BadParameter(f"{', '.join(unknown)}: not a training split of this recipe ({', '.join(splits)})",
+                                 param_hint="--fold-unscored")
     report = run_training(cfg, out or SHIPPED_HEADS[embedding])
     typer.echo(json.dumps(report, indent=2))
 

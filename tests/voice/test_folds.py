@@ -166,3 +166,60 @@ def test_train_fold_accept_exempt_option_sets_only_that(monkeypatch: pytest.Monk
     assert seen == [replace(train.shipped_recipe(), fold_accept_exempt=("go",)),
                     replace(train.shipped_recipe(), fold_accept_exempt=("go", "no"))]
     assert train.shipped_recipe().fold_accept_exempt == ()
+
+
+def test_run_folds_leaves_unscored_rows_out_of_the_score_and_the_fit() -> None:
+    """Rows `scored` does not mark (round voice23: the `neural` split's clips) of a fold's words are neither scored
+    by the fold nor heard by its head: here they sit on "go" itself, and scored they would raise the fold's "go"
+    margin; unscored, a fold scores only its words' other clips (its head is the same either way)."""
+    rng = np.random.default_rng(1)
+    cfg = TrainConfig(hidden=16, ensemble=1, crop_width=0, word_folds=3, blas_threads=1)
+    words = folds.near_words(cfg.sizes, cfg.seed)[:12]
+    centres = rng.normal(size=(N + 1, 6)) * 3
+    rows, labels, texts = [], [], []
+    for c in range(N + 1):
+        rows.append(centres[c] + rng.normal(size=(60, 6)))
+        labels += [c] * 60
+        texts += [corpus.VOCABULARY[c] if c < N else "table"] * 60
+    for w in words:  # 10 clips in the scored voices, near "go" in a direction of their own
+        rows.append(centres[GO] + rng.normal(size=6) * 4.0 + rng.normal(size=(10, 6)) * 0.5)
+        labels += [N] * 10
+        texts += [w] * 10
+    for w in words:  # 5 clips in a voice the folds do not score, said just like "go"
+        rows.append(centres[GO] + rng.normal(size=(5, 6)) * 0.3)
+        labels += [N] * 5
+        texts += [w] * 5
+    x, y = np.concatenate(rows).reshape(-1, 2, 3).astype(np.float32), np.array(labels)
+    scored = np.ones(len(y), bool)
+    scored[-5 * len(words):] = False
+    tune_idx = rng.choice((N + 1) * 60, 300, replace=False)
+    tune = (x[tune_idx], y[tune_idx])
+    every = folds.run_folds(x, y, np.array(texts), tune, cfg, progress=False)
+    some = folds.run_folds(x, y, np.array(texts), tune, cfg, progress=False, scored=scored)
+    assert sum(r.clips for r in every) == 15 * len(words) and sum(r.clips for r in some) == 10 * len(words)
+    assert max(r.go_margin for r in some) < max(r.go_margin for r in every)
+    assert sum(r.accepted for r in some) < sum(r.accepted for r in every)
+
+
+def test_train_fold_unscored_option(monkeypatch: pytest.MonkeyPatch) -> None:
+    from dataclasses import replace
+
+    from typer.testing import CliRunner
+
+    from services.voice.__main__ import app
+    from services.voice.training import dataset, train
+
+    seen: list[TrainConfig] = []
+    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
+    runner = CliRunner()
+    assert runner.invoke(app, ["train", "--neural", "150", "--fold-unscored", "neural",
+                               "--out", "/dev/null"]).exit_code == 0
+    sizes = replace(dataset.Sizes(), neural_positives=150)
+    assert seen == [train.shipped_recipe(sizes=sizes, fold_unscored=("neural",))]
+    assert train.shipped_recipe().fold_unscored == ()
+    no_split = runner.invoke(app, ["train", "--fold-unscored", "neural", "--out", "/dev/null"])
+    assert no_split.exit_code == 2 and "neural: not a training split of this recipe" in no_split.output
+    no_folds = runner.invoke(app, ["train", "--neural", "150", "--fold-unscored", "neural", "--word-folds", "0",
+                                  "--out", "/dev/null"])
+    assert no_folds.exit_code == 2 and "give --word-folds N" in no_folds.output
+    assert len(seen) == 1

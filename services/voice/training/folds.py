@@ -85,8 +85,10 @@ def score_fold(head: Head, worst_go: float, x: np.ndarray, budgets: dict[str, fl
 
 
 def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.ndarray, np.ndarray],
-              cfg: TrainConfig, progress: bool = True) -> list[FoldResult]:
-    """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows."""
+              cfg: TrainConfig, progress: bool = True, scored: np.ndarray | None = None) -> list[FoldResult]:
+    """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows. A fold's words
+    are left out of its fit in every row, and scored only in the rows `scored` marks (default: all;
+    `TrainConfig.fold_unscored`)."""
     results = []
     other = len(corpus.VOCABULARY)
     for k, words in enumerate(word_folds(near_words(cfg.sizes, cfg.seed), cfg.word_folds)):
@@ -95,7 +97,8 @@ def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.nd
         fit_temperature(head, *tune)
         chosen = calibrate(head, *tune, cfg)
         worst_go = float(chosen["go"]["worst_other"])  # type: ignore[index]
-        result = score_fold(head, worst_go, x[out], dict(cfg.fold_budgets), cfg.default_fold_budget)
+        fold = out if scored is None else out & scored
+        result = score_fold(head, worst_go, x[fold], dict(cfg.fold_budgets), cfg.default_fold_budget)
         if progress:
             get_logger("voice.train").info("word fold", fold=k, words=len(words), clips=result.clips,
                                            accepted=result.accepted, go_margin=round(result.go_margin, 2))
