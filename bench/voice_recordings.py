@@ -133,8 +133,8 @@ def stream(engine: Engine, rec: Recording, config: SegmenterConfig) -> list[tupl
     for utt in stream_utterances((pcm[i : i + step] for i in range(0, len(pcm), step)), rec.name, config,
                                  recognise=engine.recognise):
         r = utt.recognition or engine.recognise(utt.pcm)
-        start = float(utt.origin.rpartition("@")[2].rstrip("s")) - 1.0
-        out.append((round(start, 2), r.command, r.confidence, r.text))
+        assert utt.start_s is not None  # a stream's utterance
+        out.append((round(utt.start_s - 1.0, 2), r.command, r.confidence, r.text))
     return out
 
 

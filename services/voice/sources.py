@@ -52,6 +52,8 @@ class Utterance:
     """Already decoded: the segmenter's early look took this utterance (`Segment.recognition`)."""
     snr_db: float | None = None
     """Streams with Silero: the speech level over the noise floor before it (`Segment.snr_db`)."""
+    start_s: float | None = None
+    """Streams: where the utterance starts, seconds from the stream's start (`Segment.start_s`)."""
 
     @property
     def seconds(self) -> float:
@@ -105,9 +107,10 @@ def stream_utterances(
     seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
     for chunk in chunks:
         for s in seg.feed(chunk):
-            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db)
+            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
+                            start_s=s.start_s)
     for s in seg.flush():
-        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db)
+        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db, start_s=s.start_s)
 
 
 TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9)

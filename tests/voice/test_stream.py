@@ -47,7 +47,8 @@ def test_stdin_source_yields_utterances(recording: tuple[bytes, list[float]]) ->
     pcm, _ = recording
     found = list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(pcm)))
     assert len(found) == len(WORDS)
-    assert all(u.origin.startswith("stdin@") for u in found)
+    assert all(u.origin == f"stdin@{u.start_s:.2f}s" for u in found)  # where each starts, also as a number
+    assert [u.start_s for u in found] == sorted(u.start_s for u in found)
 
 
 def test_pure_noise_stream_yields_nothing_long() -> None:
