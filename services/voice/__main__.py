@@ -192,6 +192,7 @@ def train(
     from services.voice.training.dataset import MORE_VOICES, Sizes
     from services.voice.training.train import SHIPPED_HEADS, shipped_recipe, training_splits
     from services.voice.training.train import train as run_training
+    from services.voice.training.tts import TtsError
 
     if more_voices is not None and more_voices not in MORE_VOICES:
         raise typer.BadParameter(f"{more_voices!r}: one of {', '.join(MORE_VOICES)}", param_hint="--more-voices")
@@ -215,7 +216,11 @@ def train(
     if unknown:
         raise typer.BadParameter(f"{', '.join(unknown)}: not a training split of this recipe ({', '.join(splits)})",
                                  param_hint="--fold-unscored")
-    report = run_training(cfg, out or SHIPPED_HEADS[embedding])
+    try:
+        report = run_training(cfg, out or SHIPPED_HEADS[embedding])
+    except TtsError as exc:  # a voice of the recipe cannot speak here (services/voice/README.md: what to install)
+        typer.echo(f"cannot train: {exc}", err=True)
+        raise typer.Exit(1) from None
     typer.echo(json.dumps(report, indent=2))
 
 

@@ -37,6 +37,7 @@ import shutil
 import subprocess
 import tempfile
 import wave
+from collections.abc import Iterable
 from dataclasses import dataclass
 from math import gcd
 from pathlib import Path
@@ -482,6 +483,25 @@ def vocal_tract(x: np.ndarray, factor: float) -> np.ndarray:
 
 def virtual_speaker(voice: str, factor: float) -> str:
     return voice if round(factor, 2) == 1.0 else f"{voice}{VTL_MARK}{factor:.2f}"
+
+
+PROBE_WORD = "stand"
+"""The word `unavailable` asks each voice to say (a command, in the CMU dictionary the foreign voices read from)."""
+
+
+def unavailable(voices: Iterable[str]) -> dict[str, str]:
+    """Of these voices (vocal-tract factors aside), those that cannot speak on this machine, each with why (the
+    `TtsError` a word in it raised). A clip that fails to render is dropped (a word a voice cannot say); an engine or
+    voice that is not installed would drop all of its clips unnoticed, so `dataset` and the bench ask this first.
+    Asking here also loads each engine once in the calling process (Kokoro assembles its model file on first use,
+    and two rendering processes doing that at once raced on its temporary file)."""
+    out = {}
+    for base in sorted({v.partition(VTL_MARK)[0] for v in voices if v}):
+        try:
+            synthesise(PROBE_WORD, base)
+        except TtsError as exc:
+            out[base] = str(exc)
+    return out
 
 
 def synthesise(text: str, voice: str, speed: float = 1.0, pitch: float = 1.0) -> np.ndarray:
