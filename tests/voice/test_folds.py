@@ -110,25 +110,34 @@ def test_apply_never_lowers_the_recipes_go_margin() -> None:
     assert head.sure[GO] == pytest.approx(1 / (1 + np.exp(-2.5)))
 
 
-def test_run_folds_scores_each_fold_on_words_its_head_never_heard() -> None:
-    """Synthetic features: every command its own cluster; each near word its own cluster close to "go", so a
-    head fitted without a word takes much of it for "go"."""
-    rng = np.random.default_rng(0)
-    cfg = TrainConfig(hidden=16, ensemble=1, crop_width=0, word_folds=5, blas_threads=1)
-    words = folds.near_words(cfg.sizes, cfg.seed)[:40]
+def _near_go(rng: np.random.Generator, words: list[str],
+             groups: list[tuple[int, float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Synthetic features (x, y, texts): 60 clips of every command and of "table", each class its own cluster; then,
+    per group (clips, offset, spread), `clips` clips of every word labelled "other" near "go": moved off it in a
+    direction of the word's own by `offset`, scattered by `spread`."""
     centres = rng.normal(size=(N + 1, 6)) * 3
     rows, labels, texts = [], [], []
     for c in range(N + 1):
         rows.append(centres[c] + rng.normal(size=(60, 6)))
         labels += [c] * 60
         texts += [corpus.VOCABULARY[c] if c < N else "table"] * 60
-    for w in words:  # 10 clips each, near "go" in a direction of their own
-        rows.append(centres[GO] + rng.normal(size=6) * 1.5 + rng.normal(size=(10, 6)) * 0.5)
-        labels += [N] * 10
-        texts += [w] * 10
-    x, y = np.concatenate(rows).reshape(-1, 2, 3).astype(np.float32), np.array(labels)
+    for clips, offset, spread in groups:
+        for w in words:
+            rows.append(centres[GO] + rng.normal(size=6) * offset + rng.normal(size=(clips, 6)) * spread)
+            labels += [N] * clips
+            texts += [w] * clips
+    return np.concatenate(rows).reshape(-1, 2, 3).astype(np.float32), np.array(labels), np.array(texts)
+
+
+def test_run_folds_scores_each_fold_on_words_its_head_never_heard() -> None:
+    """Synthetic features: every command its own cluster; each near word its own cluster close to "go", so a
+    head fitted without a word takes much of it for "go"."""
+    rng = np.random.default_rng(0)
+    cfg = TrainConfig(hidden=16, ensemble=1, crop_width=0, word_folds=5, blas_threads=1)
+    words = folds.near_words(cfg.sizes, cfg.seed)[:40]
+    x, y, texts = _near_go(rng, words, [(10, 1.5, 0.5)])  # 10 clips each, near "go" in a direction of their own
     tune_idx = rng.choice((N + 1) * 60, 300, replace=False)  # no near word: the tune split has other words
-    results = folds.run_folds(x, y, np.array(texts), (x[tune_idx], y[tune_idx]), cfg, progress=False)
+    results = folds.run_folds(x, y, texts, (x[tune_idx], y[tune_idx]), cfg, progress=False)
     assert len(results) == 5
     assert sum(r.clips for r in results) == 10 * len(words)  # only the near words, each in one fold
     assert all(r.clips % 10 == 0 for r in results)  # a word's clips are never split between folds
@@ -175,27 +184,15 @@ def test_run_folds_leaves_unscored_rows_out_of_the_score_and_the_fit() -> None:
     rng = np.random.default_rng(1)
     cfg = TrainConfig(hidden=16, ensemble=1, crop_width=0, word_folds=3, blas_threads=1)
     words = folds.near_words(cfg.sizes, cfg.seed)[:12]
-    centres = rng.normal(size=(N + 1, 6)) * 3
-    rows, labels, texts = [], [], []
-    for c in range(N + 1):
-        rows.append(centres[c] + rng.normal(size=(60, 6)))
-        labels += [c] * 60
-        texts += [corpus.VOCABULARY[c] if c < N else "table"] * 60
-    for w in words:  # 10 clips in the scored voices, near "go" in a direction of their own
-        rows.append(centres[GO] + rng.normal(size=6) * 4.0 + rng.normal(size=(10, 6)) * 0.5)
-        labels += [N] * 10
-        texts += [w] * 10
-    for w in words:  # 5 clips in a voice the folds do not score, said just like "go"
-        rows.append(centres[GO] + rng.normal(size=(5, 6)) * 0.3)
-        labels += [N] * 5
-        texts += [w] * 5
-    x, y = np.concatenate(rows).reshape(-1, 2, 3).astype(np.float32), np.array(labels)
+    # 10 clips of each word in the scored voices, near "go" in a direction of their own; then 5 in a voice the folds
+    # do not score, said just like "go"
+    x, y, texts = _near_go(rng, words, [(10, 4.0, 0.5), (5, 0.0, 0.3)])
     scored = np.ones(len(y), bool)
     scored[-5 * len(words):] = False
     tune_idx = rng.choice((N + 1) * 60, 300, replace=False)
     tune = (x[tune_idx], y[tune_idx])
-    every = folds.run_folds(x, y, np.array(texts), tune, cfg, progress=False)
-    some = folds.run_folds(x, y, np.array(texts), tune, cfg, progress=False, scored=scored)
+    every = folds.run_folds(x, y, texts, tune, cfg, progress=False)
+    some = folds.run_folds(x, y, texts, tune, cfg, progress=False, scored=scored)
     assert sum(r.clips for r in every) == 15 * len(words) and sum(r.clips for r in some) == 10 * len(words)
     assert max(r.go_margin for r in some) < max(r.go_margin for r in every)
     assert sum(r.accepted for r in some) < sum(r.accepted for r in every)
