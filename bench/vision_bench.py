@@ -186,6 +186,7 @@ def main(
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),
+        "missing_fonts": _missing_fonts(split),
         "per_class": per_class,
         "mark_free_frames": empty_frames,
         "false_mark_rate": round(empty_with_marks / empty_frames, 4) if empty_frames else None,
@@ -311,11 +312,27 @@ def _viewed(label: Any, view: tuple[float, float, float, float], width: int, hei
     return dataclasses.replace(label, box=(round(x0), round(y0), round(w * sx), round(h * sy)))
 
 
+def _missing_fonts(split: str) -> list[str]:
+    """The fonts the held-out or blind generator draws with that this machine lacks."""
+    if split == "heldout":
+        from services.vision.heldout import missing_fonts
+    elif split == "blind":
+        from services.vision.blind import missing_fonts
+    else:
+        return []
+    return missing_fonts()
+
+
 def _tables(r: dict[str, Any]) -> str:
     lines = [
         (
             f"split {r['split']}, {r['frames']} frames, seed {r['seed']}, {r['resolution']}, "
             f"OpenCV {r['opencv']}, {r['threads']} thread"
+        ),
+        *(
+            [f"NOT the READMEs' frames for this seed: fonts missing (apt-get install fonts-dejavu-core "
+             f"fonts-dejavu-extra): {', '.join(r['missing_fonts'])}"]
+            if r["missing_fonts"] else []
         ),
         "",
         "class      frames  precision  recall  false  missed",

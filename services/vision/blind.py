@@ -206,6 +206,12 @@ def _font_available() -> bool:
     return (FONT_DIR / "DejaVuSans.ttf").exists()
 
 
+def missing_fonts() -> list[str]:
+    """The font files of `FONTS` this machine lacks: their text falls back to Pillow's bundled font and a missing
+    DejaVu Sans takes the glyph marks away, so the frames differ from the READMEs' for the same seed."""
+    return [str(FONT_DIR / name) for name in FONTS if not (FONT_DIR / name).is_file()]
+
+
 def _text_mask(text: str, name: str, px: int) -> np.ndarray:
     font = _font(name, max(6, px))
     left, top, right, bottom = font.getbbox(text)

@@ -10,7 +10,7 @@ It differs from `synthetic.py` in how frames are made, not only in its seed:
   microaneurysms), or a procedural room of wall, shelf and window;
 - cards: other proportions (square to 1.6:1, rounded corners, off-centre marks) and much narrower
   borders next to the mark (0.04 to 0.35 of the mark's size, versus about 0.35 to 0.65);
-- marks: TrueType glyphs (DejaVu Sans/Serif Bold when installed, Pillow's bundled font otherwise),
+- marks: TrueType glyphs (DejaVu Sans/Serif Bold, `FONT_FILES`; Pillow's bundled font as well),
   hand-drawn strokes, rounded caps; filled triangles as well as outlines; X bars at 60 to 120 degrees;
 - ink: black, blue, red, green, brown, purple markers;
 - a hand: two to four fingers and a thumb as skin-coloured capsules over the card's edges and corners,
@@ -64,8 +64,11 @@ FONT_FILES: tuple[str, ...] = (
     "/usr/share/fonts/truetype/dejavu/DejaVuSerif-Bold.ttf",
     "/usr/share/fonts/truetype/dejavu/DejaVuSansCondensed-Bold.ttf",
     "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Bold.ttf",
 )
+"""The fonts a seed's frames are drawn with (Debian's fonts-dejavu-core and fonts-dejavu-extra): which of them are
+installed changes every draw after the first glyph, so a machine without one draws other frames from the same seed
+(`missing_fonts`; the bench says so). LiberationSans-Bold was listed too until stop 46, but no machine that measured
+a figure had it (seed 1616 reproduced to the frame without it): a desktop with it drew other frames."""
 INKS: tuple[tuple[int, int, int], ...] = (  # RGB
     (15, 15, 20),
     (40, 40, 45),
@@ -113,6 +116,11 @@ class HeldOutLabel:
 
 def _fonts() -> list[Path]:
     return [Path(f) for f in FONT_FILES if Path(f).is_file()]
+
+
+def missing_fonts() -> list[str]:
+    """The font files of `FONT_FILES` this machine lacks (frames then differ from the READMEs' for the same seed)."""
+    return [f for f in FONT_FILES if not Path(f).is_file()]
 
 
 def _font(path: Path | None, size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
