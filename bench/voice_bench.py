@@ -175,10 +175,14 @@ def _speakable(jobs: list[tuple[dataset.Recipe, str]], required: bool) -> list[t
     """`jobs` whose voice can speak here (`tts.unavailable`). A voice that cannot: SystemExit if `required` (the
     rows every run compares), else said and its row left out (the extra rows: engines from Debian's non-free
     section, wheels of the test extra)."""
-    missing = tts.unavailable({r.voice for r, _ in jobs})
-    if missing and required:
-        raise SystemExit("held-out voices that cannot speak here (install them: services/voice/README.md):\n" +
-                         "\n".join(f"  {v}: {why}" for v, why in missing.items()))
+    voices = {r.voice for r, _ in jobs}
+    if required:
+        try:
+            tts.require(voices)
+        except tts.TtsError as exc:
+            raise SystemExit(f"{exc}\n(rows every run compares; what to install: services/voice/README.md)") from None
+        return jobs
+    missing = tts.unavailable(voices)
     for voice, why in missing.items():
         print(f"left out, cannot speak here: {voice} ({why})", flush=True)
     return [(r, c) for r, c in jobs if r.voice.partition(tts.VTL_MARK)[0] not in missing]

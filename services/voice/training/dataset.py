@@ -381,10 +381,7 @@ def _save(path: Path, **arrays: np.ndarray) -> None:
 def _render_all(items: list[Recipe], workers: int, progress: bool, embedding: str = SPEECH_EMBEDDING) -> None:
     """Render and embed every recipe once; cache the features and (speech embedding, float16) the mel
     spectrograms."""
-    missing = tts.unavailable({r.voice for r in items})
-    if missing:
-        raise tts.TtsError("these voices cannot speak here, so their clips cannot be rendered:\n" +
-                           "\n".join(f"  {voice}: {why}" for voice, why in missing.items()))
+    tts.require(r.voice for r in items)
     xs: list[np.ndarray] = []
     mels: list[np.ndarray] = []
     ys: list[int] = []

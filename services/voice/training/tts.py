@@ -504,6 +504,14 @@ def unavailable(voices: Iterable[str]) -> dict[str, str]:
     return out
 
 
+def require(voices: Iterable[str]) -> None:
+    """TtsError naming every one of these voices that cannot speak here, and why (`unavailable`)."""
+    missing = unavailable(voices)
+    if missing:
+        raise TtsError("these voices cannot speak here, so their clips cannot be rendered:\n" +
+                       "\n".join(f"  {voice}: {why}" for voice, why in missing.items()))
+
+
 def synthesise(text: str, voice: str, speed: float = 1.0, pitch: float = 1.0) -> np.ndarray:
     """`voice` is `engine:name[@vtl<factor>]`; returns float samples at 16 kHz, peak-normalised to 0.5."""
     base, _, warp = voice.partition(VTL_MARK)
