@@ -182,6 +182,10 @@ def train(
         "--fold-unscored",
         help="a training split whose clips of a fold's words the word folds do not score (they place the knots "
              "by the other splits' voices); repeat for more (round voice23: neural)")] = None,
+    split_weight: Annotated[list[str] | None, typer.Option(
+        "--split-weight",
+        help="SPLIT=W: a training split's clips weigh W times as much in the fit (W > 0); repeat for more (round "
+             "voice24: neural=0.5)")] = None,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
@@ -203,19 +207,30 @@ def train(
         raise typer.BadParameter(f"{embedding!r}: one of {', '.join(EMBEDDINGS)}", param_hint="--embedding")
     if out is None and embedding not in SHIPPED_HEADS:
         raise typer.BadParameter(f"no head ships for {embedding}: say where to write it", param_hint="--out")
+    weights = []
+    for item in split_weight or ():
+        split, _, value = item.partition("=")
+        try:
+            w = float(value)
+        except ValueError:
+            w = float("nan")
+        if not w > 0:
+            raise typer.BadParameter(f"{item!r}: give SPLIT=W with W a number above 0", param_hint="--split-weight")
+        weights.append((split, w))
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
     if neural is not None:
         sizes = replace(sizes, neural_positives=neural)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()),
-                         fold_unscored=tuple(fold_unscored or ()))
+                         fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights))
     if cfg.fold_unscored and not cfg.word_folds:
         raise typer.BadParameter("only the word folds score clips: give --word-folds N", param_hint="--fold-unscored")
     splits = training_splits(cfg.sizes)
-    unknown = sorted(set(cfg.fold_unscored) - set(splits))
-    if unknown:
-        raise typer.BadParameter(f"{', '.join(unknown)}: not a training split of this recipe ({', '.join(splits)})",
-                                 param_hint="--fold-unscored")
+    for hint, named in (("--fold-unscored", cfg.fold_unscored), ("--split-weight", [s for s, _ in weights])):
+        unknown = sorted(set(named) - set(splits))
+        if unknown:
+            raise typer.BadParameter(f"{', '.join(unknown)}: not a training split of this recipe "
+                                     f"({', '.join(splits)})", param_hint=hint)
     try:
         report = run_training(cfg, out or SHIPPED_HEADS[embedding])
     except TtsError as exc:  # a voice of the recipe cannot speak here (services/voice/README.md: what to install)

@@ -85,15 +85,16 @@ def score_fold(head: Head, worst_go: float, x: np.ndarray, budgets: dict[str, fl
 
 
 def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.ndarray, np.ndarray],
-              cfg: TrainConfig, progress: bool = True, scored: np.ndarray | None = None) -> list[FoldResult]:
-    """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows. A fold's words
-    are left out of its fit in every row, and scored only in the rows `scored` marks (default: all;
-    `TrainConfig.fold_unscored`)."""
+              cfg: TrainConfig, progress: bool = True, scored: np.ndarray | None = None,
+              clip_weight: np.ndarray | None = None) -> list[FoldResult]:
+    """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows, each clip
+    weighted by `clip_weight` as the final head's (`train.row_weights`). A fold's words are left out of its fit
+    in every row, and scored only in the rows `scored` marks (default: all; `TrainConfig.fold_unscored`)."""
     results = []
     other = len(corpus.VOCABULARY)
     for k, words in enumerate(word_folds(near_words(cfg.sizes, cfg.seed), cfg.word_folds)):
         out = np.isin(texts, words) & (y == other)
-        head = fit(x[~out], y[~out], cfg)
+        head = fit(x[~out], y[~out], cfg, None if clip_weight is None else clip_weight[~out])
         fit_temperature(head, *tune)
         chosen = calibrate(head, *tune, cfg)
         worst_go = float(chosen["go"]["worst_other"])  # type: ignore[index]
