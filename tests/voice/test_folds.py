@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from services.voice.spotter.head import Head
 from services.voice.training import corpus, dataset, folds
 from services.voice.training.train import TrainConfig
+from tests.voice.conftest import TrainCli
 
 N = len(corpus.VOCABULARY)
 GO = corpus.VOCABULARY.index("go")
@@ -156,23 +157,16 @@ def test_run_folds_scores_each_fold_on_words_its_head_never_heard() -> None:
     assert max(r.shifts["go"] for r in results) > 0 and max(r.go_margin for r in results) > 0
 
 
-def test_train_fold_accept_exempt_option_sets_only_that(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_train_fold_accept_exempt_option_sets_only_that(train_cli: TrainCli) -> None:
     from dataclasses import replace
 
-    from typer.testing import CliRunner
-
-    from services.voice.__main__ import app
     from services.voice.training import train
 
-    seen: list[TrainConfig] = []
-    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
-    runner = CliRunner()
-    assert runner.invoke(app, ["train", "--fold-accept-exempt", "go", "--out", "/dev/null"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--fold-accept-exempt", "go", "--fold-accept-exempt", "no",
-                               "--out", "/dev/null"]).exit_code == 0
-    refused = runner.invoke(app, ["train", "--fold-accept-exempt", "jump", "--out", "/dev/null"])
+    assert train_cli("--fold-accept-exempt", "go", "--out", "/dev/null").exit_code == 0
+    assert train_cli("--fold-accept-exempt", "go", "--fold-accept-exempt", "no", "--out", "/dev/null").exit_code == 0
+    refused = train_cli("--fold-accept-exempt", "jump", "--out", "/dev/null")
     assert refused.exit_code == 2 and "jump: not a command" in refused.output
-    assert seen == [replace(train.shipped_recipe(), fold_accept_exempt=("go",)),
+    assert train_cli.recipes == [replace(train.shipped_recipe(), fold_accept_exempt=("go",)),
                     replace(train.shipped_recipe(), fold_accept_exempt=("go", "no"))]
     assert train.shipped_recipe().fold_accept_exempt == ()
 
@@ -198,25 +192,17 @@ def test_run_folds_leaves_unscored_rows_out_of_the_score_and_the_fit() -> None:
     assert sum(r.accepted for r in some) < sum(r.accepted for r in every)
 
 
-def test_train_fold_unscored_option(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_train_fold_unscored_option(train_cli: TrainCli) -> None:
     from dataclasses import replace
 
-    from typer.testing import CliRunner
-
-    from services.voice.__main__ import app
     from services.voice.training import dataset, train
 
-    seen: list[TrainConfig] = []
-    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
-    runner = CliRunner()
-    assert runner.invoke(app, ["train", "--neural", "150", "--fold-unscored", "neural",
-                               "--out", "/dev/null"]).exit_code == 0
+    assert train_cli("--neural", "150", "--fold-unscored", "neural", "--out", "/dev/null").exit_code == 0
     sizes = replace(dataset.Sizes(), neural_positives=150)
-    assert seen == [train.shipped_recipe(sizes=sizes, fold_unscored=("neural",))]
+    assert train_cli.recipes == [train.shipped_recipe(sizes=sizes, fold_unscored=("neural",))]
     assert train.shipped_recipe().fold_unscored == ()
-    no_split = runner.invoke(app, ["train", "--fold-unscored", "neural", "--out", "/dev/null"])
+    no_split = train_cli("--fold-unscored", "neural", "--out", "/dev/null")
     assert no_split.exit_code == 2 and "neural: not a training split of this recipe" in no_split.output
-    no_folds = runner.invoke(app, ["train", "--neural", "150", "--fold-unscored", "neural", "--word-folds", "0",
-                                  "--out", "/dev/null"])
+    no_folds = train_cli("--neural", "150", "--fold-unscored", "neural", "--word-folds", "0", "--out", "/dev/null")
     assert no_folds.exit_code == 2 and "give --word-folds N" in no_folds.output
-    assert len(seen) == 1
+    assert len(train_cli.seen) == 1

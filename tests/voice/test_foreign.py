@@ -15,6 +15,7 @@ import pytest
 
 from services.voice.synth import OOV_HELDOUT, OOV_TUNE
 from services.voice.training import corpus, dataset, train, tts
+from tests.voice.conftest import TrainCli
 from tests.voice.pitch import f0
 
 pytest.importorskip("pocketsphinx")  # the CMU dictionary ships in its wheel
@@ -104,27 +105,21 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
         tts.synthesise("stop", "foreign:nobody")
 
 
-def test_train_foreign_option_sets_only_the_foreign_split(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_train_foreign_option_sets_only_the_foreign_split(train_cli: TrainCli, tmp_path: Path) -> None:
     """`train --foreign N` fits the default head's recipe with N foreign clips per command (round 12's candidate);
     without it, `train` fits exactly the default head's recipe (`shipped_recipe()`: `TrainConfig()` on Whisper's
     encoder with five word folds and the six more recorded speakers in training) into the default head, and `--embedding speech-embedding` the walk gate's
     (`TrainConfig()` itself) into its file (training itself is replaced here)."""
-    from typer.testing import CliRunner
-
-    from services.voice.__main__ import app
     from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD
 
-    seen: list[tuple[train.TrainConfig, object]] = []
-    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append((cfg, out)) or {"head": str(out)})
-    runner = CliRunner()
     out = tmp_path / "head.npz"
-    assert runner.invoke(app, ["train", "--out", str(out), "--foreign", "360", "--workers", "1"]).exit_code == 0
-    assert runner.invoke(app, ["train"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--embedding", "speech-embedding"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--foreign", "-1"]).exit_code != 0  # refused before any training
-    assert runner.invoke(app, ["train", "--embedding", "mfcc"]).exit_code == 2
-    assert len(seen) == 3
-    (variant, variant_out), (default, default_out), (gate, gate_out) = seen
+    assert train_cli("--out", str(out), "--foreign", "360", "--workers", "1").exit_code == 0
+    assert train_cli().exit_code == 0
+    assert train_cli("--embedding", "speech-embedding").exit_code == 0
+    assert train_cli("--foreign", "-1").exit_code != 0  # refused before any training
+    assert train_cli("--embedding", "mfcc").exit_code == 2
+    assert len(train_cli.seen) == 3
+    (variant, variant_out), (default, default_out), (gate, gate_out) = train_cli.seen
     foreign = replace(dataset.Sizes(), foreign_positives=360)
     assert variant == replace(train.shipped_recipe(), workers=1, sizes=dataset.with_more_recorded(foreign, "train"))
     assert variant_out == out

@@ -15,6 +15,7 @@ import pytest
 
 from services.voice.audio import to_pcm, write_wav
 from services.voice.training import corpus, dataset, train, tts
+from tests.voice.conftest import TrainCli
 from tests.voice.pitch import f0
 
 
@@ -169,21 +170,15 @@ def test_more_voices_in_training_only_leave_the_tune_splits_as_they_were() -> No
         dataset.with_more_recorded(base, "tune")
 
 
-def test_train_more_voices_option_sets_only_the_recorded_speakers(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_train_more_voices_option_sets_only_the_recorded_speakers(train_cli: TrainCli) -> None:
     """The default head's recipe has the six more speakers in training only (round voice19b, landed by rule voice19c);
     `--more-voices` changes that and nothing else; the speech-embedding head's recipe has none of them."""
-    from typer.testing import CliRunner
-
-    from services.voice.__main__ import app
-
-    seen: list[train.TrainConfig] = []
-    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
-    runner = CliRunner()
     for where in ("train+tune", "train", "off"):
-        assert runner.invoke(app, ["train", "--more-voices", where, "--out", "/dev/null"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--out", "/dev/null"]).exit_code == 0
-    assert runner.invoke(app, ["train", "--embedding", "speech-embedding", "--out", "/dev/null"]).exit_code == 0
-    result = runner.invoke(app, ["train", "--more-voices", "tune"])
+        assert train_cli("--more-voices", where, "--out", "/dev/null").exit_code == 0
+    assert train_cli("--out", "/dev/null").exit_code == 0
+    assert train_cli("--embedding", "speech-embedding", "--out", "/dev/null").exit_code == 0
+    result = train_cli("--more-voices", "tune")
+    seen = train_cli.recipes
     assert result.exit_code == 2 and not seen[5:]  # refused before any training
     assert seen[:3] == [replace(train.shipped_recipe(), sizes=dataset.with_more_recorded(dataset.Sizes(), where))
                         for where in ("train+tune", "train", "off")]

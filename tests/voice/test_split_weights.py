@@ -9,6 +9,7 @@ import pytest
 
 from services.voice.training import corpus, dataset, folds, train
 from services.voice.training.train import TrainConfig
+from tests.voice.conftest import TrainCli
 
 N = len(corpus.VOCABULARY)
 GO = corpus.VOCABULARY.index("go")
@@ -80,22 +81,14 @@ def test_run_folds_fits_each_fold_with_its_rows_weights(monkeypatch: pytest.Monk
         assert (w == 0.5).sum() == 60  # and keeps the neural rows' weight
 
 
-def test_train_split_weight_option(monkeypatch: pytest.MonkeyPatch) -> None:
-    from typer.testing import CliRunner
-
-    from services.voice.__main__ import app
-
-    seen: list[TrainConfig] = []
-    monkeypatch.setattr(train, "train", lambda cfg, out: seen.append(cfg) or {"head": str(out)})
-    runner = CliRunner()
-    assert runner.invoke(app, ["train", "--neural", "150", "--split-weight", "neural=0.5",
-                               "--out", "/dev/null"]).exit_code == 0
+def test_train_split_weight_option(train_cli: TrainCli) -> None:
+    assert train_cli("--neural", "150", "--split-weight", "neural=0.5", "--out", "/dev/null").exit_code == 0
     sizes = replace(dataset.Sizes(), neural_positives=150)
-    assert seen == [train.shipped_recipe(sizes=sizes, split_weights=(("neural", 0.5),))]
+    assert train_cli.recipes == [train.shipped_recipe(sizes=sizes, split_weights=(("neural", 0.5),))]
     assert train.shipped_recipe().split_weights == ()
     for bad in ("neural", "neural=", "neural=zero", "neural=-1", "neural=0"):
-        refused = runner.invoke(app, ["train", "--neural", "150", "--split-weight", bad, "--out", "/dev/null"])
+        refused = train_cli("--neural", "150", "--split-weight", bad, "--out", "/dev/null")
         assert refused.exit_code == 2 and "give SPLIT=W with W a number above 0" in refused.output, bad
-    no_split = runner.invoke(app, ["train", "--split-weight", "neural=0.5", "--out", "/dev/null"])
+    no_split = train_cli("--split-weight", "neural=0.5", "--out", "/dev/null")
     assert no_split.exit_code == 2 and "neural: not a training split of this recipe" in no_split.output
-    assert len(seen) == 1
+    assert len(train_cli.seen) == 1
