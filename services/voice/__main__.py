@@ -160,6 +160,10 @@ def train(
         "--neural", min=0,
         help="clips per command of the `neural` split (Kokoro's three training voices, a neural TTS, as virtual "
              "speakers; round voice22; 0: not fitted on) [default: the committed recipe's, Sizes.neural_positives]")] = None,
+    pseudo: Annotated[int | None, typer.Option(
+        "--pseudo", min=0,
+        help="clips per pseudo-word one consonant from a command (the `pseudo` split, from phonemes; round voice25; "
+             "0: not fitted on) [default: the committed recipe's, Sizes.pseudo_repeats]")] = None,
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
              "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
@@ -186,6 +190,10 @@ def train(
         "--split-weight",
         help="SPLIT=W: a training split's clips weigh W times as much in the fit (W > 0); repeat for more (round "
              "voice24: neural=0.5)")] = None,
+    near_weight: Annotated[float, typer.Option(
+        "--near-weight",
+        help="weight in the fit of the near-command negatives (the hand-picked neighbours, the train one-edit "
+             "neighbours, the two-edit words) against other non-command clips (round voice25: 2)")] = 1.0,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""
@@ -217,12 +225,16 @@ def train(
         if not w > 0:
             raise typer.BadParameter(f"{item!r}: give SPLIT=W with W a number above 0", param_hint="--split-weight")
         weights.append((split, w))
+    if not near_weight > 0:
+        raise typer.BadParameter(f"{near_weight}: must be above 0", param_hint="--near-weight")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
     if neural is not None:
         sizes = replace(sizes, neural_positives=neural)
+    if pseudo is not None:
+        sizes = replace(sizes, pseudo_repeats=pseudo)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()),
-                         fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights))
+                         fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights), near_weight=near_weight)
     if cfg.fold_unscored and not cfg.word_folds:
         raise typer.BadParameter("only the word folds score clips: give --word-folds N", param_hint="--fold-unscored")
     splits = training_splits(cfg.sizes)

@@ -1,4 +1,5 @@
-"""A training split weighted in the fit (`TrainConfig.split_weights`, `train --split-weight`; round voice24)."""
+"""Clips weighted in the fit: a training split (`TrainConfig.split_weights`, `train --split-weight`; round voice24) and
+the near-command negatives (`TrainConfig.near_weight`, `train --near-weight`; round voice25)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,19 @@ def test_row_weights_names_each_clip_by_its_split() -> None:
         train.row_weights(names, TrainConfig(split_weights=(("foreign", 2.0),)))
     with pytest.raises(ValueError, match="must be above 0"):
         train.row_weights(names, TrainConfig(split_weights=(("neural", 0.0),)))
+
+
+def test_clip_weights_weigh_the_near_command_negatives_only() -> None:
+    near = folds.near_words(dataset.Sizes(), 12)[:2]
+    texts = np.array([near[0], near[1], "table", near[0], "go"])
+    y = np.array([N, N, N, N, GO])
+    names = np.array(["train", "neural", "train", "speakers", "neural"])
+    assert train.clip_weights(names, texts, y, TrainConfig()) is None
+    assert train.clip_weights(names, texts, y, TrainConfig(near_weight=2.0)).tolist() == [2, 2, 1, 2, 1]
+    both = TrainConfig(near_weight=2.0, split_weights=(("neural", 0.5),))
+    assert train.clip_weights(names, texts, y, both).tolist() == [2, 1, 1, 2, 0.5]
+    with pytest.raises(ValueError, match="near weight 0.0: must be above 0"):
+        train.clip_weights(names, texts, y, TrainConfig(near_weight=0.0))
 
 
 @pytest.mark.parametrize("crops", [0, 2])
@@ -89,6 +103,10 @@ def test_train_split_weight_option(train_cli: TrainCli) -> None:
     for bad in ("neural", "neural=", "neural=zero", "neural=-1", "neural=0"):
         refused = train_cli("--neural", "150", "--split-weight", bad, "--out", "/dev/null")
         assert refused.exit_code == 2 and "give SPLIT=W with W a number above 0" in refused.output, bad
+    assert train_cli("--near-weight", "2", "--out", "/dev/null").exit_code == 0
+    assert train_cli.recipes[-1] == train.shipped_recipe(near_weight=2.0) and train.shipped_recipe().near_weight == 1
+    assert train_cli("--near-weight", "0", "--out", "/dev/null").exit_code == 2
+    train_cli.seen.pop()
     no_split = train_cli("--split-weight", "neural=0.5", "--out", "/dev/null")
     assert no_split.exit_code == 2 and "neural: not a training split of this recipe" in no_split.output
     assert len(train_cli.seen) == 1

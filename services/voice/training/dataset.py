@@ -96,6 +96,10 @@ class Sizes:
     a neural TTS) saying it; 0 (the committed recipe): no `neural` split is fitted on."""
     neural_repeats: int = 1
     """Per hand-picked neighbour, train one-edit neighbour, two-edit word and sampled dictionary word, `neural`."""
+    pseudo_repeats: int = 0
+    """Per pseudo-word one consonant from a command (`pseudo.pseudo_words`), `pseudo` split (round voice25): espeak-ng's
+    training voices and the recorded speakers that read its phonemes (MBROLA's), half as virtual speakers; 0 (the
+    committed recipe): no `pseudo` split is fitted on."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -175,7 +179,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     when `Sizes.foreign_positives` > 0): recorded speakers of other languages (`corpus.FOREIGN_TRAIN`) saying
     the commands and the training negatives. `neural` (only fitted on when `Sizes.neural_positives` > 0, round
     voice22): a neural TTS, Kokoro's three training voices (`corpus.NEURAL_TRAIN`) as virtual speakers, saying the
-    commands and the training negatives.
+    commands and the training negatives. `pseudo` (only fitted on when `Sizes.pseudo_repeats` > 0, round voice25):
+    pseudo-words one consonant from a command (`pseudo`), said from phonemes by the training voices that read them.
 
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
@@ -186,7 +191,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         voices = list(corpus.NEURAL_TRAIN)
     else:
         side = {"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                "neighbours-tune": "tune", "speakers-tune": "tune", "recorded-tune": "tune"}.get(kind, split)
+                "pseudo": "train", "neighbours-tune": "tune", "speakers-tune": "tune",
+                "recorded-tune": "tune"}.get(kind, split)
         voices = corpus.voices(side, sizes.tune_recorded if side == "tune" else sizes.recorded)
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
@@ -242,6 +248,18 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         hand_picked = [w for ws in corpus.NEIGHBOURS_TRAIN.values() for w in ws]
         for word in hand_picked + list(neighbours(sizes, seed)["train"]) + two_edit(sizes) + pool[: sizes.common_words]:
             add(word, OTHER, sizes.neural_repeats)
+        n_noise = 0
+    elif split == "pseudo":  # pseudo-words one consonant from a command, from phonemes (`pseudo`)
+        from services.voice.training import pseudo
+
+        readers = [v for v in voices if pseudo.accent(v) is not None]
+        for command, words in pseudo.pseudo_words().items():
+            for phones in words:
+                for k in range(sizes.pseudo_repeats):
+                    v, s, p = (_speaker_draw if k % 2 else _voice_draw)(rng, readers)
+                    text = pseudo.espeak_text(phones, command, cast(str, pseudo.accent(v)))
+                    strength = 0.0 if rng.random() < 0.2 else 1.0
+                    out.append(Recipe(text, OTHER, v, round(s, 3), round(p, 3), rng.randrange(2**31), strength))
         n_noise = 0
     elif split == "positives":
         add_commands(sizes.more_positives)
