@@ -190,6 +190,8 @@ def train(
         "--split-weight",
         help="SPLIT=W: a training split's clips weigh W times as much in the fit (W > 0); repeat for more (round "
              "voice24: neural=0.5)")] = None,
+    alpha: Annotated[float | None, typer.Option(
+        "--alpha", help="the MLPs' L2 penalty (round voice25: 0.3) [default: the recipe's, TrainConfig.alpha]")] = None,
     near_weight: Annotated[float, typer.Option(
         "--near-weight",
         help="weight in the fit of the near-command negatives (the hand-picked neighbours, the train one-edit "
@@ -225,6 +227,8 @@ def train(
         if not w > 0:
             raise typer.BadParameter(f"{item!r}: give SPLIT=W with W a number above 0", param_hint="--split-weight")
         weights.append((split, w))
+    if alpha is not None and not alpha > 0:
+        raise typer.BadParameter(f"{alpha}: must be above 0", param_hint="--alpha")
     if not near_weight > 0:
         raise typer.BadParameter(f"{near_weight}: must be above 0", param_hint="--near-weight")
     sizes = Sizes() if foreign is None else replace(Sizes(), foreign_positives=foreign)
@@ -234,7 +238,8 @@ def train(
         sizes = replace(sizes, pseudo_repeats=pseudo)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()),
-                         fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights), near_weight=near_weight)
+                         fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights), near_weight=near_weight,
+                         **({} if alpha is None else {"alpha": alpha}))
     if cfg.fold_unscored and not cfg.word_folds:
         raise typer.BadParameter("only the word folds score clips: give --word-folds N", param_hint="--fold-unscored")
     splits = training_splits(cfg.sizes)

@@ -106,7 +106,10 @@ def test_train_split_weight_option(train_cli: TrainCli) -> None:
     assert train_cli("--near-weight", "2", "--out", "/dev/null").exit_code == 0
     assert train_cli.recipes[-1] == train.shipped_recipe(near_weight=2.0) and train.shipped_recipe().near_weight == 1
     assert train_cli("--near-weight", "0", "--out", "/dev/null").exit_code == 2
-    train_cli.seen.pop()
+    assert train_cli("--alpha", "0.3", "--out", "/dev/null").exit_code == 0
+    assert train_cli.recipes[-1] == train.shipped_recipe(alpha=0.3) and train.shipped_recipe().alpha == 0.1
+    assert train_cli("--alpha", "0", "--out", "/dev/null").exit_code == 2
+    del train_cli.seen[-2:]
     no_split = train_cli("--split-weight", "neural=0.5", "--out", "/dev/null")
     assert no_split.exit_code == 2 and "neural: not a training split of this recipe" in no_split.output
     assert len(train_cli.seen) == 1
