@@ -162,8 +162,8 @@ def train(
              "speakers; round voice22; 0: not fitted on) [default: the committed recipe's, Sizes.neural_positives]")] = None,
     pseudo: Annotated[int | None, typer.Option(
         "--pseudo", min=0,
-        help="clips per pseudo-word one consonant from a command (the `pseudo` split, from phonemes; round voice25; "
-             "0: not fitted on) [default: the committed recipe's, Sizes.pseudo_repeats]")] = None,
+        help="clips per pseudo-word one consonant from a command (the `pseudo` split, from phonemes; tried on "
+             "tuning data in session 48; 0: not fitted on) [default: the committed recipe's, Sizes.pseudo_repeats]")] = None,
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
              "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
@@ -195,7 +195,7 @@ def train(
     near_weight: Annotated[float, typer.Option(
         "--near-weight",
         help="weight in the fit of the near-command negatives (the hand-picked neighbours, the train one-edit "
-             "neighbours, the two-edit words) against other non-command clips (round voice25: 2)")] = 1.0,
+             "neighbours, the two-edit words) against other non-command clips (tried on tuning data at 2)")] = 1.0,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""

@@ -1,4 +1,4 @@
-"""Pseudo-words one consonant from a command (`training/pseudo.py`, the `pseudo` split; round voice25)."""
+"""Pseudo-words one consonant from a command (`training/pseudo.py`, the `pseudo` split; session 48, tuning data only)."""
 
 from __future__ import annotations
 

@@ -97,9 +97,9 @@ class Sizes:
     neural_repeats: int = 1
     """Per hand-picked neighbour, train one-edit neighbour, two-edit word and sampled dictionary word, `neural`."""
     pseudo_repeats: int = 0
-    """Per pseudo-word one consonant from a command (`pseudo.pseudo_words`), `pseudo` split (round voice25): espeak-ng's
-    training voices and the recorded speakers that read its phonemes (MBROLA's), half as virtual speakers; 0 (the
-    committed recipe): no `pseudo` split is fitted on."""
+    """Per pseudo-word one consonant from a command (`pseudo.pseudo_words`), `pseudo` split: espeak-ng's training
+    voices and the recorded speakers that read its phonemes (MBROLA's), half as virtual speakers; 0 (the committed
+    recipe): no `pseudo` split is fitted on (tried on tuning data only, rule voice25: not a better curve)."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -179,7 +179,7 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     when `Sizes.foreign_positives` > 0): recorded speakers of other languages (`corpus.FOREIGN_TRAIN`) saying
     the commands and the training negatives. `neural` (only fitted on when `Sizes.neural_positives` > 0, round
     voice22): a neural TTS, Kokoro's three training voices (`corpus.NEURAL_TRAIN`) as virtual speakers, saying the
-    commands and the training negatives. `pseudo` (only fitted on when `Sizes.pseudo_repeats` > 0, round voice25):
+    commands and the training negatives. `pseudo` (only fitted on when `Sizes.pseudo_repeats` > 0; session 48):
     pseudo-words one consonant from a command (`pseudo`), said from phonemes by the training voices that read them.
 
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""

@@ -88,7 +88,7 @@ def run_folds(x: np.ndarray, y: np.ndarray, texts: np.ndarray, tune: tuple[np.nd
               cfg: TrainConfig, progress: bool = True, scored: np.ndarray | None = None,
               clip_weight: np.ndarray | None = None) -> list[FoldResult]:
     """Fit, calibrate and score one head per fold (`cfg.word_folds` of them) on the training rows, each clip
-    weighted by `clip_weight` as the final head's (`train.row_weights`). A fold's words are left out of its fit
+    weighted by `clip_weight` as the final head's (`train.clip_weights`). A fold's words are left out of its fit
     in every row, and scored only in the rows `scored` marks (default: all; `TrainConfig.fold_unscored`)."""
     results = []
     other = len(corpus.VOCABULARY)

@@ -1,4 +1,5 @@
-"""Pseudo-words one consonant from a command: near negatives that no dictionary holds (round voice25).
+"""Pseudo-words one consonant from a command: near negatives that no dictionary holds (tried on tuning data in
+session 48, rule voice25: not a better curve; off in every shipped recipe).
 
 The spotter's commonest false accepts are words one sound from a command that it never heard (a held-out "snow"
 taken for "no"): the training splits hold the dictionary's one-edit neighbours of the commands, but only the
