@@ -31,7 +31,7 @@ if __name__ == "__main__":
         cfg = replace(base, alpha=alpha)
         per = {}
         for name, d in vp.SPEAKERS.items():
-            head, info = vp.fitted_head(rows, d, [12, 13, 14], cfg, Path(f"/tmp/s48/proxy-a{alpha}"))
+            head, info = vp.fitted_head(rows, d, [12, 13, 14], cfg, out.parent / f"proxy-a{alpha}")
             per[name] = {**vp.plain(head, tune, d, cfg), **info}
             print(json.dumps({"alpha": alpha, "speaker": name, **per[name]["left_out"],
                               "tune": per[name]["tune"]["command_accuracy"]}), flush=True)
