@@ -80,8 +80,7 @@ def edits(phones: Phones) -> set[Phones]:
 @lru_cache(maxsize=1)
 def pseudo_words() -> dict[str, tuple[Phones, ...]]:
     """Per command, its kept one-consonant edits (the module's rules), sorted."""
-    prons, onsets, codas = _dictionary()
-    commands = {command_phones(w) for w in corpus.VOCABULARY}
+    prons, onsets, codas = _dictionary()  # the commands' own pronunciations among them
     out: dict[str, tuple[Phones, ...]] = {}
     for word in corpus.VOCABULARY:
         own = command_phones(word)
@@ -89,7 +88,7 @@ def pseudo_words() -> dict[str, tuple[Phones, ...]]:
         kept = set()
         for ph in edits(own):
             s = _syllable(ph)
-            if s is None or ph in prons or ph in commands or s[0] not in onsets or s[2] not in codas:
+            if s is None or ph in prons or s[0] not in onsets or s[2] not in codas:
                 continue
             if "HH" in s[2] or ("HH" in s[0] and s[0] != ("HH",)):  # a silent or unsayable h
                 continue
