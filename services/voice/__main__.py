@@ -195,7 +195,7 @@ def train(
     near_weight: Annotated[float, typer.Option(
         "--near-weight",
         help="weight in the fit of the near-command negatives (the hand-picked neighbours, the train one-edit "
-             "neighbours, the two-edit words) against other non-command clips (tried on tuning data at 2)")] = 1.0,
+             "neighbours, the two-edit words) against other non-command clips (round voice26: 2)")] = 1.0,
 ) -> None:
     """Synthesise the training and tuning speech, fit the spotter head, choose its thresholds, save it.
     Takes minutes (run it with nice); never part of the tests."""

@@ -106,8 +106,9 @@ class TrainConfig:
     near_weight: float = 1.0
     """Weight in the fit of the near-command negatives (`folds.near_words`: the hand-picked neighbours, the train
     one-edit neighbours and the two-edit words), in every split, against other "other" clips (`clip_weights`).
-    Tried at 2 with round voice24's neural split on tuning data only (rule voice25): fewer near words accepted for
-    fewer commands heard, a move along the same curve. 1 in every shipped recipe."""
+    Tried at 2 with round voice24's neural split: on tuning data (rule voice25) fewer near words accepted for fewer
+    commands heard, a move along the same curve; held out (round voice26) fewer commands heard from every family and no
+    fewer one-edit neighbours accepted. 1 in every shipped recipe."""
     tune_splits: tuple[str, ...] = ("tune", "neighbours-tune", "speakers-tune")
     """The splits the temperature and the knots are chosen on. Not `recorded-tune` (the recorded training
     speakers alone; rendered for per-speaker figures): calibrated with it, "go" walked unasked on 2 % of
