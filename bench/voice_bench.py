@@ -185,7 +185,7 @@ def _speakable(jobs: list[tuple[dataset.Recipe, str]], required: bool) -> list[t
     missing = tts.unavailable(voices)
     for voice, why in missing.items():
         print(f"left out, cannot speak here: {voice} ({why})", flush=True)
-    return [(r, c) for r, c in jobs if r.voice.partition(tts.VTL_MARK)[0] not in missing]
+    return [(r, c) for r, c in jobs if tts.base_voice(r.voice) not in missing]
 
 
 def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bool = True) -> list[Item]:

@@ -49,7 +49,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from services.voice.spotter.head import Head
-from services.voice.training import corpus, dataset, train
+from services.voice.training import corpus, dataset, train, tts
 from services.voice.training.train import TrainConfig
 
 WORDS = corpus.VOCABULARY
@@ -62,7 +62,7 @@ CALIBRATION_SEED = 0
 
 def speaker(voice: str) -> str:
     """The recorded (or espeak) voice a clip's voice is made from: `flite:awb@vtl1.1` -> `flite:awb`."""
-    return voice.partition("@vtl")[0]
+    return tts.base_voice(voice)
 
 
 @dataclass

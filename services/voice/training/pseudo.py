@@ -23,7 +23,7 @@ import re
 import subprocess
 from functools import lru_cache
 
-from services.voice.training import corpus
+from services.voice.training import corpus, tts
 
 CMU_TO_ESPEAK = {
     "P": "p", "B": "b", "T": "t", "D": "d", "K": "k", "G": "g", "F": "f", "V": "v", "TH": "T", "DH": "D",
@@ -157,8 +157,7 @@ MBROLA_ACCENTS = {"us1": "en-us", "us2": "en-us", "us3": "en-us", "en1": "en-gb"
 def accent(voice: str) -> str | None:
     """The espeak-ng accent whose phonemes `voice` (a virtual speaker's too) reads; None for a voice that cannot
     read espeak-ng's phonemes."""
-    base = voice.partition("@vtl")[0]
-    engine, _, name = base.partition(":")
+    engine, _, name = tts.base_voice(voice).partition(":")
     if engine == "espeak":
         return name.partition("+")[0]
     if engine == "mbrola":

@@ -485,6 +485,11 @@ def virtual_speaker(voice: str, factor: float) -> str:
     return voice if round(factor, 2) == 1.0 else f"{voice}{VTL_MARK}{factor:.2f}"
 
 
+def base_voice(voice: str) -> str:
+    """The voice a virtual speaker is made from (`virtual_speaker`'s inverse, the factor dropped); any other as it is."""
+    return voice.partition(VTL_MARK)[0]
+
+
 PROBE_WORD = "stand"
 """The word `unavailable` asks each voice to say (a command, in the CMU dictionary the foreign voices read from)."""
 
@@ -496,7 +501,7 @@ def unavailable(voices: Iterable[str]) -> dict[str, str]:
     Asking here also loads each engine once in the calling process (Kokoro assembles its model file on first use,
     and two rendering processes doing that at once raced on its temporary file)."""
     out = {}
-    for base in sorted({v.partition(VTL_MARK)[0] for v in voices if v}):
+    for base in sorted({base_voice(v) for v in voices if v}):
         try:
             synthesise(PROBE_WORD, base)
         except TtsError as exc:
