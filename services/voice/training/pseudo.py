@@ -20,7 +20,6 @@ phonemes: the command as the voice's accent says it (`espeak-ng -x`), one conson
 from __future__ import annotations
 
 import re
-import subprocess
 from functools import lru_cache
 
 from services.voice.training import corpus, tts
@@ -125,9 +124,9 @@ def _tokens(mnemonics: str) -> list[str]:
 @lru_cache(maxsize=64)
 def espeak_tokens(command: str, accent: str) -> tuple[str, ...]:
     """The command as espeak-ng's `accent` says it (`espeak-ng -x`), one token per dictionary phone, the vowel's
-    with primary stress. ValueError if espeak-ng's consonants are not the dictionary's."""
-    said = subprocess.run(["espeak-ng", "-q", "-x", "-v", accent, command], capture_output=True, text=True,
-                          check=True).stdout.strip()
+    with primary stress. ValueError if espeak-ng's consonants are not the dictionary's; `tts.TtsError` if espeak-ng is
+    not installed."""
+    said = tts._run(["espeak-ng", "-q", "-x", "-v", accent, command], package="espeak-ng").decode().strip()
     tokens = _tokens(said)
     own = command_phones(command)
     if len(tokens) != len(own) or any(
