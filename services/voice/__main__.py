@@ -39,6 +39,12 @@ WalkGateOption = Annotated[
                  help="spotter: a head on another embedding that must be sure of 'go' too before the robot walks "
                       "unasked, or 'none' [default: the shipped speech-embedding head, for a head on another embedding]"),
 ]
+AgreeMinOption = Annotated[
+    str | None,
+    typer.Option("--agree-min", envvar="HRI_VOICE_AGREE_MIN",
+                 help="spotter: publish a command only if the walk gate's head gives it at least this probability "
+                      "(0: off; no effect without a gate) [default: 0]"),
+]
 VadOption = Annotated[
     str,
     typer.Option("--vad", envvar="HRI_VOICE_VAD",
@@ -72,13 +78,13 @@ LexiconOption = Annotated[
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
-         walk_gate: WalkGateOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None,
-         clear_window: ClearWindowOption = None) -> None:
+         walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, vad: VadOption = "silero",
+         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate, vad=vad, early_look=early_look,
+                             head=head, walk_gate=walk_gate, agree_min=agree_min, vad=vad, early_look=early_look,
                              clear_window=clear_window)
     try:
         check_settings(settings)
@@ -96,10 +102,12 @@ def transcribe(
     lexicon: LexiconOption = None,
     head: HeadOption = None,
     walk_gate: WalkGateOption = None,
+    agree_min: AgreeMinOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
-        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate)
+        eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate,
+                          agree_min=agree_min)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

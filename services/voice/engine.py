@@ -55,7 +55,8 @@ def check_engine_name(name: str) -> None:
 
 
 def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str | None = None,
-                head_path: str | None = None, walk_gate: str | None = None) -> Engine:
+                head_path: str | None = None, walk_gate: str | None = None,
+                agree_min: str | float | None = None) -> Engine:
     """Build an engine by name; `EngineError` says what is missing."""
     from services.voice.lexicon import Lexicon, LexiconError
 
@@ -63,7 +64,7 @@ def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str |
     if name == "spotter":
         from services.voice.engine_spotter import SpotterEngine
 
-        return SpotterEngine.from_path(head_path, walk_gate)
+        return SpotterEngine.from_path(head_path, walk_gate, agree_min)
 
     try:
         lexicon = Lexicon.load(lexicon_path) if lexicon_path else None

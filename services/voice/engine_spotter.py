@@ -18,6 +18,12 @@ neighbours and the gated Whisper head on none). `HRI_VOICE_WALK_GATE`: a head fi
 head on another embedding than the speech embedding is gated by the shipped speech-embedding head
 (`spotter/head-speech-embedding.npz`), and a speech-embedding head (an enrolled one) is not gated.
 
+The agreement veto (`agree_min`, `HRI_VOICE_AGREE_MIN`, round voice27) asks the gate's head about every command
+the head would publish: unless the gate's head gives that same command at least `agree_min` probability, the
+utterance is not understood. It only ever removes a publication (no walk, no question the head alone would not
+make), costs one more embedding (~10 ms) per command the head accepts, and needs a gate (an enrolled head has none:
+the veto is off there).
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -28,6 +34,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from schemas.messages import Command
 from services.voice.engine import EngineError, Recognition
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
@@ -35,6 +43,23 @@ from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, speech_s
 from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, SURE_CONFIDENCE, Head, HeadError
 
 NO_GATE = "none"
+AGREE_ENV = "HRI_VOICE_AGREE_MIN"
+DEFAULT_AGREE_MIN = 0.0
+"""Off: round voice27 decides whether 0.25 becomes the default."""
+
+
+def agree_min_from(raw: str | float | None) -> float:
+    """The agreement veto's probability from `HRI_VOICE_AGREE_MIN` / `--agree-min` (None: the default); EngineError
+    unless a number from 0 (off) up to, not including, 1."""
+    if raw is None or raw == "":
+        return DEFAULT_AGREE_MIN
+    try:
+        value = float(raw)
+    except ValueError:
+        value = -1.0
+    if not 0.0 <= value < 1.0:
+        raise EngineError(f"{AGREE_ENV}={raw!r}: a probability from 0 (off) up to, not including, 1")
+    return value
 
 
 @dataclass
@@ -44,9 +69,17 @@ class WalkGate:
     head: Head
     embedder: UtteranceEmbedder
 
-    def confidence(self, pcm: bytes) -> float:
-        """The gate head's published confidence that this utterance is "go" (0 if it hears something else)."""
-        probs = self.head.probabilities(self.embedder.utterance(pcm))[0]
+    def probabilities(self, pcm: bytes) -> np.ndarray:
+        """The gate head's probabilities of its classes for this utterance."""
+        return self.head.probabilities(self.embedder.utterance(pcm))[0]
+
+    def probability(self, probs: np.ndarray, word: str) -> float:
+        """The gate head's probability of `word` (0 for a word outside its vocabulary)."""
+        return float(probs[self.head.vocabulary.index(word)]) if word in self.head.vocabulary else 0.0
+
+    def confidence(self, probs: np.ndarray) -> float:
+        """The gate head's published confidence that the utterance of `probs` is "go" (0 if it hears something
+        else)."""
         go = self.head.vocabulary.index(Command.GO.value)
         if int(probs.argmax()) != go:
             return 0.0
@@ -71,19 +104,23 @@ def walk_gate_for(head: Head, spec: str | None = None) -> WalkGate | None:
 class SpotterEngine:
     name = "spotter"
 
-    def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None) -> None:
+    def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
+                 agree_min: float = DEFAULT_AGREE_MIN) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
         self.head = head
         self.embedder = embedder or embedder_for(head.embedding)
         self.gate = gate
+        self.agree_min = agree_min if gate is not None else 0.0
+        """The agreement veto's probability; 0 (off) without a gate."""
 
     @classmethod
-    def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None) -> SpotterEngine:
+    def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
+                  agree_min: str | float | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
-            return cls(head, gate=walk_gate_for(head, walk_gate))
+            return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min))
         except (HeadError, FeatureError) as exc:
             raise EngineError(str(exc)) from None
 
@@ -108,12 +145,20 @@ class SpotterEngine:
             command, reason = None, f"{word} below threshold {self.head.accept[best]:.3f}"
         else:
             command, reason = Command(word), "accepted"
+            gate_probs = None
+            if self.gate is not None and self.agree_min > 0:
+                gate_probs = self.gate.probabilities(pcm)
+                agree = self.gate.probability(gate_probs, word)
+                detail["agree"] = round(agree, 3)
+                if agree < self.agree_min:  # the other embedding does not hear this command: not understood
+                    command, conf = None, min(conf, 0.49)
+                    reason = f"{word}: the walk gate's head gives it {agree:.3f}, below {self.agree_min}"
             if command == Command.GO and conf >= SURE_CONFIDENCE and self.head.base_last is not None:
                 base_conf = self.head.confidence(best, float(self.head.probabilities(feats, base=True)[0][best]))
                 if base_conf < SURE_CONFIDENCE:  # enrolment alone never makes the robot walk unasked
                     conf, reason = SURE_CONFIDENCE - 0.01, "accepted (enrolled; the calibrated head is not sure: ask)"
             if command == Command.GO and conf >= SURE_CONFIDENCE and self.gate is not None:
-                gate_conf = self.gate.confidence(pcm)
+                gate_conf = self.gate.confidence(gate_probs if gate_probs is not None else self.gate.probabilities(pcm))
                 detail["gate"] = round(gate_conf, 3)
                 if gate_conf < SURE_CONFIDENCE:  # one embedding alone never makes the robot walk unasked
                     conf, reason = SURE_CONFIDENCE - 0.01, "accepted (the walk gate's head is not sure: ask)"

@@ -10,46 +10,20 @@ import numpy as np
 import pytest
 
 from schemas.messages import Command
-from services.voice.audio import to_pcm
 from services.voice.engine import EngineError, make_engine
 from services.voice.engine_spotter import NO_GATE, SpotterEngine, walk_gate_for
 from services.voice.spotter import whisper
-from services.voice.spotter.embedders import SHAPES, SPEECH_EMBEDDING
+from services.voice.spotter.embedders import SPEECH_EMBEDDING
 from services.voice.spotter.head import SPEECH_EMBEDDING_HEAD, SURE_CONFIDENCE, Head, HeadError
-from services.voice.training import corpus, tts
-
-N = len(corpus.VOCABULARY)
-GO = corpus.VOCABULARY.index("go")
-
-
-def _head(embedding: str, winner: int) -> Head:
-    """A head that hears class `winner` (N: "other") in anything, with probability ~1."""
-    size = int(np.prod(SHAPES[embedding]))
-    bias = np.zeros(N + 1, np.float32)
-    bias[winner] = 20.0
-    return Head(corpus.VOCABULARY, np.zeros(size, np.float32), np.ones(size, np.float32),
-                [np.zeros((size, 2), np.float32), np.zeros((2, N + 1), np.float32)], [np.zeros(2, np.float32), bias],
-                np.full(N, 0.5), np.full(N, 0.9), embedding=embedding)
-
-
-@pytest.fixture(scope="module")
-def go_pcm() -> bytes:
-    x = tts.synthesise("go", "espeak:en-us", 1.0, 1.0)
-    return to_pcm(np.concatenate([np.zeros(1600), x, np.zeros(1600)]))
-
-
-@pytest.fixture(scope="module")
-def whisper_go(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("heads") / "whisper-go.npz"
-    _head(whisper.NAME, GO).save(path)
-    return path
+from services.voice.training import corpus
+from tests.voice.conftest import GO, N, fixed_head
 
 
 @pytest.mark.parametrize(("gate_hears", "walks"), [(GO, True), (N, False), (corpus.VOCABULARY.index("no"), False)])
 def test_a_sure_go_walks_only_if_the_gate_is_sure_too(tmp_path: Path, go_pcm: bytes, whisper_go: Path,
                                                       gate_hears: int, walks: bool) -> None:
     gate = tmp_path / "gate.npz"
-    _head(SPEECH_EMBEDDING, gate_hears).save(gate)
+    fixed_head(SPEECH_EMBEDDING, gate_hears).save(gate)
     engine = SpotterEngine.from_path(whisper_go, str(gate))
     assert engine.gate is not None and engine.gate.head.embedding == SPEECH_EMBEDDING
     rec = engine.recognise(go_pcm)
@@ -63,9 +37,9 @@ def test_a_sure_go_walks_only_if_the_gate_is_sure_too(tmp_path: Path, go_pcm: by
 
 def test_the_gate_is_not_asked_about_anything_but_a_sure_go(tmp_path: Path, go_pcm: bytes) -> None:
     stop = tmp_path / "stop.npz"
-    _head(whisper.NAME, corpus.VOCABULARY.index("stop")).save(stop)
+    fixed_head(whisper.NAME, corpus.VOCABULARY.index("stop")).save(stop)
     gate = tmp_path / "gate.npz"
-    _head(SPEECH_EMBEDDING, N).save(gate)
+    fixed_head(SPEECH_EMBEDDING, N).save(gate)
     rec = SpotterEngine.from_path(stop, str(gate)).recognise(go_pcm)
     assert rec.command == Command.STOP and rec.confidence >= SURE_CONFIDENCE and "gate" not in rec.detail
 
