@@ -407,6 +407,8 @@ def main() -> int:
     ap.add_argument("--enrol", action="store_true", help="also measure enrolment on one unseen voice")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     ap.add_argument("--head", help="spotter head file (default: the committed default head)")
+    ap.add_argument("--walk-gate", help="the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: "
+                                        "the engine's)")
     ap.add_argument("--agree-min", help="the spotter's agreement veto (HRI_VOICE_AGREE_MIN; default: the engine's)")
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
@@ -422,8 +424,9 @@ def main() -> int:
     items = heldout_items(args.seed, args.workers)
     rows: list[dict[str, object]] = []
     for name in args.engines.split(","):
-        engine = make_engine(name, head_path=args.head if name == "spotter" else None,
-                             agree_min=args.agree_min if name == "spotter" else None)
+        spotter = name == "spotter"
+        engine = make_engine(name, head_path=args.head if spotter else None,
+                             walk_gate=args.walk_gate if spotter else None, agree_min=args.agree_min if spotter else None)
         scores, extra = score(name, engine, items, policy)
         for s in sorted(scores, key=lambda s: (s.family != "ALL", s.family)):
             row = s.row()
