@@ -45,7 +45,7 @@ from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, SUR
 NO_GATE = "none"
 AGREE_ENV = "HRI_VOICE_AGREE_MIN"
 DEFAULT_AGREE_MIN = 0.0
-"""Off: round voice27 decides whether 0.25 becomes the default."""
+"""Off: round voice27 (0.25) heard 0.750 -> 0.663 of held-out commands for 8.7 -> 5.2 % of other words (voice README)."""
 
 
 def agree_min_from(raw: str | float | None) -> float:
