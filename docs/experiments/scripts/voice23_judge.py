@@ -42,6 +42,14 @@ def figures(path: Path) -> dict[str, float]:
     return out
 
 
+def verdict(checks: dict[str, bool]) -> int:
+    """Print each condition and whether the candidate passes them all; the exit code (0)."""
+    for name, ok in checks.items():
+        print(f"{'holds' if ok else 'FAILS':6} {name}")
+    print("PASSES" if all(checks.values()) else "does NOT pass")
+    return 0
+
+
 def main() -> int:
     c, k = figures(Path(sys.argv[1])), figures(Path(sys.argv[2]))
     for key in c:
@@ -56,10 +64,7 @@ def main() -> int:
         "(7) false asks <= control + 10": k["asks"] <= c["asks"] + 10,
         "(8) RTF <= 0.1": k["rtf"] <= 0.1,
     }
-    for name, ok in checks.items():
-        print(f"{'holds' if ok else 'FAILS':6} {name}")
-    print("PASSES" if all(checks.values()) else "does NOT pass")
-    return 0
+    return verdict(checks)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from voice23_judge import figures  # noqa: E402
+from voice23_judge import figures, verdict  # noqa: E402
 
 
 def latency_p50(path: Path) -> float:
@@ -34,10 +34,7 @@ def main() -> int:
         "(7) ALL go heard >= control - 0.05": k["go_heard"] >= c["go_heard"] - 0.05,
         "(8) RTF <= 0.1, latency p50 <= control + 20 ms": k["rtf"] <= 0.1 and k["latency_p50"] <= c["latency_p50"] + 20,
     }
-    for name, ok in checks.items():
-        print(f"{'holds' if ok else 'FAILS':6} {name}")
-    print("PASSES" if all(checks.values()) else "does NOT pass")
-    return 0
+    return verdict(checks)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice23_judge import figures  # noqa: E402
+from voice23_judge import figures, verdict  # noqa: E402
 
 
 def go_walked(path: Path) -> tuple[int, float]:
@@ -51,10 +51,7 @@ def main() -> int:
             and eb["after"]["false_walks_direct"] == 0
             and eb["after_on_other_voices"]["command_accuracy"] >= ea["after_on_other_voices"]["command_accuracy"],
     }
-    for name, ok in checks.items():
-        print(f"{'holds' if ok else 'FAILS':6} {name}")
-    print("PASSES" if all(checks.values()) else "does NOT pass")
-    return 0
+    return verdict(checks)
 
 
 if __name__ == "__main__":
