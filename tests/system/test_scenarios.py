@@ -96,10 +96,10 @@ def test_an_unsure_spoken_go_is_asked_about_and_a_spoken_yes_walks(tmp_path, rob
     that hears no command) turns every sure "go" into a question; the scenario's `confirm` answers it aloud."""
     from services.cli.simrobot import simulated_robot
     from services.voice.spotter.embedders import SPEECH_EMBEDDING
-    from tests.voice.test_walk_gate import N, _head
+    from tests.voice.conftest import N, fixed_head
 
     gate = tmp_path / "never-sure.npz"
-    _head(SPEECH_EMBEDDING, N).save(gate)
+    fixed_head(SPEECH_EMBEDDING, N).save(gate)
     with simulated_robot(tmp_path / "robot", robot=robot_id, participant="systest",
                          env={"HRI_VOICE_WALK_GATE": str(gate)}) as sim:
         assert not sim.runner.wait_ready(timeout=90), sim.log_path
