@@ -7,7 +7,7 @@ joined by `python -m services.vision.ensemble` (round vision23g; see there).
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday] [--epochs 6] [--width 1]
+                                       [--everyday] [--blind SHARE] [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
@@ -128,10 +128,7 @@ def harvest(
     proposer = Proposer.load() if proposals > 0 else None
     words_rng = np.random.default_rng([seed, PRINTED_STREAM])
     faces = typefaces() if printed > 0 else []
-    images: list[np.ndarray] = []
-    claims: list[int] = []
-    labels: list[int] = []
-    kept: list[bool] = []
+    rows: list[Row] = []
     for i in range(frames):
         scene = gen.scene(ORDER[i % len(ORDER)])
         if printed > 0 and words_rng.random() < printed:
@@ -145,21 +142,61 @@ def harvest(
             found += [
                 Candidate(None, p.box, det.proposal_crops(gray, p.box)) for p in proposer.propose(gray, proposals)
             ]
-        for c in found:
-            label: Shape | None = None
-            for t in truth:
-                if iou(c.box, t.box) >= IOU:
-                    label = t.shape
-            images.append(c.crops)
-            claims.append(len(SHAPES) if c.shape is None else SHAPES.index(c.shape))
-            labels.append(CLASSES.index(label))
-            kept.append(c.kept)
+        rows += _labelled(found, [(t.shape, t.box) for t in truth])
+    return _stack(rows)
+
+
+Row = tuple[np.ndarray, int, int, bool]  # one candidate: crops, claim index, class index, kept by the detector
+
+
+def _labelled(found: list[Candidate], truth: list[tuple[Shape, tuple[int, int, int, int]]]) -> list[Row]:
+    """Each candidate with its class: the true mark's whose box it overlaps with IoU >= IOU, else 'none'."""
+    rows: list[Row] = []
+    for c in found:
+        label: Shape | None = None
+        for shape, box in truth:
+            if iou(c.box, box) >= IOU:
+                label = shape
+        rows.append((c.crops, len(SHAPES) if c.shape is None else SHAPES.index(c.shape), CLASSES.index(label), c.kept))
+    return rows
+
+
+def _stack(rows: list[Row]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return (
-        np.array(images, np.uint8).reshape(len(images), 3, PATCH, PATCH),
-        np.array(claims, np.int64),
-        np.array(labels, np.int64),
-        np.array(kept, bool),
+        np.array([r[0] for r in rows], np.uint8).reshape(len(rows), 3, PATCH, PATCH),
+        np.array([r[1] for r in rows], np.int64),
+        np.array([r[2] for r in rows], np.int64),
+        np.array([r[3] for r in rows], bool),
     )
+
+
+def harvest_blind(seed: int, frames: int, levels: str = "") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`harvest`'s arrays for `frames` frames of the blind generator (`blind.BlindGenerator(seed)`, cycling X, O,
+    TRIANGLE and mark-free), for `--blind` (round vision29): a second way of drawing marks, cards, hands and clutter
+    to learn from, so that the network is not fitted to one generator's look. The generator's seeds for training
+    (`BLIND_SEEDS` on) are far from the small seeds the bench's blind split is run with."""
+    import cv2
+
+    from services.vision.blind import BlindGenerator
+
+    cv2.setNumThreads(1)
+    gen = BlindGenerator(seed=seed)
+    det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
+    rows: list[Row] = []
+    for i in range(frames):
+        img, label = gen.frame(ORDER[i % len(ORDER)])
+        rows += _labelled(det.candidates(img), [] if label is None else [(label.shape, label.box)])
+    return _stack(rows)
+
+
+# the blind generator's training seeds start here, added to the base seed: far from the small seeds (1, 2, 101 ...)
+# that `bench/vision_bench.py --split blind` is run with
+BLIND_SEEDS = 1_000_000
+
+
+def blind_chunks(frames: int, blind: float) -> int:
+    """How many CHUNK-frame chunks of the blind generator `--blind` adds to `frames` tuning frames."""
+    return round(frames * blind / CHUNK)
 
 
 def harvest_all(
@@ -175,31 +212,37 @@ def harvest_all(
     hand_drawn: float = 0.0,
     hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
     everyday: bool = False,
+    blind: float = 0.0,
 ) -> list[tuple[np.ndarray, ...]]:
-    """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; read from / written to `cache`
-    (a cache made with other seeds, another `printed`, `hands`, `proposals`, `arrows`, `hand_drawn` or `everyday` setting,
-    other `hand_drawn_shapes` or another pyramid is not used)."""
+    """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
+    `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
+    tuning chunks); read from / written to `cache` (a cache made with other seeds, another `printed`, `hands`,
+    `proposals`, `arrows`, `hand_drawn`, `everyday` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
+    not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
+    n_blind = blind_chunks(frames, blind)
     if cache is not None and cache.exists():
         with np.load(cache) as z:
             shares = {
                 k: float(z[k]) if k in z else 0.0
-                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday")
+                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday", "blind")
             }
             pyramid = str(z["levels"]) if "levels" in z else ""
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
-                     "hand_drawn": hand_drawn, "everyday": float(everyday)}
+                     "hand_drawn": hand_drawn, "everyday": float(everyday), "blind": blind}
             drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
             same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
             same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
             if z["seeds"].tolist() == seeds and same:
-                return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds))]
+                return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds) + n_blind)]
     n = len(seeds)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
                      [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n)
         )
+        parts += pool.map(harvest_blind, [seed + BLIND_SEEDS + k for k in range(n_blind)], [CHUNK] * n_blind,
+                          [levels] * n_blind)
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{k}_{j}": a for k, p in enumerate(parts) for j, a in enumerate(p)}
@@ -214,6 +257,7 @@ def harvest_all(
             hand_drawn=np.array(hand_drawn),
             hand_drawn_shapes=np.array(hand_drawn_shapes),
             everyday=np.array(float(everyday)),
+            blind=np.array(blind),
             **arrays,
         )
     return parts
@@ -437,6 +481,13 @@ def main(
         bool,
         typer.Option(help="the cluttered chunks also draw stars, check marks and clock faces (round vision23)"),
     ] = False,
+    blind: Annotated[
+        float,
+        typer.Option(
+            help="also learn from the blind generator (blind.py): this many of its frames per tuning frame, for "
+            "training only (round vision29; the bench's blind split then no longer judges the model blind)"
+        ),
+    ] = 0.0,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
     threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.8,
@@ -456,10 +507,14 @@ def main(
         parse_shapes(hand_drawn_shapes)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--hand-drawn-shapes") from None
+    if blind < 0:
+        raise typer.BadParameter(f"--blind {blind}: a share of at least 0")
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
-                        hand_drawn_shapes, everyday)
-    n_val = max(1, len(parts) // 10)
-    train, val = parts[:-n_val], parts[-n_val:]
+                        hand_drawn_shapes, everyday, blind)
+    n_blind = blind_chunks(frames, blind)
+    tuning, others = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
+    n_val = max(1, len(tuning) // 10)
+    train, val = tuning[:-n_val] + others, tuning[-n_val:]  # the report stays on held-back tuning chunks
     x = np.concatenate([p[0] for p in train])
     c = np.concatenate([p[1] for p in train])
     y = np.concatenate([p[2] for p in train])
