@@ -300,6 +300,48 @@ def test_the_harvest_cache_is_reused_for_the_same_shapes_however_spelt(tmp_path:
             read(cache_for("TRIANGLE"), "X")
 
 
+def test_a_blind_harvest_is_deterministic_and_labels_the_blind_generators_marks() -> None:
+    """`training --blind` (round vision29): candidates of the blind generator's frames, the same for the same seed,
+    the true marks' candidates labelled with their class and the rest 'none'."""
+    from services.vision.training import BLIND_SEEDS, harvest_blind
+
+    a = harvest_blind(BLIND_SEEDS + 3, 8)
+    assert all(np.array_equal(p, q) for p, q in zip(a, harvest_blind(BLIND_SEEDS + 3, 8), strict=True))
+    images, claims, labels, kept = a
+    assert images.shape[1:] == (3, PATCH, PATCH) and len(labels) == len(kept) == len(claims) == len(images) > 0
+    none = len(CLASSES) - 1
+    assert 0 < int((labels != none).sum()) < len(labels)  # marks found and labelled, and clutter as 'none'
+    assert not np.array_equal(a[2], harvest_blind(BLIND_SEEDS + 4, 8)[2])
+
+
+def test_blind_chunks_come_after_the_tuning_chunks_and_the_cache_knows_the_share(tmp_path: Path) -> None:
+    """`--blind 0.5` adds half as many blind frames as tuning frames, in whole chunks listed after the tuning ones; a
+    cache made without them is not used for it (here: a harvest that is refused)."""
+    from services.vision import training
+
+    assert training.blind_chunks(16000, 0.5) == 32 and training.blind_chunks(16000, 0.0) == 0
+    parts = [tuple(np.full(2, k + j) for j in range(4)) for k in range(3)]  # two tuning chunks, one blind chunk
+
+    def cache(blind: float, n: int) -> Path:
+        path = tmp_path / f"{blind}.npz"
+        np.savez(path, seeds=np.array([7, 8]), levels=np.array(""), blind=np.array(blind),
+                 **{f"{k}_{j}": a for k, p in enumerate(parts[:n]) for j, a in enumerate(p)})
+        return path
+
+    class Refused(RuntimeError):
+        pass
+
+    def no_pool(*args: object, **kwargs: object) -> None:
+        raise Refused
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(training, "ProcessPoolExecutor", no_pool)
+        got = training.harvest_all(2 * training.CHUNK, 7, 1, cache(0.5, 3), blind=0.5)
+        assert [[a.tolist() for a in p] for p in got] == [[a.tolist() for a in p] for p in parts]
+        with pytest.raises(Refused):
+            training.harvest_all(2 * training.CHUNK, 7, 1, cache(0.0, 2), blind=0.5)
+
+
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
     from services.vision.printed import print_words, typefaces
 
