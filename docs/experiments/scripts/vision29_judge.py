@@ -1,6 +1,6 @@
 """Round vision29's judge: reads the bench's JSON runs and prints every condition of vision29_rule.txt.
 
-    python docs/experiments/scripts/vision29_judge.py RUNS_DIR
+    python docs/experiments/scripts/vision29_judge.py RUNS_DIR [TUNING_SEED TUNING_SEED]   # 7026 7027; 29b: 7028 7029
 
 RUNS_DIR holds {base,variant}_{tuning7026,tuning7027,heldout8181,heldout9292,blind119,blind120}.json
 (`bench/vision_bench.py --json`); a missing pair is reported as not run.
@@ -34,9 +34,9 @@ def check(name: str, value: float, limit: float) -> bool:
     return ok
 
 
-def main(runs: Path) -> int:
+def main(runs: Path, tuning: tuple[str, str] = ("7026", "7027")) -> int:
     verdicts: list[bool] = []
-    for label, names in (("S1 tuning 7026 + 7027", ("tuning7026", "tuning7027")),
+    for label, names in ((f"S1 tuning {tuning[0]} + {tuning[1]}", tuple(f"tuning{s}" for s in tuning)),
                          ("held-out 8181 + 9292", ("heldout8181", "heldout9292")),
                          ("blind 119 + 120 (reported)", ("blind119", "blind120"))):
         base, var = load(runs, "base", names), load(runs, "variant", names)
@@ -71,4 +71,4 @@ def main(runs: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(Path(sys.argv[1])))
+    sys.exit(main(Path(sys.argv[1]), (sys.argv[2], sys.argv[3])) if len(sys.argv) == 4 else main(Path(sys.argv[1])))
