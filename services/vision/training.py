@@ -1,4 +1,4 @@
-"""Train the mark verifier (`verifier.onnx`) on candidates from the TUNING generator only.
+"""Train the mark verifier (`verifier.onnx`) on candidates from the TUNING generator (`--blind`: the blind one's too).
 
 The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday`,
 joined by `python -m services.vision.ensemble` (round vision23g; see there).
@@ -10,15 +10,19 @@ joined by `python -m services.vision.ensemble` (round vision23g; see there).
                                        [--everyday] [--blind SHARE] [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
-Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X, O, TRIANGLE and
-mark-free, half of them with the default variation and half with extra clutter (8-14 distractors: more
-words, signs and textures to learn 'not a mark' from). Every component that passes the detector's
-shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
+Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
+`blind.py`), cycling X, O, TRIANGLE and mark-free, half of them with the default variation and half with extra
+clutter (8-14 distractors: more words, signs and textures to learn 'not a mark' from). Every component
+that passes the detector's shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
 shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; with
 `--proposals PEAK` (round vision18b; not the committed recipe) so is every proposal of the committed
 proposer (`proposer.py`), cropped as the detector crops it. Each candidate's label is the true mark's
 class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each candidate is its three
-crops (`verifier.crops`) and its claim (`verifier.claim`).
+crops (`verifier.crops`) and its claim (`verifier.claim`). With `--blind SHARE` (rounds vision29-29b; not the
+committed recipe) the network also learns from `blind.BlindGenerator`'s frames, SHARE of them
+per tuning frame, in chunks listed after the tuning ones (`harvest_blind`; training only: the held-back tenth the
+report is made on stays tuning chunks). The blind split of `bench/vision_bench.py` then no longer judges that network
+blind: other seeds, but the generator's look.
 
 The model (`Net`) is a small convolutional network trained with PyTorch (fixed seed, one thread, the
 eight flips and quarter turns of the crops plus contrast, blur and noise as augmentation), exported to
@@ -392,7 +396,7 @@ def export(net: torch.nn.Module, out: Path, thresholds: tuple[float, ...], loose
     for k, v in meta.items():
         entry = model.metadata_props.add()
         entry.key, entry.value = k, v
-    model.doc_string = "vision mark verifier: python -m services.vision.training (tuning generator only)"
+    model.doc_string = "vision mark verifier: python -m services.vision.training"
     onnx.save(model, str(out))
 
 
@@ -485,7 +489,7 @@ def main(
         float,
         typer.Option(
             help="also learn from the blind generator (blind.py): this many of its frames per tuning frame, for "
-            "training only (round vision29; the bench's blind split then no longer judges the model blind)"
+            "training only (rounds vision29-29b; the bench's blind split then no longer judges the model blind)"
         ),
     ] = 0.0,
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
