@@ -11,18 +11,19 @@ joined by `python -m services.vision.ensemble` (round vision23g; see there).
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
-`blind.py`), cycling X, O, TRIANGLE and mark-free, half of them with the default variation and half with extra
-clutter (8-14 distractors: more words, signs and textures to learn 'not a mark' from). Every component
-that passes the detector's shape tests is a candidate (`MarkDetector.candidates`, verifier off), and so is every loose one (no
-shape found, but ink on a light plain surround: `MarkDetector._loose`), with no claimed shape; with
+`blind.py`), cycling X, O, TRIANGLE and mark-free, half of them with the default variation and half with
+extra clutter (8-14 distractors: more words, signs and textures to learn 'not a mark' from). Every
+component that passes the detector's shape tests is a candidate (`MarkDetector.candidates`, verifier
+off), and so is every loose one (no shape found, but ink on a light plain surround:
+`MarkDetector._loose`), with no claimed shape; with
 `--proposals PEAK` (round vision18b; not the committed recipe) so is every proposal of the committed
 proposer (`proposer.py`), cropped as the detector crops it. Each candidate's label is the true mark's
 class when its box overlaps the true box with IoU >= 0.4, else 'none'. Each candidate is its three
-crops (`verifier.crops`) and its claim (`verifier.claim`). With `--blind SHARE` (rounds vision29-29b; not the
-committed recipe) the network also learns from `blind.BlindGenerator`'s frames, SHARE of them
-per tuning frame, in chunks listed after the tuning ones (`harvest_blind`; training only: the held-back tenth the
-report is made on stays tuning chunks). The blind split of `bench/vision_bench.py` then no longer judges that network
-blind: other seeds, but the generator's look.
+crops (`verifier.crops`) and its claim (`verifier.claim`). With `--blind SHARE` (rounds vision29-29b; not
+the committed recipe) the network also learns from `blind.BlindGenerator`'s frames, SHARE of them per
+tuning frame in whole chunks listed after the tuning ones (`harvest_blind`; training only: the held-back
+tenth the report is made on stays tuning chunks). The blind split of `bench/vision_bench.py` then no
+longer judges that network blind: other seeds, but the generator's look.
 
 The model (`Net`) is a small convolutional network trained with PyTorch (fixed seed, one thread, the
 eight flips and quarter turns of the crops plus contrast, blur and noise as augmentation), exported to

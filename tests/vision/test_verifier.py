@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import typer
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
@@ -340,6 +341,18 @@ def test_blind_chunks_come_after_the_tuning_chunks_and_the_cache_knows_the_share
         assert [[a.tolist() for a in p] for p in got] == [[a.tolist() for a in p] for p in parts]
         with pytest.raises(Refused):
             training.harvest_all(2 * training.CHUNK, 7, 1, cache(0.0, 2), blind=0.5)
+
+
+def test_a_negative_blind_share_is_refused_before_any_harvest(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from services.vision import training
+
+    app = typer.Typer()
+    app.command()(training.main)
+    result = CliRunner().invoke(app, ["--out", str(tmp_path / "m.onnx"), "--blind", "-0.5"])
+    assert result.exit_code == 2 and "--blind -0.5: a share of at least 0" in result.output
+    assert not (tmp_path / "m.onnx").exists()
 
 
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
