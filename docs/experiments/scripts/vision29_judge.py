@@ -1,6 +1,7 @@
 """Round vision29's judge: reads the bench's JSON runs and prints every condition of vision29_rule.txt.
 
-    python docs/experiments/scripts/vision29_judge.py RUNS_DIR [TUNING_SEED TUNING_SEED]   # 7026 7027; 29b: 7028 7029
+    python docs/experiments/scripts/vision29_judge.py RUNS_DIR [TUNING TUNING [HELDOUT HELDOUT BLIND BLIND]]
+    # vision29: 7026 7027 (8181 9292 119 120 by default); 29b: 7028 7029; 29c: 7030 7031 2323 5252 121 122
 
 RUNS_DIR holds {base,variant}_{tuning7026,tuning7027,heldout8181,heldout9292,blind119,blind120}.json
 (`bench/vision_bench.py --json`); a missing pair is reported as not run.
@@ -34,11 +35,12 @@ def check(name: str, value: float, limit: float) -> bool:
     return ok
 
 
-def main(runs: Path, tuning: tuple[str, str] = ("7026", "7027")) -> int:
+def main(runs: Path, tuning: tuple[str, ...] = ("7026", "7027"), heldout: tuple[str, ...] = ("8181", "9292"),
+         blind: tuple[str, ...] = ("119", "120")) -> int:
     verdicts: list[bool] = []
-    for label, names in ((f"S1 tuning {tuning[0]} + {tuning[1]}", tuple(f"tuning{s}" for s in tuning)),
-                         ("held-out 8181 + 9292", ("heldout8181", "heldout9292")),
-                         ("blind 119 + 120 (reported)", ("blind119", "blind120"))):
+    for label, names in ((f"S1 tuning {' + '.join(tuning)}", tuple(f"tuning{s}" for s in tuning)),
+                         (f"held-out {' + '.join(heldout)}", tuple(f"heldout{s}" for s in heldout)),
+                         (f"blind {' + '.join(blind)} (reported)", tuple(f"blind{s}" for s in blind))):
         base, var = load(runs, "base", names), load(runs, "variant", names)
         if base is None or var is None:
             print(f"{label}: not run")
@@ -71,4 +73,7 @@ def main(runs: Path, tuning: tuple[str, str] = ("7026", "7027")) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(Path(sys.argv[1]), (sys.argv[2], sys.argv[3])) if len(sys.argv) == 4 else main(Path(sys.argv[1])))
+    seeds = sys.argv[2:]
+    if len(seeds) not in (0, 2, 6):
+        sys.exit(__doc__)
+    sys.exit(main(Path(sys.argv[1]), *(tuple(seeds[k : k + 2]) for k in range(0, len(seeds), 2))))
