@@ -101,6 +101,14 @@ def iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
     return inter / union if union > 0 else 0.0
 
 
+Row = tuple[np.ndarray, int, int, bool]  # one candidate: crops, claim index, class index, kept by the detector
+
+
+def _harvest_detector(levels: str) -> MarkDetector:
+    """`HARVEST`'s detector, or one with the pyramid `levels` ("": `HARVEST`'s own)."""
+    return MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
+
+
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
@@ -129,7 +137,7 @@ def harvest(
     if everyday and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
     gen = SceneGenerator(seed=seed, variation=variation)
-    det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
+    det = _harvest_detector(levels)
     proposer = Proposer.load() if proposals > 0 else None
     words_rng = np.random.default_rng([seed, PRINTED_STREAM])
     faces = typefaces() if printed > 0 else []
@@ -149,9 +157,6 @@ def harvest(
             ]
         rows += _labelled(found, [(t.shape, t.box) for t in truth])
     return _stack(rows)
-
-
-Row = tuple[np.ndarray, int, int, bool]  # one candidate: crops, claim index, class index, kept by the detector
 
 
 def _labelled(found: list[Candidate], truth: list[tuple[Shape, tuple[int, int, int, int]]]) -> list[Row]:
@@ -186,7 +191,7 @@ def harvest_blind(seed: int, frames: int, levels: str = "") -> tuple[np.ndarray,
 
     cv2.setNumThreads(1)
     gen = BlindGenerator(seed=seed)
-    det = MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
+    det = _harvest_detector(levels)
     rows: list[Row] = []
     for i in range(frames):
         img, label = gen.frame(ORDER[i % len(ORDER)])
