@@ -1,9 +1,9 @@
-"""Train the mark proposer (`proposer.onnx`) on frames of the TUNING generator only.
+"""Train the mark proposer (`proposer.onnx`) on frames of the TUNING generator (`--blind`: the blind one's too).
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.proposer_training [--frames 24000] [--epochs 10] [--seed 20261125]
                                                 [--jobs 2] [--threads 2] [--cache FILE] [--width N x5]
-                                                [--keep-float FILE | --from-float FILE]
+                                                [--blind SHARE] [--keep-float FILE | --from-float FILE]
 
 Its defaults trained the float32 model of 48ea60e (37 min on 2 cores); the committed `proposer.onnx` is
 that model quantised by `--from-float` (round vision19), the last step of every training run too.
@@ -12,7 +12,10 @@ Frames come from `synthetic.SceneGenerator` (never from `heldout.py`), cycling X
 mark-free, in chunks of CHUNK frames: even chunks with the verifier training's default variation, odd
 ones with its extra clutter (`training.DEFAULT`, `training.CLUTTERED`), and in both a share of the
 cards held by people's variety of fingers. Each frame is kept only as the network's input
-(`proposer.network_input`: grey, half of 640x480) and its one mark's shape and box.
+(`proposer.network_input`: grey, half of 640x480) and its one mark's shape and box. With `--blind SHARE`
+(round vision30; not the committed recipe) SHARE frames of `blind.BlindGenerator` per tuning frame are added
+in whole chunks after the tuning ones (seeds `training.BLIND_SEEDS` on, as the verifier's `--blind`), for
+training only: the held-back tenth the report is made on stays tuning chunks.
 
 The network (`_net`) is a small fully convolutional encoder-decoder (stride 32 at its deepest, for the
 context of a mark filling the frame; output at stride 8) trained with CenterNet's losses (a focal loss
@@ -28,6 +31,7 @@ from __future__ import annotations
 import json
 import tempfile
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -35,9 +39,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 import numpy as np
 import typer
 
+from schemas.messages import Shape
 from services.vision.proposer import HEADS, INPUT_FORMAT, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode
-from services.vision.synthetic import SceneGenerator
-from services.vision.training import CLUTTERED, DEFAULT, ORDER
+from services.vision.synthetic import Box, SceneGenerator
+from services.vision.training import BLIND_SEEDS, CLUTTERED, DEFAULT, ORDER, blind_chunks
 
 if TYPE_CHECKING:
     import torch  # type: ignore[import-not-found,unused-ignore]
@@ -51,37 +56,70 @@ WIDTHS = (16, 24, 32, 64, 96)
 """the network's channels at strides 2, 4, 8, 16 and 32"""
 
 
-def render(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+def _arrays(
+    draw: Callable[[Shape | None], tuple[np.ndarray, list[tuple[Shape, Box]]]], frames: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(inputs (n, h, w) uint8 at the network's scale, labels (n, 5) float32: shape index or -1, then the
-    mark's box x, y, w, h in frame pixels) for `frames` tuning frames drawn with `seed`."""
+    mark's box x, y, w, h in frame pixels) for `frames` frames of `draw` (BGR frame and its marks), cycling
+    X, O, TRIANGLE and mark-free."""
     import cv2
 
     from services.vision.detector import to_gray
     from services.vision.proposer import network_input
 
     cv2.setNumThreads(1)
-    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS)
-    gen = SceneGenerator(width=WIDTH, height=HEIGHT, seed=seed, variation=variation)
     inputs = np.zeros((frames, HEIGHT // SCALE, WIDTH // SCALE), np.uint8)
     labels = np.full((frames, 5), -1.0, np.float32)
     for i in range(frames):
-        img, truth = gen.frame(ORDER[i % len(ORDER)])
+        img, truth = draw(ORDER[i % len(ORDER)])
         inputs[i] = np.round(network_input(to_gray(img))[0, 0] * 255.0).astype(np.uint8)
-        for t in truth:
-            labels[i] = (SHAPES.index(t.shape), *t.box)
+        for shape, box in truth:
+            labels[i] = (SHAPES.index(shape), *box)
     return inputs, labels
 
 
-def render_all(frames: int, seed: int, jobs: int, cache: Path | None) -> list[tuple[np.ndarray, np.ndarray]]:
-    """`render` of chunks with seeds seed, seed + 1, ...; read from / written to `cache` (one made with
-    other seeds is not used)."""
-    seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
+def render(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """`_arrays` of `frames` tuning frames drawn with `seed`."""
+    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS)
+    gen = SceneGenerator(width=WIDTH, height=HEIGHT, seed=seed, variation=variation)
+
+    def draw(shape: Shape | None) -> tuple[np.ndarray, list[tuple[Shape, Box]]]:
+        img, truth = gen.frame(shape)
+        return img, [(t.shape, t.box) for t in truth]
+
+    return _arrays(draw, frames)
+
+
+def render_blind(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """`_arrays` of `frames` frames of the blind generator (`blind.BlindGenerator(seed)`), for `--blind`
+    (round vision30): a second way of drawing cards, marks, hands and rooms to learn from."""
+    from services.vision.blind import BlindGenerator
+
+    gen = BlindGenerator(seed=seed, width=WIDTH, height=HEIGHT)
+
+    def draw(shape: Shape | None) -> tuple[np.ndarray, list[tuple[Shape, Box]]]:
+        img, label = gen.frame(shape)
+        return img, [] if label is None else [(label.shape, label.box)]
+
+    return _arrays(draw, frames)
+
+
+def render_all(
+    frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`render` of chunks with seeds seed, seed + 1, ...; then, with `blind` > 0, `blind_chunks(frames,
+    blind, CHUNK)` chunks of `render_blind` with seeds seed + BLIND_SEEDS, ... (listed after the tuning chunks);
+    read from / written to `cache` (one made with other seeds is not used)."""
+    tuning = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
+    blinds = [seed + BLIND_SEEDS + k for k in range(blind_chunks(frames, blind, CHUNK))]
+    seeds = tuning + blinds
     if cache is not None and cache.exists():
         with np.load(cache) as z:
             if z["seeds"].tolist() == seeds:
                 return [(z[f"x_{k}"], z[f"y_{k}"]) for k in range(len(seeds))]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        parts = list(pool.map(render, seeds, [CHUNK] * len(seeds)))
+        parts = list(pool.map(render, tuning, [CHUNK] * len(tuning)))
+        parts += pool.map(render_blind, blinds, [CHUNK] * len(blinds))
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{n}_{k}": a for k, p in enumerate(parts) for n, a in zip("xy", p, strict=True)}
@@ -371,13 +409,24 @@ def main(
         Path | None,
         typer.Option(help="skip training: quantise this float32 model (the frames still calibrate)"),
     ] = None,
+    blind: Annotated[
+        float,
+        typer.Option(
+            help="also learn from the blind generator (blind.py): this many of its frames per tuning frame, for "
+            "training only (round vision30; the bench's blind split then no longer judges the proposer blind)"
+        ),
+    ] = 0.0,
 ) -> None:
     if len(widths) != 5:
         raise typer.BadParameter("give --width five times: strides 2, 4, 8, 16 and 32", param_hint="--width")
+    if blind < 0:
+        raise typer.BadParameter(f"--blind {blind}: a share of at least 0", param_hint="--blind")
     t0 = time.monotonic()
-    parts = render_all(frames, seed, jobs, cache)
-    n_val = max(1, len(parts) // 10)
-    train, val = parts[:-n_val], parts[-n_val:]
+    parts = render_all(frames, seed, jobs, cache, blind)
+    n_blind = blind_chunks(frames, blind, CHUNK)
+    tuning, others = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
+    n_val = max(1, len(tuning) // 10)
+    train, val = tuning[:-n_val] + others, tuning[-n_val:]
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
     with tempfile.TemporaryDirectory() as tmp:
         if from_float is None:

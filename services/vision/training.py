@@ -204,9 +204,9 @@ def harvest_blind(seed: int, frames: int, levels: str = "") -> tuple[np.ndarray,
 BLIND_SEEDS = 1_000_000
 
 
-def blind_chunks(frames: int, blind: float) -> int:
-    """How many CHUNK-frame chunks of the blind generator `--blind` adds to `frames` tuning frames."""
-    return round(frames * blind / CHUNK)
+def blind_chunks(frames: int, blind: float, chunk: int = CHUNK) -> int:
+    """How many `chunk`-frame chunks of the blind generator `--blind` adds to `frames` tuning frames."""
+    return round(frames * blind / chunk)
 
 
 def harvest_all(
