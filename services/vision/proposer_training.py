@@ -54,11 +54,11 @@ DOC = "vision mark proposer: python -m services.vision.proposer_training (tuning
 CALIBRATION = 25
 WIDTHS = (16, 24, 32, 64, 96)
 """the network's channels at strides 2, 4, 8, 16 and 32"""
+Chunk = tuple[np.ndarray, np.ndarray]
+"""one chunk's network inputs (n, h, w) uint8 and labels (n, 5) (`_arrays`)"""
 
 
-def _arrays(
-    draw: Callable[[Shape | None], tuple[np.ndarray, list[tuple[Shape, Box]]]], frames: int
-) -> tuple[np.ndarray, np.ndarray]:
+def _arrays(draw: Callable[[Shape | None], tuple[np.ndarray, list[tuple[Shape, Box]]]], frames: int) -> Chunk:
     """(inputs (n, h, w) uint8 at the network's scale, labels (n, 5) float32: shape index or -1, then the
     mark's box x, y, w, h in frame pixels) for `frames` frames of `draw` (BGR frame and its marks), cycling
     X, O, TRIANGLE and mark-free."""
@@ -78,7 +78,7 @@ def _arrays(
     return inputs, labels
 
 
-def render(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+def render(seed: int, frames: int) -> Chunk:
     """`_arrays` of `frames` tuning frames drawn with `seed`."""
     variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS)
     gen = SceneGenerator(width=WIDTH, height=HEIGHT, seed=seed, variation=variation)
@@ -90,7 +90,7 @@ def render(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
     return _arrays(draw, frames)
 
 
-def render_blind(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+def render_blind(seed: int, frames: int) -> Chunk:
     """`_arrays` of `frames` frames of the blind generator (`blind.BlindGenerator(seed)`), for `--blind`
     (round vision30): a second way of drawing cards, marks, hands and rooms to learn from."""
     from services.vision.blind import BlindGenerator
@@ -104,9 +104,7 @@ def render_blind(seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
     return _arrays(draw, frames)
 
 
-def render_all(
-    frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0
-) -> list[tuple[np.ndarray, np.ndarray]]:
+def render_all(frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0) -> list[Chunk]:
     """`render` of chunks with seeds seed, seed + 1, ...; then, with `blind` > 0, `blind_chunks(frames,
     blind, CHUNK)` chunks of `render_blind` with seeds seed + BLIND_SEEDS, ... (listed after the tuning chunks);
     read from / written to `cache` (one made with other seeds is not used)."""
@@ -125,6 +123,14 @@ def render_all(
         arrays = {f"{n}_{k}": a for k, p in enumerate(parts) for n, a in zip("xy", p, strict=True)}
         np.savez(cache, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
     return parts
+
+
+def split(parts: list[Chunk], n_blind: int) -> tuple[list[Chunk], list[Chunk]]:
+    """(training chunks, held-back chunks) of `render_all`'s chunks whose last `n_blind` are the blind
+    generator's: the held-back tenth is the tuning chunks' last, and every blind chunk is for training."""
+    tuning, blinds = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
+    n_val = max(1, len(tuning) // 10)
+    return tuning[:-n_val] + blinds, tuning[-n_val:]
 
 
 def targets(labels: np.ndarray, h: int, w: int) -> tuple[np.ndarray, ...]:
@@ -240,7 +246,7 @@ def _loss(out: torch.Tensor, heat: Any, index: Any, size: Any, offset: Any) -> t
 
 
 def fit(
-    parts: list[tuple[np.ndarray, np.ndarray]],
+    parts: list[Chunk],
     seed: int,
     epochs: int,
     threads: int,
@@ -304,7 +310,7 @@ def export(net: Any, out: Path) -> None:
     onnx.save(model, str(out))
 
 
-def calibration_frames(train: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+def calibration_frames(train: list[Chunk]) -> np.ndarray:
     """The frames that set the int8 model's activation ranges: the first CALIBRATION of every third
     training chunk (both variations, every shape and mark-free)."""
     return np.concatenate([xs[:CALIBRATION] for xs, _ in train[::3]])
@@ -355,7 +361,7 @@ def quantize(float_model: Path, out: Path, frames: np.ndarray, work: Path) -> No
     onnx.save(model, str(out))
 
 
-def report(proposer: Proposer, val: list[tuple[np.ndarray, np.ndarray]], threshold: float) -> dict[str, Any]:
+def report(proposer: Proposer, val: list[Chunk], threshold: float) -> dict[str, Any]:
     """On the held-back chunks, with peaks of at least `threshold`: the share of marks with a proposal of
     the right shape whose centre lies in the mark's box, and proposals per frame elsewhere."""
     found = np.zeros(len(SHAPES), int)
@@ -423,10 +429,7 @@ def main(
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0", param_hint="--blind")
     t0 = time.monotonic()
     parts = render_all(frames, seed, jobs, cache, blind)
-    n_blind = blind_chunks(frames, blind, CHUNK)
-    tuning, others = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
-    n_val = max(1, len(tuning) // 10)
-    train, val = tuning[:-n_val] + others, tuning[-n_val:]
+    train, val = split(parts, blind_chunks(frames, blind, CHUNK))
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
     with tempfile.TemporaryDirectory() as tmp:
         if from_float is None:

@@ -158,3 +158,65 @@ def test_quantising_keeps_the_proposals_and_the_input_format(tmp_path: Path) -> 
         assert fa.shape == fb.shape
         spread = float(fa.max() - fa.min()) or 1.0
         assert float(np.abs(fa - fb).max()) <= 0.1 * spread
+
+
+def test_a_blind_render_is_deterministic_and_labels_the_blind_generators_marks() -> None:
+    """`proposer_training --blind` (round vision30): the blind generator's frames at the network's scale, the same
+    for the same seed, cycling X, O, TRIANGLE and mark-free, each mark's shape and a box inside the frame."""
+    from services.vision.proposer_training import HEIGHT, WIDTH, render_blind
+    from services.vision.training import BLIND_SEEDS
+
+    x, y = render_blind(BLIND_SEEDS + 3, 8)
+    x2, y2 = render_blind(BLIND_SEEDS + 3, 8)
+    assert np.array_equal(x, x2) and np.array_equal(y, y2)
+    assert x.shape == (8, HEIGHT // SCALE, WIDTH // SCALE) and x.dtype == np.uint8 and x.std() > 10
+    assert y[:, 0].tolist() == [0, 1, 2, -1] * 2  # X, O, TRIANGLE, mark-free: `training.ORDER`
+    marks = y[y[:, 0] >= 0]
+    assert (marks[:, 3:] > 0).all() and (marks[:, 1] + marks[:, 3] <= WIDTH + 1).all()
+    assert (marks[:, 2] + marks[:, 4] <= HEIGHT + 1).all()
+    assert not np.array_equal(x, render_blind(BLIND_SEEDS + 4, 8)[0])
+
+
+def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) -> None:
+    """The blind chunks come after the tuning ones; none is held back for the report; a cache made without them is
+    not used for a `--blind` run (here: a render that is refused)."""
+    from services.vision import proposer_training as pt
+
+    assert pt.blind_chunks(24000, 0.25, pt.CHUNK) == 12
+    parts = [(np.full(2, k, np.uint8), np.full(2, k, np.float32)) for k in range(12)]  # 10 tuning, 2 blind
+    train, val = pt.split(parts, 2)
+    assert [int(p[0][0]) for p in val] == [9] and [int(p[0][0]) for p in train] == [*range(9), 10, 11]
+    assert [int(p[0][0]) for p in pt.split(parts[:10], 0)[1]] == [9]
+
+    def cache(seeds: list[int]) -> Path:
+        path = tmp_path / f"{len(seeds)}.npz"
+        arrays = {f"{n}_{k}": a for k, p in enumerate(parts[: len(seeds)]) for n, a in zip("xy", p, strict=True)}
+        np.savez(path, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
+        return path
+
+    class Refused(RuntimeError):
+        pass
+
+    def no_pool(*args: object, **kwargs: object) -> None:
+        raise Refused
+
+    seeds = [7, 8, 7 + pt.BLIND_SEEDS]  # two tuning chunks, then one blind chunk (share 0.5 of 1,000 frames)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pt, "ProcessPoolExecutor", no_pool)
+        got = pt.render_all(2 * pt.CHUNK, 7, 1, cache(seeds), blind=0.5)
+        assert [int(p[0][0]) for p in got] == [0, 1, 2]
+        with pytest.raises(Refused):
+            pt.render_all(2 * pt.CHUNK, 7, 1, cache(seeds[:2]), blind=0.5)
+
+
+def test_a_negative_blind_share_is_refused_before_any_render(tmp_path: Path) -> None:
+    import typer
+    from typer.testing import CliRunner
+
+    from services.vision import proposer_training
+
+    app = typer.Typer()
+    app.command()(proposer_training.main)
+    result = CliRunner().invoke(app, ["--out", str(tmp_path / "p.onnx"), "--blind", "-0.5"])
+    assert result.exit_code == 2 and "--blind -0.5: a share of at least 0" in result.output
+    assert not (tmp_path / "p.onnx").exists()
