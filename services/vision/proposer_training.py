@@ -312,7 +312,7 @@ def export(net: Any, out: Path) -> None:
 
 def calibration_frames(train: list[Chunk]) -> np.ndarray:
     """The frames that set the int8 model's activation ranges: the first CALIBRATION of every third
-    training chunk (both variations, every shape and mark-free)."""
+    training chunk (both variations, every shape and mark-free; with `--blind`, every third blind chunk too)."""
     return np.concatenate([xs[:CALIBRATION] for xs, _ in train[::3]])
 
 
