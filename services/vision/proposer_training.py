@@ -42,7 +42,7 @@ import typer
 from schemas.messages import Shape
 from services.vision.proposer import HEADS, INPUT_FORMAT, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode
 from services.vision.synthetic import Box, SceneGenerator
-from services.vision.training import BLIND_SEEDS, CLUTTERED, DEFAULT, ORDER, blind_chunks
+from services.vision.training import BLIND_SEEDS, CLUTTERED, DEFAULT, ORDER, blind_chunks, split_chunks
 
 if TYPE_CHECKING:
     import torch  # type: ignore[import-not-found,unused-ignore]
@@ -123,14 +123,6 @@ def render_all(frames: int, seed: int, jobs: int, cache: Path | None, blind: flo
         arrays = {f"{n}_{k}": a for k, p in enumerate(parts) for n, a in zip("xy", p, strict=True)}
         np.savez(cache, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
     return parts
-
-
-def split(parts: list[Chunk], n_blind: int) -> tuple[list[Chunk], list[Chunk]]:
-    """(training chunks, held-back chunks) of `render_all`'s chunks whose last `n_blind` are the blind
-    generator's: the held-back tenth is the tuning chunks' last, and every blind chunk is for training."""
-    tuning, blinds = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
-    n_val = max(1, len(tuning) // 10)
-    return tuning[:-n_val] + blinds, tuning[-n_val:]
 
 
 def targets(labels: np.ndarray, h: int, w: int) -> tuple[np.ndarray, ...]:
@@ -429,7 +421,7 @@ def main(
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0", param_hint="--blind")
     t0 = time.monotonic()
     parts = render_all(frames, seed, jobs, cache, blind)
-    train, val = split(parts, blind_chunks(frames, blind, CHUNK))
+    train, val = split_chunks(parts, blind_chunks(frames, blind, CHUNK))
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
     with tempfile.TemporaryDirectory() as tmp:
         if from_float is None:

@@ -39,7 +39,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import numpy as np
 import typer
@@ -207,6 +207,18 @@ BLIND_SEEDS = 1_000_000
 def blind_chunks(frames: int, blind: float, chunk: int = CHUNK) -> int:
     """How many `chunk`-frame chunks of the blind generator `--blind` adds to `frames` tuning frames."""
     return round(frames * blind / chunk)
+
+
+Part = TypeVar("Part")
+
+
+def split_chunks(parts: list[Part], n_blind: int) -> tuple[list[Part], list[Part]]:
+    """(training chunks, held-back chunks) of chunks whose last `n_blind` are the blind generator's (`--blind`, here
+    and in `proposer_training`): the held-back tenth, which the report is made on, is the tuning chunks' last; every
+    blind chunk is for training."""
+    tuning, blinds = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
+    n_val = max(1, len(tuning) // 10)
+    return tuning[:-n_val] + blinds, tuning[-n_val:]
 
 
 def harvest_all(
@@ -521,10 +533,7 @@ def main(
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0")
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
                         hand_drawn_shapes, everyday, blind)
-    n_blind = blind_chunks(frames, blind)
-    tuning, others = parts[: len(parts) - n_blind], parts[len(parts) - n_blind :]
-    n_val = max(1, len(tuning) // 10)
-    train, val = tuning[:-n_val] + others, tuning[-n_val:]  # the report stays on held-back tuning chunks
+    train, val = split_chunks(parts, blind_chunks(frames, blind))  # the report stays on held-back tuning chunks
     x = np.concatenate([p[0] for p in train])
     c = np.concatenate([p[1] for p in train])
     y = np.concatenate([p[2] for p in train])

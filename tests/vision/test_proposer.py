@@ -184,9 +184,9 @@ def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) 
 
     assert pt.blind_chunks(24000, 0.25, pt.CHUNK) == 12
     parts = [(np.full(2, k, np.uint8), np.full(2, k, np.float32)) for k in range(12)]  # 10 tuning, 2 blind
-    train, val = pt.split(parts, 2)
+    train, val = pt.split_chunks(parts, 2)
     assert [int(p[0][0]) for p in val] == [9] and [int(p[0][0]) for p in train] == [*range(9), 10, 11]
-    assert [int(p[0][0]) for p in pt.split(parts[:10], 0)[1]] == [9]
+    assert [int(p[0][0]) for p in pt.split_chunks(parts[:10], 0)[1]] == [9]
 
     def cache(seeds: list[int]) -> Path:
         path = tmp_path / f"{len(seeds)}.npz"
