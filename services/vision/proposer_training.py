@@ -50,7 +50,7 @@ if TYPE_CHECKING:
 CHUNK = 500
 HANDS = 0.3  # share of cards with fingers that have people's variety of fingers (`Variation.hand_variety`)
 WIDTH, HEIGHT = 640, 480
-DOC = "vision mark proposer: python -m services.vision.proposer_training (tuning generator only)"
+DOC = "vision mark proposer: python -m services.vision.proposer_training"
 CALIBRATION = 25
 WIDTHS = (16, 24, 32, 64, 96)
 """the network's channels at strides 2, 4, 8, 16 and 32"""
