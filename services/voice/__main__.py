@@ -178,8 +178,9 @@ def train(
              "recipe; no head ships for it: give --out)")] = "whisper-tiny.en",
     more_voices: Annotated[str | None, typer.Option(
         "--more-voices", help="six more recorded speakers (MBROLA, RHVoice; Debian non-free; corpus.RECORDED_MORE): "
-                              "off, train (the training splits only; round voice19b) or train+tune (the tune splits, "
-                              "which place the knots, too; round voice19) [default: the shipped recipe's: train for "
+                              "off, train (the training splits only; round voice19b), train+tune (the tune splits, "
+                              "which place the knots, too; round voice19) or train+gb (as train, with Festival's "
+                              "British rab and don too; corpus.RECORDED_GB; round voice29) [default: the shipped recipe's: train for "
                               "whisper-tiny.en, off for speech-embedding]")] = None,
     word_folds: Annotated[int | None, typer.Option(
         "--word-folds", min=0,

@@ -111,20 +111,23 @@ class Sizes:
     place the knots."""
 
 
-MORE_VOICES = ("off", "train", "train+tune")
-"""`train --more-voices`: where `corpus.RECORDED_MORE` speak (`with_more_recorded`)."""
+MORE_VOICES = ("off", "train", "train+tune", "train+gb")
+"""`train --more-voices`: where `corpus.RECORDED_MORE` speak (`with_more_recorded`); "train+gb" adds `corpus.RECORDED_GB`
+to them (round voice29)."""
 
 
 def with_more_recorded(sizes: Sizes, where: str) -> Sizes:
     """`sizes` with `corpus.RECORDED_MORE` among the recorded speakers of the training splits, the `engines` split
     grown with them so that each recorded speaker says as many commands and other words there as before (100 clips
     per command); with `where` "train+tune" (round voice19) of the tune splits too, with "train" (round voice19b)
-    not: the knots are then placed on the same tune speech as before. ValueError for another `where`."""
+    not: the knots are then placed on the same tune speech as before; with "train+gb" (round voice29) as "train", with
+    `corpus.RECORDED_GB` after them. ValueError for another `where`."""
     if where not in MORE_VOICES:
         raise ValueError(f"{where!r}: one of {', '.join(MORE_VOICES)}")
     if where == "off":
         return sizes
-    recorded = sizes.recorded + tuple(v for v in corpus.RECORDED_MORE if v not in sizes.recorded)
+    more = corpus.RECORDED_MORE + (corpus.RECORDED_GB if where == "train+gb" else ())
+    recorded = sizes.recorded + tuple(v for v in more if v not in sizes.recorded)
     grow = len(recorded) / len(sizes.recorded)
     tune = recorded if where == "train+tune" else sizes.tune_recorded
     return replace(sizes, recorded=recorded, tune_recorded=tune, engines_positives=round(sizes.engines_positives * grow),

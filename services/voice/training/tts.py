@@ -103,9 +103,11 @@ def flite(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
     return _run_to_wav(argv)
 
 
-FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "slt_hts": "cmu_us_slt_arctic_hts"}
+FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "rab": "rab_diphone", "don": "don_diphone",
+                   "slt_hts": "cmu_us_slt_arctic_hts"}
 """`festival:<name>` -> Festival's voice function `voice_<value>`."""
-FESTIVAL_PACKAGES = {"kal": "festvox-kallpc16k", "ked": "festvox-kdlpc16k", "slt_hts": "festvox-us-slt-hts"}
+FESTIVAL_PACKAGES = {"kal": "festvox-kallpc16k", "ked": "festvox-kdlpc16k", "rab": "festvox-rablpc16k", "don": "festvox-don",
+                     "slt_hts": "festvox-us-slt-hts"}
 """The Debian package that carries each Festival voice."""
 
 
