@@ -170,6 +170,36 @@ def test_more_voices_in_training_only_leave_the_tune_splits_as_they_were() -> No
         dataset.with_more_recorded(base, "tune")
 
 
+def test_the_british_festival_speakers_join_the_training_splits_only() -> None:
+    """Round voice29's option: Festival's rab and don after the six more speakers, in training only, held out nowhere."""
+    pytest.importorskip("pocketsphinx")
+    base = dataset.Sizes()
+    gb = dataset.with_more_recorded(base, "train+gb")
+    assert gb.recorded == corpus.RECORDED_TRAIN + corpus.RECORDED_MORE + corpus.RECORDED_GB
+    assert gb.tune_recorded == base.tune_recorded
+    assert gb.engines_positives == round(base.engines_positives * 11 / 3)
+    assert {r.voice for r in dataset.recipes("engines", gb, 12)} == set(gb.recorded)
+    for split in ("tune", "neighbours-tune", "speakers-tune", "recorded-tune"):
+        assert dataset.recipes(split, gb, 12) == dataset.recipes(split, base, 12), split
+    held = set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
+    assert not held & set(corpus.RECORDED_GB) and not set(corpus.RECORDED_GB) & set(corpus.voices("tune"))
+    assert {v.partition(":")[2] for v in corpus.RECORDED_GB} <= set(tts.FESTIVAL_VOICES)
+
+
+@pytest.mark.parametrize("voice", ["rab", "don"])
+def test_the_british_festival_voices_say_a_word_at_the_asked_speed_and_pitch(voice: str) -> None:
+    """Each voice's pitch is scaled from its own (don's is 135 Hz, the others' 105): `pitch` 1.3 is higher than 1."""
+    if shutil.which("text2wave") is None or not Path(f"/usr/share/festival/voices/english/{voice}_diphone").exists():
+        pytest.skip(f"Festival's {voice} voice is not installed (apt-get install festival "
+                    f"{tts.FESTIVAL_PACKAGES[voice]})")
+    x = tts.synthesise("no", f"festival:{voice}")
+    high = tts.synthesise("no", f"festival:{voice}", pitch=1.3)
+    slow = tts.synthesise("no", f"festival:{voice}", speed=1.3)
+    assert 0.2 < len(x) / 16000 < 1.5 and np.max(np.abs(x)) == pytest.approx(0.5)
+    assert len(slow) > 1.15 * len(x)
+    assert f0(high) > 1.15 * f0(x)
+
+
 def test_train_more_voices_option_sets_only_the_recorded_speakers(train_cli: TrainCli) -> None:
     """The default head's recipe has the six more speakers in training only (round voice19b, landed by rule voice19c);
     `--more-voices` changes that and nothing else; the speech-embedding head's recipe has none of them."""

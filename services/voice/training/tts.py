@@ -109,6 +109,9 @@ FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone", "rab": "rab_dipho
 FESTIVAL_PACKAGES = {"kal": "festvox-kallpc16k", "ked": "festvox-kdlpc16k", "rab": "festvox-rablpc16k", "don": "festvox-don",
                      "slt_hts": "festvox-us-slt-hts"}
 """The Debian package that carries each Festival voice."""
+FESTIVAL_F0 = {"don": (135.0, 30.0)}
+"""A diphone voice's own pitch, mean and spread in Hz (its `int_lr_params` targets), which `pitch` scales; (105, 15)
+for the others."""
 
 
 def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
@@ -118,7 +121,9 @@ def festival(text: str, voice: str, speed: float, pitch: float) -> np.ndarray:
             "-eval", f"(Parameter.set 'Duration_Stretch {speed:.3f})"]
     if round(pitch, 3) != 1.0 and FESTIVAL_VOICES[voice].endswith("_diphone"):
         # the diphone voices' intonation model (Int_Targets_LR) maps onto this mean and spread
-        lr = f"(target_f0_mean {105 * pitch:.1f}) (target_f0_std {15 * pitch:.1f}) (model_f0_mean 170) (model_f0_std 34)"
+        mean, std = FESTIVAL_F0.get(voice, (105.0, 15.0))
+        lr = (f"(target_f0_mean {mean * pitch:.1f}) (target_f0_std {std * pitch:.1f}) "
+              "(model_f0_mean 170) (model_f0_std 34)")
         argv += ["-eval", f"(set! int_lr_params '({lr}))"]
     try:
         return _run_to_wav(argv, stdin=text.encode())
