@@ -180,8 +180,8 @@ def train(
         "--more-voices", help="six more recorded speakers (MBROLA, RHVoice; Debian non-free; corpus.RECORDED_MORE): "
                               "off, train (the training splits only; round voice19b), train+tune (the tune splits, "
                               "which place the knots, too; round voice19) or train+gb (as train, with Festival's "
-                              "British rab and don too; corpus.RECORDED_GB; round voice29) [default: the shipped recipe's: train for "
-                              "whisper-tiny.en, off for speech-embedding]")] = None,
+                              "British rab and don too; corpus.RECORDED_GB; round voice29) [default: the shipped "
+                              "recipe's: train for whisper-tiny.en, off for speech-embedding]")] = None,
     word_folds: Annotated[int | None, typer.Option(
         "--word-folds", min=0,
         help="folds of the near-command training words; the knots move to where words the head never heard "

@@ -60,13 +60,16 @@ INSTALLED = {
     "mbrola:us2": Path("/usr/share/mbrola/us2").exists() and shutil.which("espeak-ng") is not None,
     "rhvoice:bdl": shutil.which("RHVoice-test") is not None,
     "pico:en-US": shutil.which("pico2wave") is not None,
+    # round voice29's British voices (Debian main); don speaks at its own 135 Hz, which `pitch` scales (tts.FESTIVAL_F0)
+    **{f"festival:{v}": shutil.which("text2wave") is not None
+       and Path(f"/usr/share/festival/voices/english/{v}_diphone").exists() for v in ("rab", "don")},
 }
 
 
 @pytest.mark.parametrize("voice", sorted(INSTALLED))
 def test_each_engine_says_a_word_at_the_asked_speed_and_pitch(voice: str) -> None:
     if not INSTALLED[voice]:
-        pytest.skip(f"{voice.partition(':')[0]} is not installed (Debian contrib/non-free; services/voice/README.md)")
+        pytest.skip(f"{voice} is not installed (services/voice/README.md names its Debian packages)")
     x = tts.synthesise("no", voice)  # all voiced: the loudest 100 ms has a pitch
     slow = tts.synthesise("no", voice, speed=1.3)
     high = tts.synthesise("no", voice, pitch=1.3)
@@ -184,20 +187,6 @@ def test_the_british_festival_speakers_join_the_training_splits_only() -> None:
     held = set(corpus.voices("heldout")) | set(corpus.HELDOUT_EXTRA)
     assert not held & set(corpus.RECORDED_GB) and not set(corpus.RECORDED_GB) & set(corpus.voices("tune"))
     assert {v.partition(":")[2] for v in corpus.RECORDED_GB} <= set(tts.FESTIVAL_VOICES)
-
-
-@pytest.mark.parametrize("voice", ["rab", "don"])
-def test_the_british_festival_voices_say_a_word_at_the_asked_speed_and_pitch(voice: str) -> None:
-    """Each voice's pitch is scaled from its own (don's is 135 Hz, the others' 105): `pitch` 1.3 is higher than 1."""
-    if shutil.which("text2wave") is None or not Path(f"/usr/share/festival/voices/english/{voice}_diphone").exists():
-        pytest.skip(f"Festival's {voice} voice is not installed (apt-get install festival "
-                    f"{tts.FESTIVAL_PACKAGES[voice]})")
-    x = tts.synthesise("no", f"festival:{voice}")
-    high = tts.synthesise("no", f"festival:{voice}", pitch=1.3)
-    slow = tts.synthesise("no", f"festival:{voice}", speed=1.3)
-    assert 0.2 < len(x) / 16000 < 1.5 and np.max(np.abs(x)) == pytest.approx(0.5)
-    assert len(slow) > 1.15 * len(x)
-    assert f0(high) > 1.15 * f0(x)
 
 
 def test_train_more_voices_option_sets_only_the_recorded_speakers(train_cli: TrainCli) -> None:
