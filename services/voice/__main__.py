@@ -45,6 +45,13 @@ AgreeMinOption = Annotated[
                  help="spotter: publish a command only if the walk gate's head gives it at least this probability "
                       "(0: off; no effect without a gate) [default: 0]"),
 ]
+DecoderOption = Annotated[
+    str | None,
+    typer.Option("--decoder", envvar="HRI_VOICE_DECODER",
+                 help="spotter on Whisper's encoder: 'on' asks Whisper's decoder for a second opinion (it vetoes a "
+                      "command it would not write, and rescues one the head missed, below the confidence that walks "
+                      "or confirms) [default: off]"),
+]
 VadOption = Annotated[
     str,
     typer.Option("--vad", envvar="HRI_VOICE_VAD",
@@ -78,14 +85,14 @@ LexiconOption = Annotated[
 def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption = None,
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
-         walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, vad: VadOption = "silero",
-         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
+         walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
+         vad: VadOption = "silero", early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate, agree_min=agree_min, vad=vad, early_look=early_look,
-                             clear_window=clear_window)
+                             head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder, vad=vad,
+                             early_look=early_look, clear_window=clear_window)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -103,11 +110,12 @@ def transcribe(
     head: HeadOption = None,
     walk_gate: WalkGateOption = None,
     agree_min: AgreeMinOption = None,
+    decoder: DecoderOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
         eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate,
-                          agree_min=agree_min)
+                          agree_min=agree_min, decoder=decoder)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

@@ -24,6 +24,13 @@ utterance is not understood. It only ever removes a publication (no walk, no que
 make), costs one more embedding (~10 ms) per command the head accepts, and needs a gate (an enrolled head has none:
 the veto is off there).
 
+The decoder's rescue (`decoder`, `HRI_VOICE_DECODER=on`, round voice30; `spotter/decoder.py`): where the head
+accepts no command, Whisper's own decoder reads the encoder output the head's embedding was pooled from, and the
+utterance is heard as the command it writes first if it is sure enough of it (`decoder.RESCUE_AT`,
+`decoder.ENDS_AT`), with a confidence from 0.5 to 0.6: a rescued "go" is asked about, never walked on, and a
+rescued "yes" confirms no question. Only for a head on Whisper's encoder (the default); one short decoding
+(~20-25 ms) for each utterance the head does not accept, none for one it does.
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -38,14 +45,19 @@ import numpy as np
 
 from schemas.messages import Command
 from services.voice.engine import EngineError, Recognition
+from services.voice.spotter.decoder import FirstWord
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
-from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, speech_seconds
+from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, centre, speech_seconds
 from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, SURE_CONFIDENCE, Head, HeadError
+from services.voice.spotter.whisper import WhisperEmbedder
 
 NO_GATE = "none"
 AGREE_ENV = "HRI_VOICE_AGREE_MIN"
 DEFAULT_AGREE_MIN = 0.0
 """Off: round voice27 (0.25) heard 0.750 -> 0.663 of held-out commands for 8.7 -> 5.2 % of other words (voice README)."""
+DECODER_ENV = "HRI_VOICE_DECODER"
+DEFAULT_DECODER = False
+"""Off until round voice30's held-out run decides (voice README)."""
 
 
 def agree_min_from(raw: str | float | None) -> float:
@@ -60,6 +72,21 @@ def agree_min_from(raw: str | float | None) -> float:
     if not 0.0 <= value < 1.0:
         raise EngineError(f"{AGREE_ENV}={raw!r}: a probability from 0 (off) up to, not including, 1")
     return value
+
+
+def decoder_from(raw: str | bool | None) -> bool:
+    """Whether the decoder's opinion is on, from `HRI_VOICE_DECODER` / `--decoder` (None or "": the default);
+    EngineError unless on or off (1/0, true/false, yes/no)."""
+    if raw is None or raw == "":
+        return DEFAULT_DECODER
+    if isinstance(raw, bool):
+        return raw
+    value = raw.strip().lower()
+    if value in ("on", "1", "true", "yes"):
+        return True
+    if value in ("off", "0", "false", "no"):
+        return False
+    raise EngineError(f"{DECODER_ENV}={raw!r}: on or off")
 
 
 @dataclass
@@ -105,7 +132,7 @@ class SpotterEngine:
     name = "spotter"
 
     def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
-                 agree_min: float = DEFAULT_AGREE_MIN) -> None:
+                 agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
@@ -114,14 +141,20 @@ class SpotterEngine:
         self.gate = gate
         self.agree_min = agree_min if gate is not None else 0.0
         """The agreement veto's probability; 0 (off) without a gate."""
+        self.decoder: FirstWord | None = None
+        """The decoder's opinion; None (off) unless asked for and the head reads Whisper's encoder."""
+        if decoder and isinstance(self.embedder, WhisperEmbedder):
+            self.decoder = FirstWord(self.embedder.ctranslate2_model, str(self.embedder.path / "tokenizer.json"),
+                                     head.vocabulary)
 
     @classmethod
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
-                  agree_min: str | float | None = None) -> SpotterEngine:
+                  agree_min: str | float | None = None, decoder: str | bool | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
-            return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min))
-        except (HeadError, FeatureError) as exc:
+            return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min),
+                       decoder=decoder_from(decoder))
+        except (HeadError, FeatureError, ValueError) as exc:
             raise EngineError(str(exc)) from None
 
     def recognise(self, pcm: bytes) -> Recognition:
@@ -130,7 +163,13 @@ class SpotterEngine:
         if audio_s > MAX_SPEECH_S:
             return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
                                {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
-        feats = self.embedder.utterance(pcm)
+        encoded: np.ndarray | None = None
+        if self.decoder is not None:  # the encoder output is kept for the decoder
+            assert isinstance(self.embedder, WhisperEmbedder)
+            encoded = self.embedder.encode(centre(pcm, 0))
+            feats = self.embedder.pool(encoded)
+        else:
+            feats = self.embedder.utterance(pcm)
         probs = self.head.probabilities(feats)[0]
         best = int(probs.argmax())
         n = len(self.head.vocabulary)
@@ -138,6 +177,7 @@ class SpotterEngine:
         conf = self.head.confidence(top_cmd, float(probs[top_cmd]))
         detail = {"p": {c: round(float(p), 3) for c, p in zip(self.head.classes, probs, strict=True) if p >= 0.01}}
         word = self.head.classes[best]
+        head_refused = best == n or conf < 0.5  # the head accepts no command (what the decoder may rescue)
         if best == n:
             command, reason = None, "other"
             conf = min(conf, 0.49)
@@ -162,5 +202,14 @@ class SpotterEngine:
                 detail["gate"] = round(gate_conf, 3)
                 if gate_conf < SURE_CONFIDENCE:  # one embedding alone never makes the robot walk unasked
                     conf, reason = SURE_CONFIDENCE - 0.01, "accepted (the walk gate's head is not sure: ask)"
+        if head_refused and encoded is not None:
+            assert self.decoder is not None
+            opinion = self.decoder.of(encoded)
+            detail["decoder"] = {"first": {w: round(p, 3) for w, p in opinion.first.items() if p >= 0.01},
+                                 "best": opinion.best, "ends": round(opinion.ends, 3)}
+            rescued = opinion.rescue()
+            if rescued is not None:  # the head heard no command; the decoder writes one first, sure of it
+                word, conf = rescued
+                command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)

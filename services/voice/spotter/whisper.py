@@ -107,6 +107,11 @@ class WhisperEmbedder:
         if width != DIM:
             raise FeatureError(f"{self.path}: encoder width {width}, not tiny.en's {DIM}: another Whisper size")
 
+    @property
+    def ctranslate2_model(self) -> Any:
+        """The loaded CTranslate2 Whisper model (encoder and decoder: `decoder.FirstWord` runs the decoder)."""
+        return self._model
+
     def encode(self, samples: np.ndarray) -> np.ndarray:
         """Samples in int16 units (float32, the 2.0 s window) -> (100, 384) encoder frames."""
         mel = self._mel(samples / 32768.0, padding=0)[:, :MEL_FRAMES]
@@ -115,5 +120,8 @@ class WhisperEmbedder:
 
     def utterance(self, pcm: bytes, seed: int = 0) -> np.ndarray:
         """One utterance (16-bit PCM) centred in the 2.0 s window -> (frames, 384): the stretches' averages."""
-        frames = self.encode(centre(pcm, seed))
-        return frames.reshape(self.frames, -1, DIM).mean(axis=1)
+        return self.pool(self.encode(centre(pcm, seed)))
+
+    def pool(self, encoded: np.ndarray) -> np.ndarray:
+        """The encoder's (100, 384) frames of one window -> (frames, 384): the stretches' averages."""
+        return encoded.reshape(self.frames, -1, DIM).mean(axis=1)
