@@ -71,6 +71,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert h.detail["spotter_embedding"] == "whisper-tiny.en"  # the committed default head's
     assert h.detail["spotter_walk_gate"] == "speech-embedding"  # its walk gate: the shipped speech-embedding head
     assert h.detail["spotter_agree_min"] == 0.0  # the agreement veto: off by default
+    assert h.detail["spotter_decoder"] is False  # the decoder's rescue: off by default
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(15) == 0
 
