@@ -15,7 +15,7 @@ from services.voice.audio import to_pcm
 from services.voice.engine import EngineError, make_engine
 from services.voice.engine_spotter import DECODER_ENV, SpotterEngine, decoder_from
 from services.voice.spotter import whisper
-from services.voice.spotter.decoder import RESCUE_CONFIDENCE, FirstWord, Opinion
+from services.voice.spotter.decoder import ENDS_AT, RESCUE_AT, RESCUE_CONFIDENCE, FirstWord, Opinion
 from services.voice.spotter.embedders import SPEECH_EMBEDDING
 from services.voice.spotter.features import centre
 from services.voice.spotter.head import SURE_CONFIDENCE
@@ -26,7 +26,7 @@ YES_MIN_CONFIDENCE = 0.7  # knowledge.soar: a "yes" below this cancels a questio
 
 
 def _said(word: str) -> bytes:
-    x = tts.synthesise(word, "espeak:en-us", 1.0, 1.0)
+    x = tts.synthesise(word, "espeak:en-us+f2", 1.0, 1.0)
     return to_pcm(np.concatenate([np.zeros(1600), x, np.zeros(1600)]))
 
 
@@ -54,7 +54,7 @@ def test_the_decoder_writes_the_command_said_first_and_no_command_for_another_wo
     assert isinstance(embedder, whisper.WhisperEmbedder)
     for word in ("stop", "go", "yes"):
         opinion = engine_other.decoder.of(embedder.encode(centre(clips[word], 0)))
-        assert opinion.best == word and opinion.first[word] > 0.3 and opinion.ends > 0.3
+        assert opinion.best == word and opinion.first[word] > RESCUE_AT and opinion.ends > ENDS_AT
         assert max(opinion.first, key=opinion.first.__getitem__) == word
     opinion = engine_other.decoder.of(embedder.encode(centre(clips["window"], 0)))
     assert opinion.best is None and max(opinion.first.values()) < 0.02
@@ -125,5 +125,5 @@ def test_the_opinion_s_thresholds() -> None:
     sure = Opinion({"go": 0.9, "stop": 0.05}, "go", 0.8)
     assert sure.rescue() == ("go", pytest.approx(0.5 + (RESCUE_CONFIDENCE - 0.5) * 0.9))
     assert Opinion({"go": 0.9}, "go", 0.5).rescue() is None  # the word runs on: "go" + "at"
-    assert Opinion({"go": 0.2}, "go", 0.9).rescue() is None  # not sure enough
+    assert Opinion({"go": 0.45}, "go", 0.9).rescue() is None  # not sure enough
     assert Opinion({"go": 0.9}, None, 0.0).rescue() is None  # the greedy first token is no command's
