@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
+from services.runtime.flags import parse_flag
+
 DEFAULT_PORT = "/dev/ttyUSB0"
 
 
@@ -13,11 +15,9 @@ class MotionConfigError(ValueError):
 
 
 def _flag(name: str, raw: str) -> bool:
-    value = raw.strip().lower()
-    if value in ("1", "true", "yes", "on"):
-        return True
-    if value in ("0", "false", "no", "off"):
-        return False
+    value = parse_flag(raw)
+    if value is not None:
+        return value
     raise MotionConfigError(f"{name}={raw!r}: use 1 (simulated OP2 bus) or 0 (the robot on a serial port)")
 
 

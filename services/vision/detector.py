@@ -328,9 +328,6 @@ class _Pending:
     part: bool = False  # a loose part `_split` cut off a bigger component: never named O
 
 
-_TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
-
-
 def changed_settings(config: DetectorConfig) -> str:
     """The settings of `config` that differ from the defaults, as `parse_settings` reads them ("" for none)."""
     defaults = DetectorConfig()
@@ -365,6 +362,8 @@ def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
     levels comma-separated and each level's numbers colon-separated (`levels=1:31,2:31:50,4:31`, the
     pyramid before round vision16). ValueError names the item that is no setting or whose value is not
     of the setting's type."""
+    from services.runtime.flags import parse_flag  # here: the detector itself needs no bus runtime
+
     if isinstance(items, str):
         items = [t for t in re.split(r"[;\s]+", items) if t]
     defaults = DetectorConfig()
@@ -381,9 +380,10 @@ def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
             if key == "levels":
                 changed[key] = parse_levels(value)
             elif isinstance(old, bool):
-                if value.lower() not in _TRUE + _FALSE:
+                flag = parse_flag(value)
+                if flag is None:
                     raise ValueError(value)
-                changed[key] = value.lower() in _TRUE
+                changed[key] = flag
             elif isinstance(old, tuple):
                 kind = type(old[0]) if old else str
                 changed[key] = tuple(kind(v) for v in value.split(",") if v)

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from schemas.messages import Command
+from services.runtime.flags import parse_flag
 from services.voice.engine import EngineError, Recognition
 from services.voice.spotter.decoder import FirstWord
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
@@ -79,14 +80,10 @@ def decoder_from(raw: str | bool | None) -> bool:
     EngineError unless on or off (1/0, true/false, yes/no)."""
     if raw is None or raw == "":
         return DEFAULT_DECODER
-    if isinstance(raw, bool):
-        return raw
-    value = raw.strip().lower()
-    if value in ("on", "1", "true", "yes"):
-        return True
-    if value in ("off", "0", "false", "no"):
-        return False
-    raise EngineError(f"{DECODER_ENV}={raw!r}: on or off")
+    value = raw if isinstance(raw, bool) else parse_flag(raw)
+    if value is None:
+        raise EngineError(f"{DECODER_ENV}={raw!r}: on or off")
+    return value
 
 
 @dataclass
