@@ -48,9 +48,8 @@ AgreeMinOption = Annotated[
 DecoderOption = Annotated[
     str | None,
     typer.Option("--decoder", envvar="HRI_VOICE_DECODER",
-                 help="spotter on Whisper's encoder: 'on' asks Whisper's decoder for a second opinion (it vetoes a "
-                      "command it would not write, and rescues one the head missed, below the confidence that walks "
-                      "or confirms) [default: off]"),
+                 help="spotter on Whisper's encoder: 'on' lets Whisper's own decoder rescue a command the head "
+                      "missed, below the confidence that walks or confirms (a rescued 'go' asks) [default: off]"),
 ]
 VadOption = Annotated[
     str,

@@ -58,7 +58,8 @@ DEFAULT_AGREE_MIN = 0.0
 """Off: round voice27 (0.25) heard 0.750 -> 0.663 of held-out commands for 8.7 -> 5.2 % of other words (voice README)."""
 DECODER_ENV = "HRI_VOICE_DECODER"
 DEFAULT_DECODER = False
-"""Off until round voice30's held-out run decides (voice README)."""
+"""Off: rounds voice30 and 30b heard 10-15 more of 504 held-out commands but took 8-31 more of 1,914 other words and
+asked 6-33 more questions; 30b failed its confirmation seed (voice README, round 30)."""
 
 
 def agree_min_from(raw: str | float | None) -> float:
@@ -76,7 +77,7 @@ def agree_min_from(raw: str | float | None) -> float:
 
 
 def decoder_from(raw: str | bool | None) -> bool:
-    """Whether the decoder's opinion is on, from `HRI_VOICE_DECODER` / `--decoder` (None or "": the default);
+    """Whether the decoder's rescue is on, from `HRI_VOICE_DECODER` / `--decoder` (None or "": the default);
     EngineError unless on or off (1/0, true/false, yes/no)."""
     if raw is None or raw == "":
         return DEFAULT_DECODER
@@ -139,7 +140,7 @@ class SpotterEngine:
         self.agree_min = agree_min if gate is not None else 0.0
         """The agreement veto's probability; 0 (off) without a gate."""
         self.decoder: FirstWord | None = None
-        """The decoder's opinion; None (off) unless asked for and the head reads Whisper's encoder."""
+        """The decoder's rescue; None (off) unless asked for and the head reads Whisper's encoder."""
         if decoder and isinstance(self.embedder, WhisperEmbedder):
             self.decoder = FirstWord(self.embedder.ctranslate2_model, str(self.embedder.path / "tokenizer.json"),
                                      head.vocabulary)
