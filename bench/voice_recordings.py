@@ -25,6 +25,7 @@ rate) with `NAME.txt`, its transcript, one utterance a line: recordings of the p
 
     .venv/bin/python bench/voice_recordings.py                         # spotter + pocketsphinx
     .venv/bin/python bench/voice_recordings.py --folder my_recordings --engines spotter --show
+    .venv/bin/python bench/voice_recordings.py --engines spotter --decoder on --words   # the decoder's rescue too
 """
 
 from __future__ import annotations
@@ -195,6 +196,8 @@ def main() -> int:
     ap.add_argument("--folder", type=Path, help="NAME.wav + NAME.txt pairs (default: the moonshine-voice wheel's two)")
     ap.add_argument("--show", action="store_true", help="print every utterance's start, command and text")
     ap.add_argument("--words", action="store_true", help="also each word alone, cut out by Whisper's timestamps")
+    ap.add_argument("--decoder", help="the spotter's second opinion from Whisper's decoder, on or off "
+                                      "(HRI_VOICE_DECODER; default: the engine's)")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -202,7 +205,7 @@ def main() -> int:
     rows = []
     clips: dict[str, list[tuple[str, bytes]]] = {}
     for name in args.engines.split(","):
-        engine = make_engine(name)
+        engine = make_engine(name, decoder=args.decoder if name == "spotter" else None)
         for rec in recordings:
             heard = stream(engine, rec, SegmenterConfig())
             if args.show:
