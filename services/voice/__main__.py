@@ -49,7 +49,7 @@ DecoderOption = Annotated[
     str | None,
     typer.Option("--decoder", envvar="HRI_VOICE_DECODER",
                  help="spotter on Whisper's encoder: 'on' lets Whisper's own decoder rescue a command the head "
-                      "missed, below the confidence that confirms a question; never 'go' [default: off]"),
+                      "missed, below the confidence that walks or confirms (a rescued 'go' asks) [default: off]"),
 ]
 VadOption = Annotated[
     str,

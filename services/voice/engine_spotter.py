@@ -27,8 +27,8 @@ the veto is off there).
 The decoder's rescue (`decoder`, `HRI_VOICE_DECODER=on`, round voice30; `spotter/decoder.py`): where the head
 accepts no command, Whisper's own decoder reads the encoder output the head's embedding was pooled from, and the
 utterance is heard as the command it writes first if it is sure enough of it (`decoder.RESCUE_AT`,
-`decoder.ENDS_AT`), with a confidence from 0.5 to 0.6, so a rescued "yes" confirms no question; "go" is never
-rescued (`decoder.NEVER_RESCUED`, round voice30c). Only for a head on Whisper's encoder (the default); one short decoding
+`decoder.ENDS_AT`), with a confidence from 0.5 to 0.6: a rescued "go" is asked about, never walked on, and a
+rescued "yes" confirms no question. Only for a head on Whisper's encoder (the default); one short decoding
 (~20-25 ms) for each utterance the head does not accept, none for one it does.
 
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
@@ -208,6 +208,6 @@ class SpotterEngine:
             rescued = opinion.rescue()
             if rescued is not None:  # the head heard no command; the decoder writes one first, sure of it
                 word, conf = rescued
-                command, reason = Command(word), "rescued by the decoder (never go; below 0.7: confirms nothing)"
+                command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)

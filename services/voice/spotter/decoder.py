@@ -16,10 +16,10 @@ encoding) for two steps, greedily, after `<|startoftranscript|><|notimestamps|>`
 
 How the engine uses it (`SpotterEngine`, `HRI_VOICE_DECODER=on`): only where the head accepts no command (it
 hears "other", or a command below its accept knot), the utterance is *rescued* as command c if the greedy first
-token is c's with `first[c]` >= `RESCUE_AT` (0.5) and `ends` >= `ENDS_AT` (0.6), and c is not "go"
-(`NEVER_RESCUED`). It is published with a confidence from 0.5 up to `RESCUE_CONFIDENCE`: enough for the reasoner
-to act on (0.5), too little for a "yes" to confirm a question (0.7). The decoder alone never makes the robot walk
-or ask to, and a command the head accepts is never changed, so the decoder costs no time where the head hears one.
+token is c's with `first[c]` >= `RESCUE_AT` (0.5) and `ends` >= `ENDS_AT` (0.6). It is published with a confidence from 0.5
+up to `RESCUE_CONFIDENCE`: enough for the reasoner to act on (0.5), too little for a "go" to walk unasked (0.85:
+the robot asks) or for a "yes" to confirm a question (0.7). The decoder alone never makes the robot walk, and a
+command the head accepts is never changed, so the decoder costs no time where the head hears a command.
 
 Why no veto the other way (a command the head accepts, dropped where the decoder would not write it): on the
 tuning voices it cost more commands than other words (the decoder hears espeak-ng's voices badly: espeak-ng en-gb
@@ -45,11 +45,6 @@ ENDS_AT = 0.6
 """... and the word ends there with at least this probability."""
 RESCUE_CONFIDENCE = 0.6
 """The highest confidence a rescued command is published with (0.5 + 0.1 x the decoder's probability)."""
-NEVER_RESCUED = frozenset({"go"})
-"""Commands the decoder never rescues. A rescued "go" could only ask ("Shall I walk forward?": it is published below
-0.85), and in rounds 30 and 30b every question nobody asked for that the rescue added was one; "go" is the one
-command whose mistakes move the robot, which should not walk, nor offer to, on the decoder's word alone (round
-voice30c). Where the greedy first token is "go", nothing is rescued."""
 END_MARKS = (".", "!", "?", ",")
 
 
@@ -75,7 +70,7 @@ class Opinion:
 
     def rescue(self) -> tuple[str, float] | None:
         """The command the decoder hears where the head heard none, with its published confidence; or None."""
-        if self.best is None or self.best in NEVER_RESCUED or self.first[self.best] < RESCUE_AT or self.ends < ENDS_AT:
+        if self.best is None or self.first[self.best] < RESCUE_AT or self.ends < ENDS_AT:
             return None
         return self.best, 0.5 + (RESCUE_CONFIDENCE - 0.5) * self.first[self.best]
 
