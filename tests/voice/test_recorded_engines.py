@@ -60,7 +60,8 @@ INSTALLED = {
     "mbrola:us2": Path("/usr/share/mbrola/us2").exists() and shutil.which("espeak-ng") is not None,
     "rhvoice:bdl": shutil.which("RHVoice-test") is not None,
     "pico:en-US": shutil.which("pico2wave") is not None,
-    # round voice29's British voices (Debian contrib and non-free); don speaks at its own 135 Hz, which `pitch` scales (tts.FESTIVAL_F0)
+    # round voice29's British voices (Debian contrib and non-free); don speaks at its own 135 Hz, which `pitch`
+    # scales (tts.FESTIVAL_F0)
     **{f"festival:{v}": shutil.which("text2wave") is not None
        and Path(f"/usr/share/festival/voices/english/{v}_diphone").exists() for v in ("rab", "don")},
 }

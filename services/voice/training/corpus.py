@@ -60,10 +60,11 @@ three men; RHVoice's statistical-parametric voices, two men and a woman), added 
 not in its tune splits. Never a held-out speaker: RHVoice's slt is flite's held-out slt,
 so it is held out too (`HELDOUT_EXTRA`), with MBROLA's us1 and the whole SVOX Pico engine."""
 RECORDED_GB = ("festival:rab", "festival:don")
-"""Two more recorded speakers, both British men, through Festival's diphone voices (Debian contrib, with non-free's festlex-oald: festvox-rablpc16k,
-festvox-don; don is a minimal 10 kHz voice): added after `RECORDED_MORE` by `dataset.with_more_recorded(sizes,
-"train+gb")` (round voice29), in the training splits only. No split or bench row used them before: the committed head
-heard 21 of don's 28 clean commands, none of its four "go"s (a British "go", as Pico en-GB and MBROLA en1 say it)."""
+"""Two more recorded speakers, both British men, through Festival's diphone voices (Debian contrib, with non-free's
+festlex-oald: festvox-rablpc16k, festvox-don; don is a minimal 10 kHz voice): added after `RECORDED_MORE` by
+`dataset.with_more_recorded(sizes, "train+gb")` (round voice29), in the training splits only. No split or bench row
+used them before: the committed head heard 21 of don's 28 clean commands, none of its four "go"s (a British "go", as
+Pico en-GB and MBROLA en1 say it)."""
 HELDOUT_OTHER_ENGINES = ("flite:rms", "flite:slt", "festival:kal")
 HELDOUT_NEURAL = ("piper:en_US-joe-medium", "kokoro:jm_kumo", "kokoro:jf_nezumi")
 """Neural voices, held out (stop 45): Piper's joe (VITS, trained on an American man's recordings) and two of Kokoro-82M's
