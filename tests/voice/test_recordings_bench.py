@@ -43,12 +43,14 @@ def test_published_commands_are_matched_to_what_was_said() -> None:
     assert (walk["false_walks"], walk["false_asks"]) == (1, 0)
 
 
-def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_reading() -> None:
+@pytest.mark.parametrize("decoder", ["off", "on"])  # on: Whisper's decoder may rescue what the head missed (round 30)
+def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_reading(decoder: str) -> None:
     if importlib.util.find_spec("moonshine_voice") is None:  # its audio is read; its library is never imported
         pytest.skip("moonshine-voice (its audio) is in the test extra")
     from services.voice.engine import make_engine
 
-    engine = make_engine("spotter")
+    engine = make_engine("spotter", decoder=decoder)
+    assert (getattr(engine, "decoder", None) is not None) == (decoder == "on")
     rows = {r.name: score(stream(engine, r, SegmenterConfig()), r, Policy.from_knowledge()) for r in wheel_recordings()}
     reading, dialogue = rows["two_cities.wav"], rows["endgame_nagg_nell.wav"]
     assert reading["utterances"] >= 7 and reading["published"] == {}  # 44 s of a person reading: cut every 6 s
