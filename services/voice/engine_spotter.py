@@ -48,7 +48,7 @@ from services.runtime.flags import parse_flag
 from services.voice.engine import EngineError, Recognition
 from services.voice.spotter.decoder import FirstWord
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
-from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, centre, speech_seconds
+from services.voice.spotter.features import MAX_SPEECH_S, FeatureError, speech_seconds
 from services.voice.spotter.head import DEFAULT_HEAD, SPEECH_EMBEDDING_HEAD, SURE_CONFIDENCE, Head, HeadError
 from services.voice.spotter.whisper import WhisperEmbedder
 
@@ -164,7 +164,7 @@ class SpotterEngine:
         encoded: np.ndarray | None = None
         if self.decoder is not None:  # the encoder output is kept for the decoder
             assert isinstance(self.embedder, WhisperEmbedder)
-            encoded = self.embedder.encode(centre(pcm, 0))
+            encoded = self.embedder.encoded(pcm)
             feats = self.embedder.pool(encoded)
         else:
             feats = self.embedder.utterance(pcm)

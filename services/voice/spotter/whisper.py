@@ -118,9 +118,14 @@ class WhisperEmbedder:
         view = self._view(np.ascontiguousarray(mel[None], dtype=np.float32))
         return np.asarray(self._model.encode(view, to_cpu=True))[0]
 
+    def encoded(self, pcm: bytes, seed: int = 0) -> np.ndarray:
+        """One utterance (16-bit PCM) centred in the 2.0 s window -> its (100, 384) encoder frames (what `utterance`
+        pools, and what the decoder's rescue reads)."""
+        return self.encode(centre(pcm, seed))
+
     def utterance(self, pcm: bytes, seed: int = 0) -> np.ndarray:
         """One utterance (16-bit PCM) centred in the 2.0 s window -> (frames, 384): the stretches' averages."""
-        return self.pool(self.encode(centre(pcm, seed)))
+        return self.pool(self.encoded(pcm, seed))
 
     def pool(self, encoded: np.ndarray) -> np.ndarray:
         """The encoder's (100, 384) frames of one window -> (frames, 384): the stretches' averages."""
