@@ -27,6 +27,9 @@ It differs from `synthetic.py` in how frames are made, not only in its seed:
   tuning generator's lens is its own model, applied by its own code.
 
 `HeldOutGenerator(seed).frame(shape)` returns a BGR uint8 frame and a `HeldOutLabel` (or None).
+`HeldOutGenerator(seed).clip(shape)` returns a `HeldOutClip`: 36 frames at 30 fps of one such scene seen by a
+camera that stands or sways as a walking robot's head does, the card held up from frame 6 on
+(`bench/vision_clips.py`).
 """
 
 from __future__ import annotations
@@ -114,6 +117,30 @@ class HeldOutLabel:
     filled: bool  # a filled triangle
 
 
+CLIP_FPS = 30.0
+CLIP_FRAMES = 36
+CLIP_SHOWN = 6
+"""Frames of a clip before the card is held up: the confirmation windows start from the scene without it."""
+CLIP_ZOOM = 1.1
+
+
+@dataclass(frozen=True)
+class HeldOutClip:
+    frames: list[np.ndarray]
+    boxes: list[Box | None]
+    """The mark's box in each frame; None before the card is held up, or while less than half of it is in view."""
+    label: HeldOutLabel | None
+    """The mark as drawn in the scene (its box before the camera's view; blur 0); None for a mark-free clip."""
+    shown: int
+    """The first frame with the card."""
+    walking: bool
+    """Whether the camera sways as on a walking robot (else it stands still: only the noise changes)."""
+    sway_px: float
+    """The camera's sway or bob amplitude, whichever is larger, pixels."""
+    blur_px: float
+    """The longest motion streak of the mark over one exposure in the clip, pixels."""
+
+
 def _fonts() -> list[Path]:
     return [Path(f) for f in FONT_FILES if Path(f).is_file()]
 
@@ -144,14 +171,7 @@ class HeldOutGenerator:
     # ------------------------------------------------------------------ public
     def frame(self, shape: Shape | None) -> tuple[np.ndarray, HeldOutLabel | None]:
         rng = self.rng
-        bg = self._background()
-        for _ in range(int(rng.integers(2, 7))):
-            self._clutter(bg)
-        label = None
-        if shape is not None:
-            label = self._held_card(bg, shape)
-        elif rng.random() < 0.5:
-            self._held_card(bg, None)  # a blank or decoy card held up
+        bg, _, label = self._scene(shape)
         blur = float(rng.uniform(0, 20)) if rng.random() < 0.7 else 0.0
         if self._lens_maps is not None:
             bg = Image.fromarray(cv2.remap(np.asarray(bg), *self._lens_maps, cv2.INTER_LINEAR,
@@ -163,7 +183,83 @@ class HeldOutGenerator:
             )
         return img, label
 
+    def clip(self, shape: Shape | None, frames: int = CLIP_FRAMES, shown: int = CLIP_SHOWN) -> HeldOutClip:
+        """`frames` frames at `CLIP_FPS` of one scene seen by a camera on a walking robot (three clips in four; the
+        rest stand still), the card held up from frame `shown` on (before it, the same scene without the card).
+
+        The camera: its view is the scene enlarged by `CLIP_ZOOM` (so its sway stays inside the scene). Walking, it
+        sways sideways (0-18 px) and rolls (0-3 degrees) once a stride of 0.9-1.4 s, bobs (0-8 px) twice a stride,
+        is jolted at each footfall (a 10 Hz shake of 0-12 px dying away in about 0.1 s: streaks to about 20 px) and closes in on the scene
+        by up to 12 % a second. Each frame is exposed for the clip's 4-33 ms, and the mark's travel in that time
+        is its motion blur. The light, focus, noise level and JPEG quality are the clip's (drawn as for a
+        frame); the noise is new in every frame. The card itself does not move in the scene: a hand's own motion
+        is not modelled."""
+        if self._lens_maps is not None:
+            raise ValueError("clips are made through a pinhole camera: no lens")
+        rng, w, h = self.rng, self.width, self.height
+        scene, empty, label = self._scene(shape, keep_empty=True)
+        look = self._look()
+        noise, quality = float(rng.uniform(0, 0.6)), int(rng.integers(40, 91))
+        walking = rng.random() < 0.75
+        stride = float(rng.uniform(0.9, 1.4))
+        sway, bob, jolt, roll = (float(rng.uniform(0, a)) for a in (18.0, 8.0, 12.0, 3.0))
+        approach = float(rng.uniform(0, 0.12))
+        phase = rng.uniform(0, 2 * math.pi, 2)
+        exposure = float(rng.uniform(0.004, 0.033))
+        if not walking:
+            sway = bob = jolt = roll = approach = 0.0
+
+        def view(t: float) -> np.ndarray:  # scene pixels -> frame pixels at time t
+            a = 2 * math.pi * t / stride + phase[0]
+            z = CLIP_ZOOM * (1 + approach * t)
+            r = math.radians(roll * math.sin(a))
+            since = (a % math.pi) / math.pi * stride / 2  # seconds since the last footfall (two a stride)
+            shake = jolt * math.exp(-since / 0.06) * math.sin(2 * math.pi * 10 * since)
+            shift = (w / 2 + sway * math.sin(a), h / 2 + bob * math.sin(2 * a + phase[1]) + shake)
+            turn = np.array([[z * math.cos(r), -z * math.sin(r), 0], [z * math.sin(r), z * math.cos(r), 0], [0, 0, 1]])
+            return np.array([[1, 0, shift[0]], [0, 1, shift[1]], [0, 0, 1]]) @ turn @ np.array(
+                [[1, 0, -w / 2], [0, 1, -h / 2], [0, 0, 1.0]]
+            )
+
+        x, y, bw, bh = label.box if label is not None else (w // 2, h // 2, 0, 0)
+        corners = np.array([[x, y], [x + bw, y], [x + bw, y + bh], [x, y + bh]], np.float64)
+        centre = corners.mean(axis=0, keepdims=True)
+        out: list[np.ndarray] = []
+        boxes: list[Box | None] = []
+        streaks: list[float] = []
+        for i in range(frames):
+            t = i / CLIP_FPS
+            m = view(t)
+            src = np.asarray(scene if i >= shown or empty is None else empty)
+            seen = cv2.warpPerspective(src, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT_101)
+            arr = _lit(Image.fromarray(seen), look)
+            dx, dy = (_project(view(t + exposure / 2), centre) - _project(view(t - exposure / 2), centre))[0]
+            streak = math.hypot(dx, dy)
+            streaks.append(streak)
+            if streak >= 1.5:
+                arr = _motion_blur(arr, streak, math.atan2(dy, dx))
+            out.append(self._sensor(arr, noise, quality))
+            boxes.append(_in_view(_project(m, corners), w, h) if label is not None and i >= shown else None)
+        return HeldOutClip(out, boxes, label, shown, walking, max(sway, bob), max(streaks))
+
     # ------------------------------------------------------------------ scene
+    def _scene(
+        self, shape: Shape | None, keep_empty: bool = False
+    ) -> tuple[Image.Image, Image.Image | None, HeldOutLabel | None]:
+        """Background, clutter and the held card (or, mark-free, a blank or decoy card half the time): the scene,
+        the same scene before the card was put in it (with `keep_empty`, else None), and the mark's label."""
+        rng = self.rng
+        bg = self._background()
+        for _ in range(int(rng.integers(2, 7))):
+            self._clutter(bg)
+        empty = bg.copy() if keep_empty else None
+        label = None
+        if shape is not None:
+            label = self._held_card(bg, shape)
+        elif rng.random() < 0.5:
+            self._held_card(bg, None)  # a blank or decoy card held up
+        return bg, empty, label
+
     def _background(self) -> Image.Image:
         rng, w, h = self.rng, self.width, self.height
         if self.bank and rng.random() < 0.75:
@@ -474,10 +570,16 @@ class HeldOutGenerator:
 
     # ------------------------------------------------------------------ the camera
     def _camera(self, img: Image.Image, blur: float) -> np.ndarray:
+        look = self._look()
+        arr = _lit(img, look)
+        if blur >= 1.5:
+            arr = _motion_blur(arr, blur, float(self.rng.uniform(0, math.pi)))
+        return self._sensor(arr, float(self.rng.uniform(0, 0.6)))
+
+    def _look(self) -> _Look:
+        """The light on a frame (exposure, colour cast, vignette, a strong gradient) and the lens's focus."""
         rng, w, h = self.rng, self.width, self.height
-        a = np.asarray(img, np.float32)
         yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-        # light: exposure, colour cast, vignette, a strong gradient
         gain = float(rng.uniform(0.3, 1.6))
         cast = rng.uniform(0.85, 1.15, 3).astype(np.float32)
         r2 = ((xx - w / 2) / (w / 2)) ** 2 + ((yy - h / 2) / (h / 2)) ** 2
@@ -487,30 +589,47 @@ class HeldOutGenerator:
             (xx / w - 0.5) * math.cos(ang) + (yy / h - 0.5) * math.sin(ang)
         )
         light = (gain * vignette * grad)[..., None] * cast
-        a = a * light
-        a = np.clip(a, 0, 255)
-        out = Image.fromarray(a.astype(np.uint8))
-        if rng.random() < 0.4:
-            out = out.filter(ImageFilter.GaussianBlur(float(rng.uniform(0.3, 1.8))))
-        arr = np.asarray(out, np.float32)
-        if blur >= 1.5:
-            n = math.ceil(blur) | 1
-            kernel = np.zeros((n, n), np.float32)
-            c = n // 2
-            th = float(rng.uniform(0, math.pi))
-            for s in np.linspace(-blur / 2, blur / 2, 4 * n):
-                kernel[round(c + s * math.sin(th)), round(c + s * math.cos(th))] += 1
-            kernel /= kernel.sum()
-            arr = cv2.filter2D(arr, -1, kernel, borderType=cv2.BORDER_REFLECT)
-        # shot noise: variance grows with the signal
-        k = float(rng.uniform(0, 0.6))
-        arr = arr + rng.standard_normal(arr.shape).astype(np.float32) * np.sqrt(k * arr + 1.0)
+        defocus = float(rng.uniform(0.3, 1.8)) if rng.random() < 0.4 else 0.0
+        return _Look(light, defocus)
+
+    def _sensor(self, arr: np.ndarray, noise: float, quality: int | None = None) -> np.ndarray:
+        """Shot noise (its variance grows with the signal, `noise` x it) and JPEG at `quality` (None: drawn after
+        the noise, 40-90) -> the BGR frame."""
+        rng = self.rng
+        arr = arr + rng.standard_normal(arr.shape).astype(np.float32) * np.sqrt(noise * arr + 1.0)
         out = Image.fromarray(np.clip(arr, 0, 255).astype(np.uint8))
         buf = io.BytesIO()
-        out.save(buf, format="JPEG", quality=int(rng.integers(40, 91)))
+        out.save(buf, format="JPEG", quality=int(rng.integers(40, 91)) if quality is None else quality)
         buf.seek(0)
         rgb = np.asarray(Image.open(buf).convert("RGB"))
         return np.ascontiguousarray(rgb[:, :, ::-1])
+
+
+@dataclass(frozen=True)
+class _Look:
+    light: np.ndarray
+    """(h, w, 3) factors: exposure x vignette x gradient x colour cast"""
+    defocus: float
+    """Gaussian blur radius of an out-of-focus lens; 0: in focus"""
+
+
+def _lit(img: Image.Image, look: _Look) -> np.ndarray:
+    a = np.clip(np.asarray(img, np.float32) * look.light, 0, 255)
+    out = Image.fromarray(a.astype(np.uint8))
+    if look.defocus:
+        out = out.filter(ImageFilter.GaussianBlur(look.defocus))
+    return np.asarray(out, np.float32)
+
+
+def _motion_blur(arr: np.ndarray, length: float, angle: float) -> np.ndarray:
+    """A straight streak `length` pixels long at `angle` (radians from the x axis)."""
+    n = math.ceil(length) | 1
+    kernel = np.zeros((n, n), np.float32)
+    c = n // 2
+    for s in np.linspace(-length / 2, length / 2, 4 * n):
+        kernel[round(c + s * math.sin(angle)), round(c + s * math.cos(angle))] += 1
+    kernel /= kernel.sum()
+    return cv2.filter2D(arr, -1, kernel, borderType=cv2.BORDER_REFLECT)
 
 
 # ---------------------------------------------------------------------- helpers
@@ -643,3 +762,14 @@ def _homography(
 def _project(h: np.ndarray, pts: np.ndarray) -> np.ndarray:
     p = np.column_stack([pts, np.ones(len(pts))]) @ h.T
     return p[:, :2] / p[:, 2:3]
+
+
+def _in_view(corners: np.ndarray, w: int, h: int) -> Box | None:
+    """The box around four projected corners, cut to the frame; None if less than half of it is in view."""
+    x0, y0 = corners.min(axis=0)
+    x1, y1 = corners.max(axis=0)
+    cx0, cy0, cx1, cy1 = max(x0, 0.0), max(y0, 0.0), min(x1, w - 1.0), min(y1, h - 1.0)
+    if cx1 <= cx0 or cy1 <= cy0 or (cx1 - cx0) * (cy1 - cy0) < 0.5 * (x1 - x0) * (y1 - y0):
+        return None
+    return (round(cx0), round(cy0), round(cx1 - cx0) + 1, round(cy1 - cy0) + 1)
+

@@ -1,0 +1,121 @@
+"""Held-out clips (`HeldOutGenerator.clip`) and their bench (`bench/vision_clips.py`): one scene seen by a camera
+that stands or sways as a walking robot's, the card held up at a known frame; scored through the service's
+detector and frame confirmation."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from bench import vision_clips
+from schemas.messages import Shape
+from services.vision.debounce import Confirmation, Debouncer
+from services.vision.detector import Detection
+from services.vision.heldout import CLIP_SHOWN, HeldOutClip, HeldOutGenerator, HeldOutLabel
+
+
+def _clips(seed: int, n: int, frames: int = 10) -> list[HeldOutClip]:
+    gen = HeldOutGenerator(seed=seed)
+    return [gen.clip(Shape.X, frames=frames) for _ in range(n)]
+
+
+def test_a_clip_is_deterministic_and_shows_the_card_from_its_frame() -> None:
+    first, again = _clips(11, 2), _clips(11, 2)
+    for a, b in zip(first, again, strict=True):
+        assert a.boxes == b.boxes and all(np.array_equal(x, y) for x, y in zip(a.frames, b.frames, strict=True))
+    for clip in first:
+        assert len(clip.frames) == len(clip.boxes) == 10 and clip.frames[0].shape == (480, 640, 3)
+        assert clip.boxes[:CLIP_SHOWN] == [None] * CLIP_SHOWN
+        assert clip.label is not None and clip.label.shape is Shape.X
+        assert all(b is not None for b in clip.boxes[CLIP_SHOWN:])  # a card placed in view stays in view
+
+
+def test_a_standing_camera_sees_the_same_scene_and_a_walking_one_sways() -> None:
+    clips = _clips(12, 12)
+    standing = next(c for c in clips if not c.walking)
+    walking = next(c for c in clips if c.walking and c.sway_px > 5)
+    assert standing.blur_px == 0 and standing.sway_px == 0
+    assert len(set(standing.boxes[CLIP_SHOWN:])) == 1  # the mark does not move in the frame
+    # consecutive frames differ by the sensor's noise only (and JPEG), not by where things are
+    a, b = (cv2.GaussianBlur(standing.frames[i].astype(np.float32), (9, 9), 3) for i in (CLIP_SHOWN, CLIP_SHOWN + 1))
+    assert np.abs(a - b).mean() < 6
+    assert len(set(walking.boxes[CLIP_SHOWN:])) > 2 and walking.blur_px > 0
+
+
+def test_a_card_before_it_is_held_up_is_not_in_the_scene() -> None:
+    clip = _clips(13, 1)[0]
+    x, y, w, h = clip.boxes[CLIP_SHOWN]  # type: ignore[misc]
+    before, after = (clip.frames[i][y : y + h, x : x + w].astype(np.float32) for i in (CLIP_SHOWN - 1, CLIP_SHOWN))
+    assert np.abs(before - after).mean() > 10
+
+
+def test_clips_are_made_through_a_pinhole_only() -> None:
+    with pytest.raises(ValueError, match="no lens"):
+        HeldOutGenerator(seed=1, lens=0.1).clip(Shape.X)
+
+
+def _clip(shape: Shape | None, frames: int = 10) -> HeldOutClip:
+    """A clip's labels without frames: the card up from frame 6, at (100, 100)."""
+    label = None if shape is None else HeldOutLabel(shape, (100, 100, 50, 50), 50.0, 0.0, 0.0, False, False)
+    box = None if shape is None else (100, 100, 50, 50)
+    return HeldOutClip([], [None] * CLIP_SHOWN + [box] * (frames - CLIP_SHOWN), label, CLIP_SHOWN, True, 5.0, 2.0)
+
+
+def _run(clip: HeldOutClip, found: dict[int, list[Detection]]) -> vision_clips.ClipScore:
+    """Detections by frame through the service's confirmation, then scored."""
+    debounce = Debouncer(Confirmation())
+    per_frame = [found.get(i, []) for i in range(len(clip.boxes))]
+    return vision_clips.score_clip(clip, per_frame, [debounce.update(d) for d in per_frame])
+
+
+def test_an_x_counts_from_its_first_frame_and_an_o_from_its_third() -> None:
+    x = _run(_clip(Shape.X), {8: [Detection(Shape.X, 0.9, (102, 101, 48, 49))]})
+    assert x.confirmed_at == 2 and x.frames_found == 1 and x.frames_with_mark == 4 and x.false_frames == 0
+    o_box = (100, 100, 50, 50)
+    o = _run(_clip(Shape.O), {i: [Detection(Shape.O, 0.9, o_box)] for i in (6, 7, 9)})
+    assert o.confirmed_at == 3  # 3 of 4: the third sighting, at frame 9
+    missed = _run(_clip(Shape.O), {i: [Detection(Shape.O, 0.9, o_box)] for i in (6, 9)})
+    assert missed.confirmed_at is None and missed.frames_found == 2
+
+
+def test_marks_elsewhere_or_before_the_card_are_false() -> None:
+    far = _run(_clip(Shape.X), {7: [Detection(Shape.X, 0.9, (400, 300, 40, 40))]})
+    assert far.frames_found == 0 and far.false_frames == 1 and far.confirmed_at == 1  # the robot stops all the same
+    early = _run(_clip(Shape.X), {2: [Detection(Shape.X, 0.9, (100, 100, 50, 50))]})
+    assert early.confirmed_at is None and Shape.X in early.confirmed and early.false_frames == 1
+    free = _run(_clip(None), {i: [Detection(Shape.O, 0.8, (5, 5, 30, 30))] for i in (3, 4, 5)})
+    summary = vision_clips.summarise([(free, _clip(None))])
+    assert summary["none"] == {
+        "clips": 1,
+        "false_danger_events": 0,
+        "false_o_events": 1,
+        "false_frame_rate": round(3 / 10, 4),
+    }
+
+
+def test_bench_prints_events_per_class() -> None:
+    import typer
+
+    app = typer.Typer()
+    app.command()(vision_clips.main)
+    result = CliRunner().invoke(app, ["--clips", "1", "--frames", "8", "--seed", "3"])
+    assert result.exit_code == 0, result.output
+    for text in ("X ", "TRIANGLE", "O ", "mark-free clips: 1", "frames per CPU-second"):
+        assert text in result.output
+    bad = CliRunner().invoke(app, ["--frames", "6"])
+    assert bad.exit_code == 2 and "lead-in" in bad.output
+
+
+def test_other_windows_replay_the_same_detections() -> None:
+    """A false O seen in three frames running lifts a danger under 3 of 4, not under 4 of 5; an X seen once stops
+    the robot under 1 of 3, not under 2 of 3."""
+    free = _clip(None)
+    o_thrice = [[Detection(Shape.O, 0.8, (5, 5, 30, 30))] if i in (3, 4, 5) else [] for i in range(10)]
+    x_clip = _clip(Shape.X)
+    x_once = [[Detection(Shape.X, 0.9, (100, 100, 50, 50))] if i == 7 else [] for i in range(10)]
+    w = vision_clips.windows([(free, o_thrice), (x_clip, x_once)])
+    assert w["safe"]["3/4"]["false_events"] == 1 and w["safe"]["4/5"]["false_events"] == 0
+    assert w["danger"]["1/3"]["seen_within_1s"] == 1 and w["danger"]["2/3"]["seen_within_1s"] == 0
+    assert w["danger"]["1/3"]["ms_to_confirm_p50"] == [33]
