@@ -17,8 +17,12 @@ Printed per class:
   `vision_bench.py` counts a frame), to set against how often the stream confirms it;
 - for mark-free clips, **false events**: clips in which an X or triangle (a needless stop) or an O (a danger
   lifted by nothing: the dangerous one) was confirmed, and the false marks' frame rate;
-- wrong-class events: an O confirmed in a danger clip, an X or triangle in an O clip;
-- seen by camera (walking / standing), by mark size and by the clip's longest motion streak.
+- **never found**: clips in which the detector found the mark in no frame at all;
+- wrong-class events: an O confirmed in a danger clip, an X or triangle in an O clip; **lifted**: a danger clip
+  in which, after the danger was confirmed, a frame confirmed an O and no X or triangle (the reasoner, for which
+  danger wins only within one observation, would have taken the danger as lifted);
+- seen by camera (walking / standing), by mark size, by the clip's longest motion streak, by a finger near the
+  mark, and for triangles by filled or outline.
 
     .venv/bin/python bench/vision_clips.py [--clips 100] [--seed 2718] [--json]
 """
@@ -67,6 +71,9 @@ class ClipScore:
     """Frames with a detection that is not the mark (another class, or elsewhere)."""
     confirmed: set[Shape] = field(default_factory=set)
     """Every class confirmed in the clip, the lead-in frames included."""
+    lifted: bool = False
+    """A danger clip: after its X or triangle was confirmed, a frame confirmed an O and no danger mark (the
+    reasoner, for which danger wins within one observation, would have taken the danger as lifted)."""
 
 
 def score_clip(
@@ -77,6 +84,9 @@ def score_clip(
     score = ClipScore(shape, frames=len(found))
     for i, (box, dets, conf) in enumerate(zip(clip.boxes, found, confirmed, strict=True)):
         score.confirmed.update(d.shape for d in conf)
+        shapes = {d.shape for d in conf}
+        if shape in DANGER_SHAPES and score.confirmed_at is not None and Shape.O in shapes:
+            score.lifted |= not shapes & DANGER_SHAPES
         if (
             shape is not None
             and i >= clip.shown
@@ -173,6 +183,8 @@ def summarise(rows: list[tuple[ClipScore, HeldOutClip]]) -> dict[str, Any]:
                 ("camera", "walking" if c.walking else "standing"),
                 ("size_px", _bin(c.label.size, SIZE_BINS)),
                 ("streak_px", _bin(c.blur_px, STREAK_BINS)),
+                ("finger_near", str(c.label.finger_near).lower()),
+                *((("filled", str(c.label.filled).lower()),) if shape is Shape.TRIANGLE else ()),
             ):
                 cell = slices[name][value]
                 cell[0] += s.confirmed_at is not None and s.confirmed_at < within
@@ -192,6 +204,8 @@ def summarise(rows: list[tuple[ClipScore, HeldOutClip]]) -> dict[str, Any]:
                 sum(s.frames_found for s, _ in mine) / max(1, sum(s.frames_with_mark for s, _ in mine)), 3
             ),
             "wrong_class_events": sum(any(w in s.confirmed for w in wrong) for s, _ in mine),
+            "danger_lifted_events": sum(s.lifted for s, _ in mine),
+            "missed_in_every_frame": sum(s.confirmed_at is None and s.frames_found == 0 for s, _ in mine),
             "seen_within_1s_by": {
                 name: {k: f"{v[0]}/{v[1]}" for k, v in sorted(cells.items())}
                 for name, cells in slices.items()
@@ -206,7 +220,7 @@ def _tables(r: dict[str, Any]) -> str:
         f"at {CLIP_FPS:g} fps, the card up from frame {r['shown']}; OpenCV {r['opencv']}, 1 thread",
         "",
         f"{'class':9} {'clips':>5} {'seen<1s':>8} {'seen':>5} {'frames p50/p90/max':>19} {'ms p50':>7} "
-        f"{'frame recall':>12} {'wrong class':>11}",
+        f"{'frame recall':>12} {'never found':>11} {'wrong class':>11} {'lifted':>6}",
     ]
     for name in ("X", "TRIANGLE", "O"):
         c = r["per_class"].get(name)
@@ -216,7 +230,8 @@ def _tables(r: dict[str, Any]) -> str:
         spread = f"{f['p50']}/{f['p90']}/{f['max']}"
         lines.append(
             f"{name:9} {c['clips']:>5} {c['seen_within_1s']:>8} {c['seen']:>5} {spread:>19} "
-            f"{c['ms_to_confirm_p50']!s:>7} {c['frame_recall']:>12.3f} {c['wrong_class_events']:>11}"
+            f"{c['ms_to_confirm_p50']!s:>7} {c['frame_recall']:>12.3f} {c['missed_in_every_frame']:>11} "
+            f"{c['wrong_class_events']:>11} {c['danger_lifted_events'] if name != 'O' else '':>6}"
         )
     n = r["per_class"].get("none")
     if n:

@@ -119,3 +119,13 @@ def test_other_windows_replay_the_same_detections() -> None:
     assert w["safe"]["3/4"]["false_events"] == 1 and w["safe"]["4/5"]["false_events"] == 0
     assert w["danger"]["1/3"]["seen_within_1s"] == 1 and w["danger"]["2/3"]["seen_within_1s"] == 0
     assert w["danger"]["1/3"]["ms_to_confirm_p50"] == [33]
+
+
+def test_an_o_confirmed_without_the_danger_lifts_it() -> None:
+    """Danger wins within one observation only: an O confirmed once the X has dropped out lifts the danger."""
+    x, o = Detection(Shape.X, 0.9, (100, 100, 50, 50)), Detection(Shape.O, 0.8, (300, 300, 40, 40))
+    clip = _clip(Shape.X, frames=16)
+    dropped = _run(clip, {6: [x], 7: [x], **{i: [o] for i in (11, 12, 13)}})
+    assert dropped.confirmed_at == 0 and dropped.lifted
+    kept = _run(clip, {**{i: [x] for i in range(6, 16)}, **{i: [x, o] for i in (11, 12, 13)}})
+    assert Shape.O in kept.confirmed and not kept.lifted
