@@ -126,7 +126,8 @@ def confirm(found: list[list[Detection]], confirmation: Confirmation) -> list[li
 
 def windows(runs: list[tuple[HeldOutClip, list[list[Detection]]]]) -> dict[str, Any]:
     """The same detections under other confirmation windows: what each costs and buys (the service's are
-    `Confirmation()`'s: danger 1/3, safe 3/4)."""
+    `Confirmation()`'s: danger 1/3, safe 3/4, an O only in a window clear of danger), and with an O confirmed
+    beside a danger mark (as before round vision31)."""
     out: dict[str, Any] = {"safe": {}, "danger": {}}
     for kind, options in (("safe", SAFE_WINDOWS), ("danger", DANGER_WINDOWS)):
         for window in options:
@@ -147,6 +148,18 @@ def windows(runs: list[tuple[HeldOutClip, list[list[Detection]]]]) -> dict[str, 
                     if n in r and (n == "O") == (kind == "danger")
                 ),
             }
+    for clear in (False, True):  # round vision31: an O confirmed only in a window with no X or triangle
+        r = summarise(
+            [(score_clip(c, f, confirm(f, Confirmation(clear_of_danger=clear))), c) for c, f in runs]
+        )
+        danger = [r[n] for n in ("X", "TRIANGLE") if n in r]
+        out["clear_of_danger" if clear else "o_beside_danger"] = {
+            "danger_lifted_events": sum(d["danger_lifted_events"] for d in danger),
+            "danger_seen_within_1s": sum(d["seen_within_1s"] for d in danger),
+            "o_seen_within_1s": r["O"]["seen_within_1s"] if "O" in r else None,
+            "o_ms_to_confirm_p50": r["O"]["ms_to_confirm_p50"] if "O" in r else None,
+            "false_o_events": r.get("none", {}).get("false_o_events"),
+        }
     return out
 
 
@@ -250,7 +263,10 @@ def _tables(r: dict[str, Any]) -> str:
                 for k, cells in c["seen_within_1s_by"].items()
             )
             lines.append(f"{name} seen within 1 s by {by}")
-    lines += ["", "the same detections under other confirmation windows (the service's: danger 1/3, O 3/4):"]
+    lines += [
+        "",
+        "the same detections under other confirmation windows (the service's: danger 1/3, O 3/4 clear of danger):",
+    ]
     for kind, label, false in (
         ("safe", "O", "false O in mark-free clips"),
         ("danger", "X + triangle", "needless stops"),
@@ -261,6 +277,16 @@ def _tables(r: dict[str, Any]) -> str:
                 f"  {label:12} {window:>4}: seen within 1 s {w['seen_within_1s']}/{w['clips']}, ms p50 {ms}, "
                 f"{false} {w['false_events']}, wrong-class events {w['wrong_class_events']}"
             )
+    for key, label in (
+        ("o_beside_danger", "an O may be confirmed beside a danger mark"),
+        ("clear_of_danger", "an O only in a window clear of danger (the service's)"),
+    ):
+        w = r["windows"][key]
+        lines.append(
+            f"  {label}: danger lifted while its card was up in {w['danger_lifted_events']} clips, danger seen within "
+            f"1 s {w['danger_seen_within_1s']}, O seen within 1 s {w['o_seen_within_1s']} (p50 "
+            f"{w['o_ms_to_confirm_p50']} ms), mark-free clips with a confirmed O {w['false_o_events']}"
+        )
     lines += [
         "",
         f"frames per CPU-second (detection only): {r['fps_per_cpu_second']}; clip streaks (the longest motion blur per "

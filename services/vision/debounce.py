@@ -10,7 +10,10 @@ cares whether an X, O or triangle is being held up):
   dropped detections do not flicker it.
 - O (safe), default 3 of 4: published from its third sighting within four frames (two frame periods
   of added latency at the earliest: 67 ms at 30 fps, 133 ms at 15 fps), so a single false O never
-  clears a danger; released after two frames without it.
+  clears a danger; released after two frames without it. And only where no X or triangle was detected
+  in any frame of that same window (`Confirmation.clear_of_danger`, round vision31): an O seen beside a
+  danger mark that flickers in and out never lifts the danger in a frame where the danger mark happens
+  to be missing.
 
 A mark first seen at frame t is confirmed at frame t + k - 1 at the earliest and stays confirmed
 until it has been missing for n - k + 1 frames.
@@ -55,6 +58,11 @@ class Confirmation:
 
     danger: DebounceConfig = field(default_factory=lambda: DebounceConfig(1, 3))
     safe: DebounceConfig = field(default_factory=lambda: DebounceConfig(3, 4))
+    clear_of_danger: bool = True
+    """The safe mark is confirmed only if no X or triangle was detected in any frame of its window. On held-out
+    clips (bench/vision_clips.py) a clutter letter O beside an X card, with the X missing for three frames, was
+    otherwise confirmed in a frame without the X: the reasoner, for which danger wins only within one
+    observation, would have lifted the danger while the X was still held up."""
 
     def for_shape(self, shape: Shape) -> DebounceConfig:
         return self.danger if shape in DANGER_SHAPES else self.safe
@@ -74,13 +82,17 @@ class Debouncer:
         self._history: dict[Shape, deque[Detection | None]] = {
             s: deque(maxlen=self.config.for_shape(s).n) for s in Shape
         }
+        self._danger: deque[bool] = deque(maxlen=self.config.safe.n)  # a danger mark detected, frame by frame
 
     def update(self, detections: list[Detection]) -> list[Detection]:
         confirmed: list[Detection] = []
+        self._danger.append(any(d.shape in DANGER_SHAPES for d in detections))
         for shape, history in self._history.items():
             mine = [d for d in detections if d.shape == shape]
             history.append(max(mine, key=lambda d: d.confidence) if mine else None)
             hits = [d for d in history if d is not None]
+            if shape not in DANGER_SHAPES and self.config.clear_of_danger and any(self._danger):
+                continue
             if len(hits) >= self.config.for_shape(shape).k:
                 latest = hits[-1]
                 mean_conf = sum(d.confidence for d in hits) / len(hits)
@@ -90,3 +102,4 @@ class Debouncer:
     def reset(self) -> None:
         for history in self._history.values():
             history.clear()
+        self._danger.clear()

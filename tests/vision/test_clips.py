@@ -63,9 +63,11 @@ def _clip(shape: Shape | None, frames: int = 10) -> HeldOutClip:
     return HeldOutClip([], [None] * CLIP_SHOWN + [box] * (frames - CLIP_SHOWN), label, CLIP_SHOWN, True, 5.0, 2.0)
 
 
-def _run(clip: HeldOutClip, found: dict[int, list[Detection]]) -> vision_clips.ClipScore:
-    """Detections by frame through the service's confirmation, then scored."""
-    debounce = Debouncer(Confirmation())
+def _run(
+    clip: HeldOutClip, found: dict[int, list[Detection]], confirmation: Confirmation | None = None
+) -> vision_clips.ClipScore:
+    """Detections by frame through the service's confirmation (or another), then scored."""
+    debounce = Debouncer(confirmation or Confirmation())
     per_frame = [found.get(i, []) for i in range(len(clip.boxes))]
     return vision_clips.score_clip(clip, per_frame, [debounce.update(d) for d in per_frame])
 
@@ -126,6 +128,11 @@ def test_an_o_confirmed_without_the_danger_lifts_it() -> None:
     x, o = Detection(Shape.X, 0.9, (100, 100, 50, 50)), Detection(Shape.O, 0.8, (300, 300, 40, 40))
     clip = _clip(Shape.X, frames=16)
     dropped = _run(clip, {6: [x], 7: [x], **{i: [o] for i in (11, 12, 13)}})
-    assert dropped.confirmed_at == 0 and dropped.lifted
-    kept = _run(clip, {**{i: [x] for i in range(6, 16)}, **{i: [x, o] for i in (11, 12, 13)}})
-    assert Shape.O in kept.confirmed and not kept.lifted
+    assert dropped.confirmed_at == 0 and dropped.lifted  # the X last seen 4 frames before the O's third sighting
+    beside = {**{i: [x] for i in range(6, 16)}, **{i: [x, o] for i in (11, 12, 13)}}
+    kept = _run(clip, beside, Confirmation(clear_of_danger=False))
+    assert Shape.O in kept.confirmed and not kept.lifted  # confirmed, but always beside the X
+    assert Shape.O not in _run(clip, beside).confirmed  # round vision31: not confirmed beside a danger mark
+    flicker = {**{i: [x] for i in range(6, 12)}, 12: [x, o], **{i: [o] for i in (13, 14, 15)}}
+    assert _run(clip, flicker, Confirmation(clear_of_danger=False)).lifted  # the X missing 13-15: lifted at 15
+    assert not _run(clip, flicker).lifted

@@ -31,7 +31,8 @@ def test_single_noisy_frame_neither_raises_nor_drops_a_mark() -> None:
 
 
 def test_shapes_are_independent_and_box_is_the_latest() -> None:
-    deb = Debouncer(DebounceConfig(2, 3))
+    one = DebounceConfig(2, 3)
+    deb = Debouncer(Confirmation(danger=one, safe=one, clear_of_danger=False))
     moved = Detection(Shape.X, 0.7, (20, 20, 40, 40))
     deb.update([X, O_])
     out = deb.update([moved, O_])
@@ -81,7 +82,21 @@ def test_safe_mark_needs_three_of_four_frames() -> None:
 
 
 def test_confirmation_windows_are_per_kind() -> None:
-    conf = Confirmation(danger=DebounceConfig(2, 2), safe=DebounceConfig(1, 1))
+    conf = Confirmation(danger=DebounceConfig(2, 2), safe=DebounceConfig(1, 1), clear_of_danger=False)
     deb = Debouncer(conf)
     assert _run(deb, [[X, O_], [X], []]) == [{Shape.O}, {Shape.X}, set()]
     assert str(conf) == "danger 2/2, safe 1/1"
+
+
+def test_an_o_is_not_confirmed_in_a_window_with_a_danger_mark() -> None:
+    """Round vision31: an O beside an X that flickers never lifts the danger in a frame the X is missing from."""
+    deb = Debouncer()  # danger 1/3, safe 3/4
+    frames = [[X, O_], [O_], [X, O_], [O_], [O_], [O_], [O_]]
+    # the X is held 2 frames after it was seen; the O waits until no X is in its own last 4 frames
+    assert _run(deb, frames) == [{Shape.X}, {Shape.X}, {Shape.X}, {Shape.X}, {Shape.X}, set(), {Shape.O}]
+    before = Debouncer(Confirmation(clear_of_danger=False))
+    assert _run(before, frames)[3] == {Shape.X, Shape.O}  # as it was: the O confirmed beside the X
+    assert _run(before, [[X], [O_], [O_], [O_]])[3] == {Shape.O}  # the X missing: the danger would be lifted
+    for danger in (X, T):  # a danger card swapped for an O: the O one frame later than without the rule
+        deb.reset()
+        assert _run(deb, [[danger], [O_], [O_], [O_], [O_]])[2:] == [{danger.shape}, set(), {Shape.O}]
