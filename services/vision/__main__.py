@@ -46,7 +46,7 @@ DebounceOption = Annotated[
     typer.Option(
         "--debounce",
         envvar="HRI_VISION_DEBOUNCE",
-        help="K/N for the safe mark O: published once seen in K of the last N frames",
+        help="K/N for the safe mark O: published once seen in K of the last N frames, none of them with an X or triangle",
     ),
 ]
 DangerDebounceOption = Annotated[
