@@ -29,6 +29,7 @@ Printed per class:
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import statistics
 import sys
@@ -47,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 from schemas.messages import Shape  # noqa: E402
 from services.vision.debounce import DANGER_SHAPES, Confirmation, DebounceConfig, Debouncer  # noqa: E402
 from services.vision.detector import Detection, MarkDetector, box_overlap  # noqa: E402
-from services.vision.heldout import CLIP_FPS, HeldOutClip, HeldOutGenerator  # noqa: E402
+from services.vision.heldout import CLIP_FPS, CLIP_FRAMES, CLIP_SHOWN, HeldOutClip, HeldOutGenerator  # noqa: E402
 
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 WITHIN_S = 1.0
@@ -298,11 +299,13 @@ def _tables(r: dict[str, Any]) -> str:
 def main(
     clips: Annotated[int, typer.Option(help="clips per class (X, O, triangle, mark-free)")] = 100,
     seed: Annotated[int, typer.Option(help="held-out generator seed")] = 2718,
-    frames: Annotated[int, typer.Option(help="frames per clip (the card goes up at frame 6)")] = 36,
+    frames: Annotated[int, typer.Option(help="frames per clip (the card goes up at frame 6)")] = CLIP_FRAMES,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
 ) -> None:
-    if frames <= 6:
-        raise typer.BadParameter("a clip needs more than its 6 lead-in frames", param_hint="--frames")
+    if frames <= CLIP_SHOWN:
+        raise typer.BadParameter(
+            f"a clip needs more than its {CLIP_SHOWN} lead-in frames", param_hint="--frames"
+        )
     cv2.setNumThreads(1)
     gen = HeldOutGenerator(seed=seed)
     detector = MarkDetector()
@@ -312,7 +315,9 @@ def main(
         clip = gen.clip(CLASSES[i % len(CLASSES)], frames=frames)
         found, spent = detect_clip(detector, clip)
         cpu += spent
-        runs.append((_light(clip), found))  # the labels, not the frames: a clip's 36 frames are 33 MB
+        runs.append(
+            (dataclasses.replace(clip, frames=[]), found)
+        )  # the labels, not the frames (33 MB a clip)
     rows = [(score_clip(c, f, confirm(f, Confirmation())), c) for c, f in runs]
     streaks = [c.blur_px for c, _ in runs]
     result = {
@@ -331,11 +336,6 @@ def main(
         },
     }
     print(json.dumps(result, indent=2) if as_json else _tables(result))
-
-
-def _light(clip: HeldOutClip) -> HeldOutClip:
-    """The clip without its frames."""
-    return HeldOutClip([], clip.boxes, clip.label, clip.shown, clip.walking, clip.sway_px, clip.blur_px)
 
 
 if __name__ == "__main__":
