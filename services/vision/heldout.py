@@ -29,7 +29,8 @@ It differs from `synthetic.py` in how frames are made, not only in its seed:
 `HeldOutGenerator(seed).frame(shape)` returns a BGR uint8 frame and a `HeldOutLabel` (or None).
 `HeldOutGenerator(seed).clip(shape)` returns a `HeldOutClip`: 36 frames at 30 fps of one such scene seen by a
 camera that stands or sways as a walking robot's head does, the card held up from frame 6 on
-(`bench/vision_clips.py`).
+(`bench/vision_clips.py`); with `hand`, `rolling_shutter` and `auto_exposure`, what a person and a real camera add:
+the card raised into view by an unsteady hand, rows read out over 10-30 ms, a gain that follows the brightness.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from __future__ import annotations
 import io
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -122,6 +124,10 @@ CLIP_FRAMES = 36
 CLIP_SHOWN = 6
 """Frames of a clip before the card is held up: the confirmation windows start from the scene without it."""
 CLIP_ZOOM = 1.1
+LAYER_PAD = 64
+"""Pixels a held card's own layer reaches past the frame on every side (`HeldOutGenerator._held_card`)."""
+_PAD_SHIFT = np.array([[1, 0, -LAYER_PAD], [0, 1, -LAYER_PAD], [0, 0, 1.0]])
+"""A card layer's pixels -> the scene's."""
 
 
 @dataclass(frozen=True)
@@ -138,7 +144,9 @@ class HeldOutClip:
     sway_px: float
     """The camera's sway or bob amplitude, whichever is larger, pixels."""
     blur_px: float
-    """The longest motion streak of the mark over one exposure in the clip, pixels."""
+    """The longest motion streak of the mark over one exposure in the clip, pixels (with a hand: while in view)."""
+    in_view: int | None = None
+    """The first frame with the mark's box (more than half of it in view); None for a mark-free clip."""
 
 
 def _fonts() -> list[Path]:
@@ -167,6 +175,8 @@ class HeldOutGenerator:
         # `lens`: the barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws
         # no random numbers, so a seed's scenes are the same with and without it.
         self._lens_maps = lens_maps(lens, width, height) if lens else None
+        # a clip's hand and shutter draw from a stream of their own, so the scenes are the same without them
+        self._clip_rng = np.random.default_rng([seed, 1])
 
     # ------------------------------------------------------------------ public
     def frame(self, shape: Shape | None) -> tuple[np.ndarray, HeldOutLabel | None]:
@@ -174,8 +184,9 @@ class HeldOutGenerator:
         bg, _, label = self._scene(shape)
         blur = float(rng.uniform(0, 20)) if rng.random() < 0.7 else 0.0
         if self._lens_maps is not None:
-            bg = Image.fromarray(cv2.remap(np.asarray(bg), *self._lens_maps, cv2.INTER_LINEAR,
-                                           borderMode=cv2.BORDER_REPLICATE))
+            bg = Image.fromarray(
+                cv2.remap(np.asarray(bg), *self._lens_maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            )
         img = self._camera(bg, blur)
         if label is not None:
             label = HeldOutLabel(
@@ -183,7 +194,16 @@ class HeldOutGenerator:
             )
         return img, label
 
-    def clip(self, shape: Shape | None, frames: int = CLIP_FRAMES, shown: int = CLIP_SHOWN) -> HeldOutClip:
+    def clip(
+        self,
+        shape: Shape | None,
+        frames: int = CLIP_FRAMES,
+        shown: int = CLIP_SHOWN,
+        *,
+        hand: bool = False,
+        rolling_shutter: bool = False,
+        auto_exposure: bool = False,
+    ) -> HeldOutClip:
         """`frames` frames at `CLIP_FPS` of one scene seen by a camera on a walking robot (three clips in four; the
         rest stand still), the card held up from frame `shown` on (before it, the same scene without the card).
 
@@ -191,13 +211,23 @@ class HeldOutGenerator:
         sways sideways (0-18 px) and rolls (0-3 degrees) once a stride of 0.9-1.4 s, bobs (0-8 px) twice a stride,
         is jolted at each footfall (a 10 Hz shake of 0-12 px dying away in about 0.1 s) and closes in on the scene
         by up to 12 % a second. Each frame is exposed for the clip's 4-33 ms, and the mark's travel in that time
-        is its motion blur (a clip's longest: p50 2.5 px, p90 7 px, at most 12 px over 1,600 clips). The light, focus, noise level and JPEG quality are the clip's (drawn as for a
-        frame); the noise is new in every frame. The card itself does not move in the scene: a hand's own motion
-        is not modelled."""
+        is its motion blur (a clip's longest: p50 2.5 px, p90 7 px, at most 12 px over 1,600 clips). The light,
+        focus, noise level and JPEG quality are the clip's (drawn as for a frame); the noise is new in every frame.
+
+        Off by default, what a person and a real camera add (`_Hand`, `_Shutter`; their random numbers come from a
+        stream of their own, so a seed's scenes, cameras and noise are the same with them and without):
+        - `hand`: the card does not appear at frame `shown`: a hand starts raising it then, from below the view,
+          turned, and brings it to its place in 0.15-0.5 s (a minimum-jerk reach), then holds it with a slow
+          drift, a tremor and a wobble. The card's own travel in the exposure blurs the card and its fingers.
+        - `rolling_shutter`: the rows are read out top to bottom over 10-30 ms, so each band of 8 rows sees the
+          scene, the camera and the hand at its own time (what moves is sheared).
+        - `auto_exposure`: the camera's gain follows the frame's mean brightness back to what it metered on the
+          first frame, with a time constant of 0.15-0.6 s: a bright card brought up darkens the next frames."""
         if self._lens_maps is not None:
             raise ValueError("clips are made through a pinhole camera: no lens")
         rng, w, h = self.rng, self.width, self.height
-        scene, empty, label = self._scene(shape, keep_empty=True)
+        layers: list[np.ndarray] = []
+        scene, empty, label = self._scene(shape, keep_empty=True, layers=layers if hand else None)
         look = self._look()
         noise, quality = float(rng.uniform(0, 0.6)), int(rng.integers(40, 91))
         walking = rng.random() < 0.75
@@ -208,6 +238,8 @@ class HeldOutGenerator:
         exposure = float(rng.uniform(0.004, 0.033))
         if not walking:
             sway = bob = jolt = roll = approach = 0.0
+        person = _Hand.draw(self._clip_rng, layers[0] if layers else None, h)
+        shutter = _Shutter.draw(self._clip_rng, rolling_shutter, auto_exposure)
 
         def view(t: float) -> np.ndarray:  # scene pixels -> frame pixels at time t
             a = 2 * math.pi * t / stride + phase[0]
@@ -216,38 +248,85 @@ class HeldOutGenerator:
             since = (a % math.pi) / math.pi * stride / 2  # seconds since the last footfall (two a stride)
             shake = jolt * math.exp(-since / 0.06) * math.sin(2 * math.pi * 10 * since)
             shift = (w / 2 + sway * math.sin(a), h / 2 + bob * math.sin(2 * a + phase[1]) + shake)
-            turn = np.array([[z * math.cos(r), -z * math.sin(r), 0], [z * math.sin(r), z * math.cos(r), 0], [0, 0, 1]])
-            return np.array([[1, 0, shift[0]], [0, 1, shift[1]], [0, 0, 1]]) @ turn @ np.array(
-                [[1, 0, -w / 2], [0, 1, -h / 2], [0, 0, 1.0]]
+            turn = np.array(
+                [[z * math.cos(r), -z * math.sin(r), 0], [z * math.sin(r), z * math.cos(r), 0], [0, 0, 1]]
             )
+            return (
+                np.array([[1, 0, shift[0]], [0, 1, shift[1]], [0, 0, 1]])
+                @ turn
+                @ np.array([[1, 0, -w / 2], [0, 1, -h / 2], [0, 0, 1.0]])
+            )
+
+        t_up = shown / CLIP_FPS
+
+        def mark_view(t: float) -> np.ndarray:  # the mark's scene pixels -> frame pixels at time t
+            return view(t) @ person.at(t - t_up) if person is not None else view(t)
 
         x, y, bw, bh = label.box if label is not None else (w // 2, h // 2, 0, 0)
         corners = np.array([[x, y], [x + bw, y], [x + bw, y + bh], [x, y + bh]], np.float64)
         centre = corners.mean(axis=0, keepdims=True)
+        card = None if person is None else _premultiplied(layers[0])
         out: list[np.ndarray] = []
         boxes: list[Box | None] = []
         streaks: list[float] = []
+        gain, metered = 1.0, None
         for i in range(frames):
             t = i / CLIP_FPS
-            m = view(t)
-            src = np.asarray(scene if i >= shown or empty is None else empty)
-            seen = cv2.warpPerspective(src, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT_101)
-            arr = _lit(Image.fromarray(seen), look)
-            dx, dy = (_project(view(t + exposure / 2), centre) - _project(view(t - exposure / 2), centre))[0]
-            streak = math.hypot(dx, dy)
-            streaks.append(streak)
-            if streak >= 1.5:
-                arr = _motion_blur(arr, streak, math.atan2(dy, dx))
+            raised = card is not None and i >= shown
+            t_mark = shutter.row_time(t, float(_project(mark_view(t), centre)[0, 1]), h)
+            box = (
+                _in_view(_project(mark_view(t_mark), corners), w, h)
+                if label is not None and i >= shown
+                else None
+            )
+            camera_streak = _streak(view, t_mark, exposure, centre)
+            src = np.asarray(scene if i >= shown and person is None or empty is None else empty)
+            seen = shutter.warp(src, view, t, cv2.BORDER_REFLECT_101)
+            if raised:
+                assert card is not None and person is not None
+                card_streak = _streak(mark_view, t_mark, exposure, centre)
+                held = shutter.warp(
+                    card,
+                    lambda tb: view(tb) @ person.at(tb - t_up) @ _PAD_SHIFT,
+                    t,
+                    cv2.BORDER_CONSTANT,
+                )
+                back = seen.astype(np.float32)
+                if camera_streak[0] >= 1.5:
+                    back = _motion_blur(back, *camera_streak)
+                if card_streak[0] >= 1.5:
+                    held = _motion_blur(held, *card_streak)
+                alpha = held[..., 3:]
+                seen = np.clip(back * (1 - alpha) + held[..., :3], 0, 255).round().astype(np.uint8)
+            arr = _lit(Image.fromarray(seen), look, gain)
+            if shutter.ae_rate:
+                level = float(arr.mean())
+                metered = level if metered is None else metered
+                gain = float(np.clip(gain * (metered / max(level, 1.0)) ** shutter.ae_rate, 0.25, 4.0))
+            if not raised and camera_streak[0] >= 1.5:
+                arr = _motion_blur(arr, *camera_streak)
+            if person is None or box is not None:
+                streaks.append(card_streak[0] if raised else camera_streak[0])
             out.append(self._sensor(arr, noise, quality))
-            boxes.append(_in_view(_project(m, corners), w, h) if label is not None and i >= shown else None)
-        return HeldOutClip(out, boxes, label, shown, walking, max(sway, bob), max(streaks))
+            boxes.append(box)
+        return HeldOutClip(
+            out,
+            boxes,
+            label,
+            shown,
+            walking,
+            max(sway, bob),
+            max(streaks, default=0.0),
+            in_view=next((i for i, b in enumerate(boxes) if b is not None), None),
+        )
 
     # ------------------------------------------------------------------ scene
     def _scene(
-        self, shape: Shape | None, keep_empty: bool = False
+        self, shape: Shape | None, keep_empty: bool = False, layers: list[np.ndarray] | None = None
     ) -> tuple[Image.Image, Image.Image | None, HeldOutLabel | None]:
         """Background, clutter and the held card (or, mark-free, a blank or decoy card half the time): the scene,
-        the same scene before the card was put in it (with `keep_empty`, else None), and the mark's label."""
+        the same scene before the card was put in it (with `keep_empty`, else None), and the mark's label. With
+        `layers`, the card and its fingers are appended to it as a layer of their own (`_held_card`)."""
         rng = self.rng
         bg = self._background()
         for _ in range(int(rng.integers(2, 7))):
@@ -255,9 +334,9 @@ class HeldOutGenerator:
         empty = bg.copy() if keep_empty else None
         label = None
         if shape is not None:
-            label = self._held_card(bg, shape)
+            label = self._held_card(bg, shape, layers)
         elif rng.random() < 0.5:
-            self._held_card(bg, None)  # a blank or decoy card held up
+            self._held_card(bg, None, layers)  # a blank or decoy card held up
         return bg, empty, label
 
     def _background(self) -> Image.Image:
@@ -338,9 +417,13 @@ class HeldOutGenerator:
                 patch = src.resize((max(8, int(s * 1.5)),) * 2).convert("RGB")
                 img.paste(patch, (int(cx), int(cy)))
 
-    def _held_card(self, img: Image.Image, shape: Shape | None) -> HeldOutLabel | None:
+    def _held_card(
+        self, img: Image.Image, shape: Shape | None, layers: list[np.ndarray] | None = None
+    ) -> HeldOutLabel | None:
         """Render a card (with the mark, or a decoy) and the fingers holding it on a padded RGBA
-        canvas at 2x, warp it into the frame, and return the mark's label."""
+        canvas at 2x, warp it into the frame, and return the mark's label. With `layers`, the card is also
+        appended to it alone: an RGBA array of the frame with `LAYER_PAD` pixels more on every side (so a hand
+        can move a card cut by the frame's edge), drawing no random number."""
         rng = self.rng
         size = float(math.exp(rng.uniform(math.log(40), math.log(400))))  # mark size in the frame
         k = 3.0 if size < 90 else 2.0 if size < 200 else 1.0  # supersampling
@@ -406,6 +489,20 @@ class HeldOutGenerator:
         coeffs = tuple(float(v) for v in inv.reshape(-1)[:8])
         warped = canvas.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BICUBIC)
         img.paste(warped, (0, 0), warped)
+        if layers is not None:
+            shifted = inv @ np.array([[1, 0, -LAYER_PAD], [0, 1, -LAYER_PAD], [0, 0, 1.0]])
+            shifted /= shifted[2, 2]
+            size = (self.width + 2 * LAYER_PAD, self.height + 2 * LAYER_PAD)
+            layers.append(
+                np.asarray(
+                    canvas.transform(
+                        size,
+                        Image.PERSPECTIVE,
+                        tuple(float(v) for v in shifted.reshape(-1)[:8]),
+                        Image.BICUBIC,
+                    )
+                )
+            )
         if shape is None:
             return None
         wm = np.asarray(mask.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BILINEAR))
@@ -613,12 +710,132 @@ class _Look:
     """Gaussian blur radius of an out-of-focus lens; 0: in focus"""
 
 
-def _lit(img: Image.Image, look: _Look) -> np.ndarray:
-    a = np.clip(np.asarray(img, np.float32) * look.light, 0, 255)
+def _lit(img: Image.Image, look: _Look, gain: float = 1.0) -> np.ndarray:
+    """The scene's pixels under the light, times `gain` (a camera's automatic exposure), clipped; then focus."""
+    a = np.asarray(img, np.float32) * look.light
+    a = np.clip(a * np.float32(gain) if gain != 1.0 else a, 0, 255)
     out = Image.fromarray(a.astype(np.uint8))
     if look.defocus:
         out = out.filter(ImageFilter.GaussianBlur(look.defocus))
     return np.asarray(out, np.float32)
+
+
+def _premultiplied(layer: np.ndarray) -> np.ndarray:
+    """An RGBA uint8 layer -> float32 colour times coverage (0-255) and coverage (0-1), ready to warp and blur."""
+    alpha = layer[..., 3:].astype(np.float32) / 255
+    return np.concatenate([layer[..., :3].astype(np.float32) * alpha, alpha], axis=2)
+
+
+def _streak(
+    to_frame: Callable[[float], np.ndarray], t: float, exposure: float, at: np.ndarray
+) -> tuple[float, float]:
+    """The travel of the scene point `at` in the frame over an exposure centred on `t`: its length and angle."""
+    dx, dy = (_project(to_frame(t + exposure / 2), at) - _project(to_frame(t - exposure / 2), at))[0]
+    return math.hypot(dx, dy), math.atan2(dy, dx)
+
+
+@dataclass(frozen=True)
+class _Hand:
+    """A hand raising a held card into view and holding it: scene pixels -> scene pixels at a time since it
+    started. The reach is a minimum-jerk move (how people's arms move) from below the view, the card turned by
+    `turn` degrees and straightened on the way; held, it drifts (0-12 px, 0.2-0.8 Hz), trembles (0.3-2.5 px,
+    8-12 Hz: physiological tremor) and wobbles (0-4 degrees)."""
+
+    centre: tuple[float, float]
+    start: tuple[float, float]
+    rise_s: float
+    turn: float
+    drift: tuple[float, float, float, float, float]  # amplitude x, y (px), frequency (Hz), phases
+    tremor: tuple[float, float, float, float]  # amplitude (px), frequency (Hz), phases
+    wobble: tuple[float, float, float]  # amplitude (degrees), frequency (Hz), phase
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, layer: np.ndarray | None, height: int) -> _Hand | None:
+        """A hand for the card on `layer` (None: no card held up, no hand). Draws the same numbers either way."""
+        rise, way, turn = (
+            float(rng.uniform(0.15, 0.5)),
+            math.radians(rng.uniform(-35, 35)),
+            float(rng.uniform(-15, 15)),
+        )
+        drift = (
+            *(float(v) for v in rng.uniform(0, 12, 2)),
+            float(rng.uniform(0.2, 0.8)),
+            *(float(v) for v in rng.uniform(0, 2 * math.pi, 2)),
+        )
+        tremor = (
+            float(rng.uniform(0.3, 2.5)),
+            float(rng.uniform(8, 12)),
+            *(float(v) for v in rng.uniform(0, 2 * math.pi, 2)),
+        )
+        wobble = (float(rng.uniform(0, 4)), float(rng.uniform(0.3, 1.0)), float(rng.uniform(0, 2 * math.pi)))
+        if layer is None:
+            return None
+        ys, xs = np.nonzero(layer[..., 3] > 0)
+        x0, x1, y0, y1 = (float(v) - LAYER_PAD for v in (xs.min(), xs.max(), ys.min(), ys.max()))
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+        # from below, far enough that the whole card, turned any way, starts out of the scene
+        reach = (height - cy + math.hypot(x1 - x0, y1 - y0) / 2 + 10) / math.cos(way)
+        return cls(
+            (cx, cy), (reach * math.sin(way), reach * math.cos(way)), rise, turn, drift, tremor, wobble
+        )  # type: ignore[arg-type]
+
+    def at(self, t: float) -> np.ndarray:
+        s = min(max(t / self.rise_s, 0.0), 1.0)
+        left = 1 - (10 * s**3 - 15 * s**4 + 6 * s**5)  # of the reach still to go
+        ax, ay, f, p, q = self.drift
+        ta, tf, tp, tq = self.tremor
+        dx = (
+            left * self.start[0]
+            + ax * math.sin(2 * math.pi * f * t + p)
+            + ta * math.sin(2 * math.pi * tf * t + tp)
+        )
+        dy = (
+            left * self.start[1]
+            + ay * math.sin(2 * math.pi * f * t + q)
+            + ta * math.sin(2 * math.pi * tf * t + tq)
+        )
+        r = math.radians(
+            left * self.turn + self.wobble[0] * math.sin(2 * math.pi * self.wobble[1] * t + self.wobble[2])
+        )
+        cx, cy = self.centre
+        back = np.array([[1, 0, -cx], [0, 1, -cy], [0, 0, 1.0]])
+        turn = np.array([[math.cos(r), -math.sin(r), 0], [math.sin(r), math.cos(r), 0], [0, 0, 1.0]])
+        return np.array([[1, 0, cx + dx], [0, 1, cy + dy], [0, 0, 1.0]]) @ turn @ back
+
+
+@dataclass(frozen=True)
+class _Shutter:
+    """How the clip's camera reads out and exposes: a global shutter (`readout_s` 0) or a rolling one reading the
+    rows top to bottom in `readout_s`, in bands of `BAND` rows; and its automatic exposure (`ae_rate`, the share
+    of the metering error corrected per frame; 0: a fixed gain)."""
+
+    readout_s: float
+    ae_rate: float
+    BAND = 8
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, rolling: bool, auto_exposure: bool) -> _Shutter:
+        readout, tau = float(rng.uniform(0.010, 0.030)), float(rng.uniform(0.15, 0.6))
+        return cls(readout if rolling else 0.0, 1 - math.exp(-1 / (CLIP_FPS * tau)) if auto_exposure else 0.0)
+
+    def row_time(self, t: float, y: float, height: int) -> float:
+        return t + self.readout_s * min(max(y, 0.0), height) / height if self.readout_s else t
+
+    def warp(
+        self, src: np.ndarray, to_frame: Callable[[float], np.ndarray], t: float, border: int
+    ) -> np.ndarray:
+        """`src` seen in the frame at time `t`; each band of rows at its own time when the shutter rolls."""
+        h, w = src.shape[0], src.shape[1]
+        if src.shape[2] == 4:  # a card layer: the frame's size
+            h, w = h - 2 * LAYER_PAD, w - 2 * LAYER_PAD
+        if not self.readout_s:
+            return cv2.warpPerspective(src, to_frame(t), (w, h), flags=cv2.INTER_LINEAR, borderMode=border)
+        bands = []
+        for y0 in range(0, h, self.BAND):
+            y1 = min(y0 + self.BAND, h)
+            m = np.array([[1, 0, 0], [0, 1, -y0], [0, 0, 1.0]]) @ to_frame(self.row_time(t, (y0 + y1) / 2, h))
+            bands.append(cv2.warpPerspective(src, m, (w, y1 - y0), flags=cv2.INTER_LINEAR, borderMode=border))
+        return np.concatenate(bands, axis=0)
 
 
 def _motion_blur(arr: np.ndarray, length: float, angle: float) -> np.ndarray:
@@ -644,8 +861,10 @@ def lens_camera(lens: float, width: int, height: int) -> tuple[np.ndarray, np.nd
     """The held-out lens in OpenCV's model: (camera matrix, distortion coefficients k1, k2, p1, p2). ValueError
     for a lens stronger than `max_lens` (no scene point would show at the frame's corners)."""
     if not 0 <= lens < max_lens(width, height):
-        raise ValueError(f"lens {lens}: between 0 and {max_lens(width, height):.3f} for a {width}x{height} frame "
-                         "(a stronger barrel lens folds the frame's corners back in this one-coefficient model)")
+        raise ValueError(
+            f"lens {lens}: between 0 and {max_lens(width, height):.3f} for a {width}x{height} frame "
+            "(a stronger barrel lens folds the frame's corners back in this one-coefficient model)"
+        )
     k = np.array([[width, 0, width / 2], [0, width, height / 2], [0, 0, 1]], np.float64)
     return k, np.array([-lens, 0, 0, 0], np.float64)
 
@@ -772,4 +991,3 @@ def _in_view(corners: np.ndarray, w: int, h: int) -> Box | None:
     if cx1 <= cx0 or cy1 <= cy0 or (cx1 - cx0) * (cy1 - cy0) < 0.5 * (x1 - x0) * (y1 - y0):
         return None
     return (round(cx0), round(cy0), round(cx1 - cx0) + 1, round(cy1 - cy0) + 1)
-

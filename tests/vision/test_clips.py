@@ -136,3 +136,57 @@ def test_an_o_confirmed_without_the_danger_lifts_it() -> None:
     flicker = {**{i: [x] for i in range(6, 12)}, 12: [x, o], **{i: [o] for i in (13, 14, 15)}}
     assert _run(clip, flicker, Confirmation(clear_of_danger=False)).lifted  # the X missing 13-15: lifted at 15
     assert not _run(clip, flicker).lifted
+
+
+def test_a_hand_raises_the_card_from_below_into_the_same_scene() -> None:
+    """With a hand the card is not there at once: it comes up from below, blurred by its own travel, and settles
+    where the card without a hand stands, give or take the hand's drift and tremor. The scene, camera and noise
+    are the same as without the hand: the lead-in frames are the same bytes."""
+    plain = HeldOutGenerator(seed=21).clip(Shape.X, frames=24)
+    held = HeldOutGenerator(seed=21).clip(Shape.X, frames=24, hand=True)
+    assert plain.label == held.label
+    assert all(np.array_equal(a, b) for a, b in zip(plain.frames[:CLIP_SHOWN], held.frames[:CLIP_SHOWN], strict=True))
+    assert plain.in_view == CLIP_SHOWN and held.in_view is not None and held.in_view > CLIP_SHOWN
+    assert held.boxes[CLIP_SHOWN : held.in_view] == [None] * (held.in_view - CLIP_SHOWN)
+    rising = [b[1] for b in held.boxes[held.in_view : held.in_view + 3] if b is not None]
+    assert rising == sorted(rising, reverse=True) and rising[0] > rising[-1]  # moving up the frame
+    (px, py, pw, ph), (hx, hy, hw, hh) = plain.boxes[-1], held.boxes[-1]  # type: ignore[misc]
+    assert abs((px + pw / 2) - (hx + hw / 2)) < 25 and abs((py + ph / 2) - (hy + hh / 2)) < 25
+    assert held.blur_px > plain.blur_px  # the reach blurs the card as it comes into view
+
+
+def test_a_rolling_shutter_shears_only_what_moves() -> None:
+    """Rows read at their own times: a standing camera with a card that does not move gives the global shutter's
+    frames; a swaying one does not."""
+    kinds = set()
+    for seed in (30, 31, 32, 36):  # two walking cameras, two standing
+        plain = HeldOutGenerator(seed=seed).clip(Shape.O, frames=8)
+        rolled = HeldOutGenerator(seed=seed).clip(Shape.O, frames=8, rolling_shutter=True)
+        same = all(np.array_equal(a, b) for a, b in zip(plain.frames, rolled.frames, strict=True))
+        assert same == (not plain.walking), seed
+        kinds.add(plain.walking)
+    assert kinds == {True, False}
+
+
+def test_automatic_exposure_pulls_a_bright_card_back_to_the_metered_level() -> None:
+    """A bright card brought up brightens the frame; a camera with automatic exposure turns its gain down over
+    the next frames, back towards the level it metered before the card, and a fixed gain stays bright (seeds
+    whose card brightens the frame by 15 to 60 grey levels)."""
+    for seed in (53, 57, 59):
+        fixed = HeldOutGenerator(seed=seed).clip(Shape.X, frames=20)
+        auto = HeldOutGenerator(seed=seed).clip(Shape.X, frames=20, auto_exposure=True)
+        before, after = float(fixed.frames[0].mean()), float(fixed.frames[-1].mean())
+        assert after - before > 10, seed
+        assert abs(float(auto.frames[-1].mean()) - before) < 0.4 * (after - before), seed
+        assert float(auto.frames[CLIP_SHOWN].mean()) > float(auto.frames[-1].mean()) + 3, seed  # then it settles
+
+
+def test_bench_takes_the_person_and_camera_effects() -> None:
+    import typer
+
+    app = typer.Typer()
+    app.command()(vision_clips.main)
+    args = ["--clips", "1", "--frames", "16", "--seed", "4", "--hand", "--rolling-shutter", "--auto-exposure"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "add: hand, rolling shutter, auto exposure" in result.output and "from view" in result.output
