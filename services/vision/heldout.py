@@ -217,8 +217,9 @@ class HeldOutGenerator:
         Off by default, what a person and a real camera add (`_Hand`, `_Shutter`; their random numbers come from a
         stream of their own, so a seed's scenes, cameras and noise are the same with them and without):
         - `hand`: the card does not appear at frame `shown`: a hand starts raising it then, from below the view,
-          turned, and brings it to its place in 0.15-0.5 s (a minimum-jerk reach), then holds it with a slow
-          drift, a tremor and a wobble. The card's own travel in the exposure blurs the card and its fingers.
+          turned, and brings it to its place at a peak speed of 0.5-2 m/s (a minimum-jerk reach of 0.2-0.8 s),
+          then holds it with a slow drift, a tremor and a wobble. The card's own travel in the exposure blurs the
+          card and its fingers.
         - `rolling_shutter`: the rows are read out top to bottom over 10-30 ms, so each band of 8 rows sees the
           scene, the camera and the hand at its own time (what moves is sheared).
         - `auto_exposure`: the camera's gain follows the frame's mean brightness back to what it metered on the
@@ -734,12 +735,17 @@ def _streak(
     return math.hypot(dx, dy), math.atan2(dy, dx)
 
 
+HELD_SIZE_M = 0.25
+"""What a hand holds up, card and fingers, measured along its longest side: the scale of a hand's reach."""
+
+
 @dataclass(frozen=True)
 class _Hand:
     """A hand raising a held card into view and holding it: scene pixels -> scene pixels at a time since it
-    started. The reach is a minimum-jerk move (how people's arms move) from below the view, the card turned by
-    `turn` degrees and straightened on the way; held, it drifts (0-12 px, 0.2-0.8 Hz), trembles (0.3-2.5 px,
-    8-12 Hz: physiological tremor) and wobbles (0-4 degrees)."""
+    started. The reach is a minimum-jerk move (how people's arms move) from below the view at a peak speed of
+    0.5-2 m/s (its length in metres from the card's size in pixels, `HELD_SIZE_M`; taking 0.2-0.8 s), the card
+    turned by `turn` degrees and straightened on the way; held, it drifts (0-12 px, 0.2-0.8 Hz), trembles
+    (0.3-2.5 px, 8-12 Hz: physiological tremor) and wobbles (0-4 degrees)."""
 
     centre: tuple[float, float]
     start: tuple[float, float]
@@ -752,11 +758,8 @@ class _Hand:
     @classmethod
     def draw(cls, rng: np.random.Generator, layer: np.ndarray | None, height: int) -> _Hand | None:
         """A hand for the card on `layer` (None: no card held up, no hand). Draws the same numbers either way."""
-        rise, way, turn = (
-            float(rng.uniform(0.15, 0.5)),
-            math.radians(rng.uniform(-35, 35)),
-            float(rng.uniform(-15, 15)),
-        )
+        speed = float(rng.uniform(0.5, 2.0))
+        way, turn = math.radians(rng.uniform(-35, 35)), float(rng.uniform(-15, 15))
         drift = (
             *(float(v) for v in rng.uniform(0, 12, 2)),
             float(rng.uniform(0.2, 0.8)),
@@ -775,9 +778,12 @@ class _Hand:
         cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
         # from below, far enough that the whole card, turned any way, starts out of the scene
         reach = (height - cy + math.hypot(x1 - x0, y1 - y0) / 2 + 10) / math.cos(way)
-        return cls(
-            (cx, cy), (reach * math.sin(way), reach * math.cos(way)), rise, turn, drift, tremor, wobble
-        )  # type: ignore[arg-type]
+        per_m = max(x1 - x0, y1 - y0) / HELD_SIZE_M
+        rise = min(
+            max(1.875 * reach / per_m / speed, 0.2), 0.8
+        )  # a minimum-jerk move peaks at 1.875 x its mean
+        start = (reach * math.sin(way), reach * math.cos(way))
+        return cls((cx, cy), start, rise, turn, drift, tremor, wobble)  # type: ignore[arg-type]
 
     def at(self, t: float) -> np.ndarray:
         s = min(max(t / self.rise_s, 0.0), 1.0)
