@@ -20,14 +20,19 @@ Printed per class:
 - **never found**: clips in which the detector found the mark in no frame at all;
 - wrong-class events: an O confirmed in a danger clip, an X or triangle in an O clip; **lifted**: a danger clip
   in which, after the danger was confirmed, a frame confirmed an O and no X or triangle (the reasoner, for which
-  danger wins only within one observation, would have taken the danger as lifted);
+  danger wins only within one observation, would have taken the danger as lifted); **left in danger**: the
+  reasoner's latch replayed on the confirmed marks is latched at the clip's end (for an O clip: a false X or
+  triangle the O did not lift again);
+- the same detections replayed under other windows and under each rule for what may lift a danger (`SAFE_RULES`:
+  before round vision31, round vision31's window clear of danger, round vision32's O shown anew);
 - seen by camera (walking / standing), by mark size, by the clip's longest motion streak, by a finger near the
   mark, and for triangles by filled or outline.
 
 What a person and a real camera add, each off by default (`HeldOutGenerator.clip`; the same seed gives the same
 scenes, cameras and noise with them and without, so a run with them pairs with one without):
-- `--hand`: a hand raises the card into view from below (0.15-0.5 s, a minimum-jerk reach, the card turned and
-  straightened on the way, blurred by its own travel), then holds it with drift, tremor and wobble; the clock of
+- `--hand`: a hand raises the card into view from below (a minimum-jerk reach at a peak of 0.5-2 m/s, 0.2-0.8 s,
+  the card turned and straightened on the way, blurred by its own travel), then holds it with drift, tremor and
+  wobble; the clock of
   "seen within 1 s" starts when the hand starts;
 - `--rolling-shutter`: rows read out top to bottom over 10-30 ms;
 - `--auto-exposure`: the gain follows the frame's brightness (time constant 0.15-0.6 s), so a bright card brought
@@ -65,6 +70,17 @@ SIZE_BINS = ((0, 80), (80, 160), (160, 10_000))
 STREAK_BINS = ((0, 1.5), (1.5, 5), (5, 10_000))
 SAFE_WINDOWS = ("2/3", "3/4", "3/5", "4/5", "5/6", "6/8")
 DANGER_WINDOWS = ("1/1", "1/3", "2/3", "2/4")
+SAFE_RULES = {  # what may lift a danger, replayed on the same detections
+    "o_beside_danger": Confirmation(clear_of_danger=False, new_safe_only=False),  # before round vision31
+    "clear_of_danger": Confirmation(clear_of_danger=True, new_safe_only=False),  # round vision31
+    "new_safe_only": Confirmation(clear_of_danger=True, new_safe_only=True),  # round vision32
+}
+SERVICE = " (the service's)"
+SAFE_RULE_LABELS = {
+    "o_beside_danger": "an O may be confirmed beside a danger mark",
+    "clear_of_danger": "an O only in a window clear of danger",
+    "new_safe_only": "and not an O that was confirmed before the danger came",
+}
 
 
 @dataclass
@@ -84,6 +100,9 @@ class ClipScore:
     lifted: bool = False
     """A danger clip: after its X or triangle was confirmed, a frame confirmed an O and no danger mark (the
     reasoner, for which danger wins within one observation, would have taken the danger as lifted)."""
+    left_in_danger: bool = False
+    """The reasoner's latch replayed on the confirmed marks (a confirmed X or triangle latches danger, a frame with
+    a confirmed O and neither lifts it) is latched at the clip's last frame: the robot would still be stopped."""
 
 
 def score_clip(
@@ -95,6 +114,10 @@ def score_clip(
     for i, (box, dets, conf) in enumerate(zip(clip.boxes, found, confirmed, strict=True)):
         score.confirmed.update(d.shape for d in conf)
         shapes = {d.shape for d in conf}
+        if shapes & DANGER_SHAPES:
+            score.left_in_danger = True
+        elif Shape.O in shapes:
+            score.left_in_danger = False
         if shape in DANGER_SHAPES and score.confirmed_at is not None and Shape.O in shapes:
             score.lifted |= not shapes & DANGER_SHAPES
         if (
@@ -136,8 +159,7 @@ def confirm(found: list[list[Detection]], confirmation: Confirmation) -> list[li
 
 def windows(runs: list[tuple[HeldOutClip, list[list[Detection]]]]) -> dict[str, Any]:
     """The same detections under other confirmation windows: what each costs and buys (the service's are
-    `Confirmation()`'s: danger 1/3, safe 3/4, an O only in a window clear of danger), and with an O confirmed
-    beside a danger mark (as before round vision31)."""
+    `Confirmation()`'s), and under each rule of `SAFE_RULES` for what may lift a danger."""
     out: dict[str, Any] = {"safe": {}, "danger": {}}
     for kind, options in (("safe", SAFE_WINDOWS), ("danger", DANGER_WINDOWS)):
         for window in options:
@@ -158,16 +180,16 @@ def windows(runs: list[tuple[HeldOutClip, list[list[Detection]]]]) -> dict[str, 
                     if n in r and (n == "O") == (kind == "danger")
                 ),
             }
-    for clear in (False, True):  # round vision31: an O confirmed only in a window with no X or triangle
-        r = summarise(
-            [(score_clip(c, f, confirm(f, Confirmation(clear_of_danger=clear))), c) for c, f in runs]
-        )
+    for name, confirmation in SAFE_RULES.items():
+        r = summarise([(score_clip(c, f, confirm(f, confirmation)), c) for c, f in runs])
         danger = [r[n] for n in ("X", "TRIANGLE") if n in r]
-        out["clear_of_danger" if clear else "o_beside_danger"] = {
+        out[name] = {
+            "service": confirmation == Confirmation(),
             "danger_lifted_events": sum(d["danger_lifted_events"] for d in danger),
             "danger_seen_within_1s": sum(d["seen_within_1s"] for d in danger),
             "o_seen_within_1s": r["O"]["seen_within_1s"] if "O" in r else None,
             "o_ms_to_confirm_p50": r["O"]["ms_to_confirm_p50"] if "O" in r else None,
+            "o_left_in_danger": r["O"]["left_in_danger"] if "O" in r else None,
             "false_o_events": r.get("none", {}).get("false_o_events"),
         }
     return out
@@ -235,6 +257,7 @@ def summarise(rows: list[tuple[ClipScore, HeldOutClip]]) -> dict[str, Any]:
             ),
             "wrong_class_events": sum(any(w in s.confirmed for w in wrong) for s, _ in mine),
             "danger_lifted_events": sum(s.lifted for s, _ in mine),
+            "left_in_danger": sum(s.left_in_danger for s, _ in mine),
             "missed_in_every_frame": sum(s.confirmed_at is None and s.frames_found == 0 for s, _ in mine),
             "seen_within_1s_by": {
                 name: {k: f"{v[0]}/{v[1]}" for k, v in sorted(cells.items())}
@@ -286,7 +309,7 @@ def _tables(r: dict[str, Any]) -> str:
             lines.append(f"{name} seen within 1 s by {by}")
     lines += [
         "",
-        "the same detections under other confirmation windows (the service's: danger 1/3, O 3/4 clear of danger):",
+        "the same detections under other confirmation windows (the service's: danger 1/3, O 3/4) and rules:",
     ]
     for kind, label, false in (
         ("safe", "O", "false O in mark-free clips"),
@@ -298,15 +321,13 @@ def _tables(r: dict[str, Any]) -> str:
                 f"  {label:12} {window:>4}: seen within 1 s {w['seen_within_1s']}/{w['clips']}, ms p50 {ms}, "
                 f"{false} {w['false_events']}, wrong-class events {w['wrong_class_events']}"
             )
-    for key, label in (
-        ("o_beside_danger", "an O may be confirmed beside a danger mark"),
-        ("clear_of_danger", "an O only in a window clear of danger (the service's)"),
-    ):
+    for key, label in SAFE_RULE_LABELS.items():
         w = r["windows"][key]
         lines.append(
-            f"  {label}: danger lifted while its card was up in {w['danger_lifted_events']} clips, danger seen within "
-            f"1 s {w['danger_seen_within_1s']}, O seen within 1 s {w['o_seen_within_1s']} (p50 "
-            f"{w['o_ms_to_confirm_p50']} ms), mark-free clips with a confirmed O {w['false_o_events']}"
+            f"  {label}{SERVICE if w['service'] else ''}: danger lifted while its card was up in "
+            f"{w['danger_lifted_events']} clips, danger seen within 1 s {w['danger_seen_within_1s']}, O seen within "
+            f"1 s {w['o_seen_within_1s']} (p50 {w['o_ms_to_confirm_p50']} ms), O clips left in danger "
+            f"{w['o_left_in_danger']}, mark-free clips with a confirmed O {w['false_o_events']}"
         )
     lines += [
         "",

@@ -190,3 +190,17 @@ def test_bench_takes_the_person_and_camera_effects() -> None:
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     assert "add: hand, rolling shutter, auto exposure" in result.output and "from view" in result.output
+
+
+def test_the_rules_for_lifting_a_danger_replay_on_the_same_detections() -> None:
+    """Seed 3141's clip 390 in brief: a clutter O in view from the start, a triangle detected three times, then
+    lost at the frame's edge. Before round vision32 the O lifted the danger; with it, it does not. Its cost: an O
+    card on which a false X appears after the O was confirmed leaves the robot stopped ("left in danger")."""
+    clutter, tri = Detection(Shape.O, 0.8, (500, 400, 33, 31)), Detection(Shape.TRIANGLE, 0.95, (100, 100, 50, 50))
+    found = [[clutter, tri] if i in (11, 13, 14) else [clutter] for i in range(24)]
+    o_box = (100, 100, 50, 50)
+    o_card = [[Detection(Shape.O, 0.9, o_box)] + ([Detection(Shape.X, 0.9, o_box)] if i == 12 else []) for i in range(24)]
+    w = vision_clips.windows([(_clip(Shape.TRIANGLE, 24), found), (_clip(Shape.O, 24), o_card)])
+    assert [w[k]["danger_lifted_events"] for k in vision_clips.SAFE_RULES] == [1, 1, 0]
+    assert [w[k]["o_left_in_danger"] for k in vision_clips.SAFE_RULES] == [0, 0, 1]
+    assert w["new_safe_only"]["service"] and not w["clear_of_danger"]["service"]

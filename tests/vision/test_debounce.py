@@ -94,9 +94,50 @@ def test_an_o_is_not_confirmed_in_a_window_with_a_danger_mark() -> None:
     frames = [[X, O_], [O_], [X, O_], [O_], [O_], [O_], [O_]]
     # the X is held 2 frames after it was seen; the O waits until no X is in its own last 4 frames
     assert _run(deb, frames) == [{Shape.X}, {Shape.X}, {Shape.X}, {Shape.X}, {Shape.X}, set(), {Shape.O}]
-    before = Debouncer(Confirmation(clear_of_danger=False))
+    before = Debouncer(Confirmation(clear_of_danger=False, new_safe_only=False))
     assert _run(before, frames)[3] == {Shape.X, Shape.O}  # as it was: the O confirmed beside the X
     assert _run(before, [[X], [O_], [O_], [O_]])[3] == {Shape.O}  # the X missing: the danger would be lifted
     for danger in (X, T):  # a danger card swapped for an O: the O one frame later than without the rule
         deb.reset()
         assert _run(deb, [[danger], [O_], [O_], [O_], [O_]])[2:] == [{danger.shape}, set(), {Shape.O}]
+
+
+def _moved(d: Detection, dx: int, dy: int = 0) -> Detection:
+    x, y, w, h = d.box
+    return Detection(d.shape, d.confidence, (x + dx, y + dy, w, h))
+
+
+def test_an_o_confirmed_before_the_danger_does_not_lift_it_while_it_stays() -> None:
+    """Round vision32 (held-out clip 390 of seed 3141 with a hand): a clutter O confirmed before a triangle card
+    came stays in view, the triangle drifts out of view; without the rule the O lifts the danger once the
+    triangle has been missing for the O's window."""
+    frames = [[O_]] * 4 + [[T, O_]] * 3 + [[O_]] * 10
+    before = _run(Debouncer(Confirmation(new_safe_only=False)), frames)
+    assert before[3] == {Shape.O} and before[4] == {Shape.TRIANGLE} and Shape.O in before[-1]  # lifted
+    now = _run(Debouncer(), frames)
+    assert now[3] == {Shape.O} and now[4] == {Shape.TRIANGLE}
+    assert all(Shape.O not in out for out in now[4:])  # the O that was there all along never lifts it
+
+
+def test_a_stale_o_follows_its_box_and_is_forgotten_once_out_of_view() -> None:
+    deb = Debouncer()
+    _run(deb, [[O_]] * 3 + [[X, O_]])  # O confirmed, then an X: the O is stale
+    drifting = [[_moved(O_, 8 * i, 3 * i)] for i in range(1, 8)]  # the O moves 8 px a frame, the X is gone
+    assert all(Shape.O not in out for out in _run(deb, drifting))  # (the X is held two frames)
+    assert _run(deb, [[]] * 4) == [set()] * 4  # out of view for the O's window of 4 frames: forgotten
+    assert _run(deb, [[O_]] * 3)[-1] == {Shape.O}  # shown anew, it says safe again
+
+
+def test_an_o_shown_anew_lifts_the_danger_beside_a_stale_one() -> None:
+    """Only the O that was there before the danger is left out: another O, or an O that was never confirmed
+    before the danger (a card raised while the X is still up), counts."""
+    elsewhere = Detection(Shape.O, 0.85, (300, 200, 50, 50))
+    deb = Debouncer()
+    _run(deb, [[O_]] * 3 + [[X, O_]])
+    assert _run(deb, [[O_, elsewhere]] * 6)[-1] == {Shape.O}
+    raised = Debouncer()
+    assert _run(raised, [[X], [X, O_], [X, O_], [O_], [O_], [O_], [O_]])[-1] == {Shape.O}
+    raised.reset()
+    _run(raised, [[O_]] * 3 + [[X, O_]])
+    raised.reset()  # a reset forgets the stale O too
+    assert _run(raised, [[O_]] * 3)[-1] == {Shape.O}
