@@ -491,7 +491,7 @@ class HeldOutGenerator:
         warped = canvas.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BICUBIC)
         img.paste(warped, (0, 0), warped)
         if layers is not None:
-            shifted = inv @ np.array([[1, 0, -LAYER_PAD], [0, 1, -LAYER_PAD], [0, 0, 1.0]])
+            shifted = inv @ _PAD_SHIFT
             shifted /= shifted[2, 2]
             size = (self.width + 2 * LAYER_PAD, self.height + 2 * LAYER_PAD)
             layers.append(
@@ -779,13 +779,13 @@ class _Hand:
         # from below, far enough that the whole card, turned any way, starts out of the scene
         reach = (height - cy + math.hypot(x1 - x0, y1 - y0) / 2 + 10) / math.cos(way)
         per_m = max(x1 - x0, y1 - y0) / HELD_SIZE_M
-        rise = min(
-            max(1.875 * reach / per_m / speed, 0.2), 0.8
-        )  # a minimum-jerk move peaks at 1.875 x its mean
+        # a minimum-jerk move's peak speed is 1.875 times its mean
+        rise = min(max(1.875 * reach / per_m / speed, 0.2), 0.8)
         start = (reach * math.sin(way), reach * math.cos(way))
         return cls((cx, cy), start, rise, turn, drift, tremor, wobble)  # type: ignore[arg-type]
 
     def at(self, t: float) -> np.ndarray:
+        """Where the hand has the card `t` seconds after it started raising it (before: still out of view)."""
         s = min(max(t / self.rise_s, 0.0), 1.0)
         left = 1 - (10 * s**3 - 15 * s**4 + 6 * s**5)  # of the reach still to go
         ax, ay, f, p, q = self.drift
