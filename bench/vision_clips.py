@@ -32,8 +32,7 @@ What a person and a real camera add, each off by default (`HeldOutGenerator.clip
 scenes, cameras and noise with them and without, so a run with them pairs with one without):
 - `--hand`: a hand raises the card into view from below (a minimum-jerk reach at a peak of 0.5-2 m/s, 0.2-0.8 s,
   the card turned and straightened on the way, blurred by its own travel), then holds it with drift, tremor and
-  wobble; the clock of
-  "seen within 1 s" starts when the hand starts;
+  wobble; the clock of "seen within 1 s" starts when the hand starts;
 - `--rolling-shutter`: rows read out top to bottom over 10-30 ms;
 - `--auto-exposure`: the gain follows the frame's brightness (time constant 0.15-0.6 s), so a bright card brought
   up darkens the frames after it.
@@ -70,17 +69,21 @@ SIZE_BINS = ((0, 80), (80, 160), (160, 10_000))
 STREAK_BINS = ((0, 1.5), (1.5, 5), (5, 10_000))
 SAFE_WINDOWS = ("2/3", "3/4", "3/5", "4/5", "5/6", "6/8")
 DANGER_WINDOWS = ("1/1", "1/3", "2/3", "2/4")
-SAFE_RULES = {  # what may lift a danger, replayed on the same detections
-    "o_beside_danger": Confirmation(clear_of_danger=False, new_safe_only=False),  # before round vision31
-    "clear_of_danger": Confirmation(clear_of_danger=True, new_safe_only=False),  # round vision31
-    "new_safe_only": Confirmation(clear_of_danger=True, new_safe_only=True),  # round vision32
+SAFE_RULES: dict[str, tuple[str, Confirmation]] = {  # what may lift a danger, replayed on the same detections
+    "o_beside_danger": (  # before round vision31
+        "an O may be confirmed beside a danger mark",
+        Confirmation(clear_of_danger=False, new_safe_only=False),
+    ),
+    "clear_of_danger": (  # round vision31
+        "an O only in a window clear of danger",
+        Confirmation(clear_of_danger=True, new_safe_only=False),
+    ),
+    "new_safe_only": (  # round vision32
+        "and not an O that was confirmed before the danger came",
+        Confirmation(clear_of_danger=True, new_safe_only=True),
+    ),
 }
 SERVICE = " (the service's)"
-SAFE_RULE_LABELS = {
-    "o_beside_danger": "an O may be confirmed beside a danger mark",
-    "clear_of_danger": "an O only in a window clear of danger",
-    "new_safe_only": "and not an O that was confirmed before the danger came",
-}
 
 
 @dataclass
@@ -180,7 +183,7 @@ def windows(runs: list[tuple[HeldOutClip, list[list[Detection]]]]) -> dict[str, 
                     if n in r and (n == "O") == (kind == "danger")
                 ),
             }
-    for name, confirmation in SAFE_RULES.items():
+    for name, (_, confirmation) in SAFE_RULES.items():
         r = summarise([(score_clip(c, f, confirm(f, confirmation)), c) for c, f in runs])
         danger = [r[n] for n in ("X", "TRIANGLE") if n in r]
         out[name] = {
@@ -321,7 +324,7 @@ def _tables(r: dict[str, Any]) -> str:
                 f"  {label:12} {window:>4}: seen within 1 s {w['seen_within_1s']}/{w['clips']}, ms p50 {ms}, "
                 f"{false} {w['false_events']}, wrong-class events {w['wrong_class_events']}"
             )
-    for key, label in SAFE_RULE_LABELS.items():
+    for key, (label, _) in SAFE_RULES.items():
         w = r["windows"][key]
         lines.append(
             f"  {label}{SERVICE if w['service'] else ''}: danger lifted while its card was up in "
@@ -369,9 +372,8 @@ def main(
         )
         found, spent = detect_clip(detector, clip)
         cpu += spent
-        runs.append(
-            (dataclasses.replace(clip, frames=[]), found)
-        )  # the labels, not the frames (33 MB a clip)
+        # the labels, not the frames (33 MB a clip)
+        runs.append((dataclasses.replace(clip, frames=[]), found))
     rows = [(score_clip(c, f, confirm(f, Confirmation())), c) for c, f in runs]
     streaks = [c.blur_px for c, _ in runs]
     to_view = [c.in_view - c.shown for c, _ in runs if c.in_view is not None]
