@@ -65,3 +65,18 @@ def test_train_says_which_voice_cannot_speak(monkeypatch: pytest.MonkeyPatch) ->
     result = CliRunner().invoke(app, ["train", "--out", "/dev/null"])
     assert result.exit_code == 1 and "cannot train: these voices" in result.output
     assert "festival:ked: festival is not installed" in result.output
+
+
+def test_a_command_that_exits_0_without_writing_audio_is_an_error() -> None:
+    with pytest.raises(tts.TtsError, match="true wrote no audio"):
+        tts._run_to_wav(["true", tts.OUT])
+
+
+@pytest.mark.skipif(not shutil.which("text2wave"), reason="needs Festival (apt-get install festival)")
+def test_a_festival_voice_that_is_not_installed_is_named_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
+    """text2wave asked for a voice it does not have prints a SIOD error and exits 0, writing nothing: before, that
+    escaped `unavailable` as a FileNotFoundError and stopped the bench's extra rows instead of leaving one out."""
+    monkeypatch.setitem(tts.FESTIVAL_VOICES, "nobody", "nobody_hts")
+    monkeypatch.setitem(tts.FESTIVAL_PACKAGES, "nobody", "festvox-nobody")
+    missing = tts.unavailable(["festival:nobody"])
+    assert "unbound variable" in missing["festival:nobody"] and "apt-get install festvox-nobody" in missing["festival:nobody"]

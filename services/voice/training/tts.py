@@ -69,13 +69,19 @@ def _at_sample_rate(x: np.ndarray, rate: int) -> np.ndarray:
     return resample_poly(x, SAMPLE_RATE // g, rate // g)
 
 
-def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> bytes:
+def _completed(argv: list[str], stdin: bytes | None = None,
+               package: str = "espeak-ng flite festival") -> subprocess.CompletedProcess[bytes]:
     if shutil.which(argv[0]) is None:
         raise TtsError(f"{argv[0]} is not installed (apt-get install {package})")
     try:
-        return subprocess.run(argv, input=stdin, capture_output=True, check=True, timeout=30).stdout
+        return subprocess.run(argv, input=stdin, capture_output=True, check=True, timeout=30)
     except subprocess.CalledProcessError as exc:
         raise TtsError(f"{argv[0]} failed: {exc.stderr.decode(errors='replace')[:200]}") from None
+
+
+def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> bytes:
+    """The command's standard output; TtsError if it is not installed or fails."""
+    return _completed(argv, stdin, package).stdout
 
 
 OUT = "<out.wav>"
@@ -86,7 +92,11 @@ def _run_to_wav(argv: list[str], stdin: bytes | None = None, package: str = "esp
     """Run a TTS command that writes a WAV file (`OUT` in `argv`, a file in a temporary folder); its samples."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "x.wav"
-        _run([str(out) if a == OUT else a for a in argv], stdin=stdin, package=package)
+        done = _completed([str(out) if a == OUT else a for a in argv], stdin=stdin, package=package)
+        if not out.is_file() or out.stat().st_size == 0:
+            # text2wave asked for a voice that is not installed prints a SIOD error and still exits 0
+            said = (done.stderr or done.stdout).decode(errors="replace").strip()
+            raise TtsError(f"{argv[0]} wrote no audio: {said[:200]}")
         return wav_samples(out.read_bytes())
 
 
