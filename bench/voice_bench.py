@@ -412,6 +412,8 @@ def main() -> int:
     ap.add_argument("--agree-min", help="the spotter's agreement veto (HRI_VOICE_AGREE_MIN; default: the engine's)")
     ap.add_argument("--decoder", help="the spotter's second opinion from Whisper's decoder, on or off "
                                       "(HRI_VOICE_DECODER; default: the engine's)")
+    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
+                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the stream latency's early look: seconds of quiet, or off (default: the service's)")
@@ -429,7 +431,8 @@ def main() -> int:
         spotter = name == "spotter"
         engine = make_engine(name, head_path=args.head if spotter else None,
                              walk_gate=args.walk_gate if spotter else None, agree_min=args.agree_min if spotter else None,
-                             decoder=args.decoder if spotter else None)
+                             decoder=args.decoder if spotter else None,
+                             stop_in_phrase=args.stop_in_phrase if spotter else None)
         scores, extra = score(name, engine, items, policy)
         for s in sorted(scores, key=lambda s: (s.family != "ALL", s.family)):
             row = s.row()

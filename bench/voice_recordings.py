@@ -198,6 +198,8 @@ def main() -> int:
     ap.add_argument("--words", action="store_true", help="also each word alone, cut out by Whisper's timestamps")
     ap.add_argument("--decoder", help="the spotter's second opinion from Whisper's decoder, on or off "
                                       "(HRI_VOICE_DECODER; default: the engine's)")
+    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
+                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -205,7 +207,9 @@ def main() -> int:
     rows = []
     clips: dict[str, list[tuple[str, bytes]]] = {}
     for name in args.engines.split(","):
-        engine = make_engine(name, decoder=args.decoder if name == "spotter" else None)
+        spotter = name == "spotter"
+        engine = make_engine(name, decoder=args.decoder if spotter else None,
+                             stop_in_phrase=args.stop_in_phrase if spotter else None)
         for rec in recordings:
             heard = stream(engine, rec, SegmenterConfig())
             if args.show:

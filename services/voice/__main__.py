@@ -51,6 +51,12 @@ DecoderOption = Annotated[
                  help="spotter on Whisper's encoder: 'on' lets Whisper's own decoder rescue a command the head "
                       "missed, below the confidence that walks or confirms (a rescued 'go' asks) [default: off]"),
 ]
+StopInPhraseOption = Annotated[
+    str | None,
+    typer.Option("--stop-in-phrase", envvar="HRI_VOICE_STOP_IN_PHRASE",
+                 help="spotter: 'on' also hears 'stop' within a phrase the head heard no command in ('please stop', "
+                      "'stop it'); only 'stop', the safe direction [default: off]"),
+]
 VadOption = Annotated[
     str,
     typer.Option("--vad", envvar="HRI_VOICE_VAD",
@@ -85,12 +91,13 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
-         vad: VadOption = "silero", early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
+         stop_in_phrase: StopInPhraseOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
-                             head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder, vad=vad,
+                             head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
+                             stop_in_phrase=stop_in_phrase, vad=vad,
                              early_look=early_look, clear_window=clear_window)
     try:
         check_settings(settings)
@@ -110,11 +117,12 @@ def transcribe(
     walk_gate: WalkGateOption = None,
     agree_min: AgreeMinOption = None,
     decoder: DecoderOption = None,
+    stop_in_phrase: StopInPhraseOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
         eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate,
-                          agree_min=agree_min, decoder=decoder)
+                          agree_min=agree_min, decoder=decoder, stop_in_phrase=stop_in_phrase)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

@@ -31,6 +31,12 @@ utterance is heard as the command it writes first if it is sure enough of it (`d
 rescued "yes" confirms no question. Only for a head on Whisper's encoder (the default); one short decoding
 (~20-25 ms) for each utterance the head does not accept, none for one it does.
 
+"stop" within a phrase (`stop_in_phrase`, `HRI_VOICE_STOP_IN_PHRASE`, round voice31; `PhraseStop`): where the head
+accepts no command, windows of `PhraseStop.window_s` across the utterance are classified as well, and the utterance is
+heard as "stop" if one of them is surely enough "stop" ("please stop", "stop it"). Only "stop": stopping is the safe
+direction, while a "go" at a phrase's end may be "don't go". Costs an embedding per window (~10 ms) for each utterance
+the head does not accept, none for one it does.
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -45,6 +51,7 @@ import numpy as np
 
 from schemas.messages import Command
 from services.runtime.flags import parse_flag
+from services.voice.audio import SAMPLE_RATE
 from services.voice.engine import EngineError, Recognition
 from services.voice.spotter.decoder import FirstWord
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
@@ -60,6 +67,9 @@ DECODER_ENV = "HRI_VOICE_DECODER"
 DEFAULT_DECODER = False
 """Off: rounds voice30 and 30b heard 10-15 more of 504 held-out commands but took 8-31 more of 1,914 other words and
 asked 6-33 more questions; 30b failed its confirmation seed (voice README, round 30)."""
+STOP_IN_PHRASE_ENV = "HRI_VOICE_STOP_IN_PHRASE"
+DEFAULT_STOP_IN_PHRASE = False
+"""Off until round voice31's rule decides (voice README)."""
 
 
 def agree_min_from(raw: str | float | None) -> float:
@@ -76,15 +86,51 @@ def agree_min_from(raw: str | float | None) -> float:
     return value
 
 
-def decoder_from(raw: str | bool | None) -> bool:
-    """Whether the decoder's rescue is on, from `HRI_VOICE_DECODER` / `--decoder` (None or "": the default);
-    EngineError unless on or off (1/0, true/false, yes/no)."""
+def _on_off(raw: str | bool | None, default: bool, env: str) -> bool:
+    """An on/off setting from its variable `env` or option (None or "": `default`); EngineError unless on or off
+    (1/0, true/false, yes/no)."""
     if raw is None or raw == "":
-        return DEFAULT_DECODER
+        return default
     value = raw if isinstance(raw, bool) else parse_flag(raw)
     if value is None:
-        raise EngineError(f"{DECODER_ENV}={raw!r}: on or off")
+        raise EngineError(f"{env}={raw!r}: on or off")
     return value
+
+
+def decoder_from(raw: str | bool | None) -> bool:
+    """Whether the decoder's rescue is on, from `HRI_VOICE_DECODER` / `--decoder`."""
+    return _on_off(raw, DEFAULT_DECODER, DECODER_ENV)
+
+
+def stop_in_phrase_from(raw: str | bool | None) -> bool:
+    """Whether "stop" is also looked for within a phrase, from `HRI_VOICE_STOP_IN_PHRASE` / `--stop-in-phrase`."""
+    return _on_off(raw, DEFAULT_STOP_IN_PHRASE, STOP_IN_PHRASE_ENV)
+
+
+@dataclass(frozen=True)
+class PhraseStop:
+    """ "stop" looked for in windows across an utterance the head heard no command in (round voice31). Chosen on the
+    tune voices' phrases and one-edit neighbours only (voice README): 0.7 s windows found 22 more of 48 "stop"s said
+    within a phrase and no more false stops than 0.5-0.8 s; at 0.5 (the head's own accept) they heard "stop" in
+    "don't go"; 0.85 (sure) found half as many."""
+
+    window_s: float = 0.7
+    """Each window's length: about one word with its edges."""
+    hop_s: float = 0.2
+    """From one window's start to the next's."""
+    at: float = 0.7
+    """The published confidence (calibrated: 0.5 is the head's accept, 0.85 its sure) a window's "stop" needs."""
+
+    def windows(self, pcm: bytes) -> list[tuple[float, bytes]]:
+        """The utterance's windows from its start to its end, each with its start (s); none for an utterance no
+        longer than one window."""
+        size, hop = round(self.window_s * SAMPLE_RATE) * 2, round(self.hop_s * SAMPLE_RATE) * 2
+        if len(pcm) <= size:
+            return []
+        starts = list(range(0, len(pcm) - size + 1, hop))
+        if starts[-1] != len(pcm) - size:
+            starts.append(len(pcm) - size)  # the last window ends with the utterance: "please stop"
+        return [(k / 2 / SAMPLE_RATE, pcm[k : k + size]) for k in starts]
 
 
 @dataclass
@@ -130,7 +176,8 @@ class SpotterEngine:
     name = "spotter"
 
     def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
-                 agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER) -> None:
+                 agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER,
+                 stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
@@ -144,14 +191,18 @@ class SpotterEngine:
         if decoder and isinstance(self.embedder, WhisperEmbedder):
             self.decoder = FirstWord(self.embedder.ctranslate2_model, str(self.embedder.path / "tokenizer.json"),
                                      head.vocabulary)
+        self.phrase_stop: PhraseStop | None = (
+            PhraseStop() if stop_in_phrase and Command.STOP.value in head.vocabulary else None)
+        """"stop" within a phrase; None (off) unless asked for and the head has "stop"."""
 
     @classmethod
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
-                  agree_min: str | float | None = None, decoder: str | bool | None = None) -> SpotterEngine:
+                  agree_min: str | float | None = None, decoder: str | bool | None = None,
+                  stop_in_phrase: str | bool | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
             return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min),
-                       decoder=decoder_from(decoder))
+                       decoder=decoder_from(decoder), stop_in_phrase=stop_in_phrase_from(stop_in_phrase))
         except (HeadError, FeatureError, ValueError) as exc:
             raise EngineError(str(exc)) from None
 
@@ -209,5 +260,25 @@ class SpotterEngine:
             if rescued is not None:  # the head heard no command; the decoder writes one first, sure of it
                 word, conf = rescued
                 command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
+        if command is None and self.phrase_stop is not None:
+            heard = self._stop_within(pcm)
+            if heard is not None:
+                at_s, conf = heard
+                word, command, reason = Command.STOP.value, Command.STOP, f"stop within the utterance at {at_s:.1f} s"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)
+
+    def _stop_within(self, pcm: bytes) -> tuple[float, float] | None:
+        """Where a window of the utterance is surely enough "stop" (`PhraseStop.at`): its start (s) and the best such
+        window's confidence; None if no window is."""
+        assert self.phrase_stop is not None
+        stop = self.head.vocabulary.index(Command.STOP.value)
+        best: tuple[float, float] | None = None
+        for start_s, window in self.phrase_stop.windows(pcm):
+            probs = self.head.probabilities(self.embedder.utterance(window))[0]
+            if int(probs.argmax()) != stop:
+                continue
+            conf = self.head.confidence(stop, float(probs[stop]))
+            if conf >= self.phrase_stop.at and (best is None or conf > best[1]):
+                best = (start_s, conf)
+        return best

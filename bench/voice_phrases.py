@@ -1,0 +1,195 @@
+"""Commands said inside short phrases, and "go" after a word that forbids it (prints figures; not a test).
+
+The robot obeys single command words. People do not always say one word: "please stop", "let's go", "don't go".
+This bench asks what the robot does with such speech, on held-out voices only (`corpus.voices("heldout")` and the
+voices of `corpus.HELDOUT_EXTRA` that can speak here), in two ways:
+
+- **One utterance** (a WAV file, or a stream in which the words run together): each phrase of `GROUPS` is said
+  `--renderings` times by random held-out voices at random speeds, half clean and half with the training's kind of
+  augmentation (noise at 3-30 dB, reverberation, band limits, tempo; other seeds), trimmed as the service trims a
+  WAV file, then recognised.
+- **Two utterances** (a live stream in which the person pauses between the words): each pair of `PAIRS` is said
+  word by word by one voice, joined by each pause of `PAUSES`, in a quiet room and in pink noise 20 dB under the
+  voice, and fed in chunks through the service's stream path (`sources.stream_utterances`: Silero VAD, its end
+  windows) and the engine.
+
+A "go" counts as the reasoner's policy takes it (`voice_bench.Policy`, read from the knowledge file): the robot
+walks at once at or above `^confirm-below` and asks "Shall I walk forward?" between `^min-confidence` and it.
+
+    .venv/bin/python bench/voice_phrases.py --seed 1 [--renderings 8] [--engine spotter] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import random
+import sys
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.voice_bench import Policy  # noqa: E402
+from schemas.messages import Command  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
+from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
+from services.voice.sources import CHUNK_S, stream_utterances  # noqa: E402
+from services.voice.training import augment, corpus, dataset, tts  # noqa: E402
+
+GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "go forbidden": ("must not walk", (
+        "don't go", "do not go", "never go", "no go", "don't go yet", "you can't go", "don't go there",
+        "no, don't go", "wait, don't go", "please don't go")),
+    "go-words": ("must not walk", (
+        "go away", "go home", "go back", "gone", "going", "goes", "to go", "ago", "cargo", "go slow")),
+    "go in a phrase": ("a walk or a question is what was meant", (
+        "let's go", "go now", "go forward", "okay go", "go ahead", "ready, go", "now go", "go go")),
+    "stop in a phrase": ("stopping is what was meant", (
+        "please stop", "stop it", "stop now", "stop stop", "stop there", "stop please", "okay stop", "just stop")),
+    "stop forbidden": ("a stop is the safe mistake", ("don't stop", "never stop", "don't stop now", "no, don't stop")),
+    "other commands in a phrase": ("any command but go", (
+        "yes please", "no thanks", "stand up", "sit down", "get down", "why not", "yes sir", "oh no", "oh yes",
+        "no no", "down there", "why me")),
+}
+"""Each group: what the robot should do with it, and its phrases."""
+
+PAIRS: tuple[tuple[str, str], ...] = (
+    ("don't", "go"), ("do not", "go"), ("never", "go"), ("no", "go"), ("not", "go"), ("wait", "go"))
+"""Said word by word, with a pause between: the first part forbids the "go" that follows."""
+PAUSES = (0.0, 0.12, 0.2, 0.3, 0.5)
+"""Seconds of pause between the two parts. Silero ends an utterance after 0.09 s of quiet in a clear stream and
+0.15 s otherwise (`SegmenterConfig`), so from about 0.12 s on the "go" is heard on its own."""
+ROOMS = (("quiet", None), ("noise 20 dB", 20.0))
+WALK, ASK = "go: walk", "go: ask"
+
+
+def heard(rec: Recognition, policy: Policy) -> str:
+    """What the reasoner makes of one recognition: a command's name, `WALK` or `ASK` for a "go", or "none"."""
+    if rec.command is None or rec.confidence < policy.min_confidence:
+        return "none"
+    if rec.command is Command.GO:
+        return WALK if rec.confidence >= policy.confirm_below else ASK
+    return rec.command.value
+
+
+@dataclass(frozen=True)
+class Clip:
+    group: str
+    phrase: str
+    voice: str
+    condition: str
+    pcm: bytes
+
+
+def _render_phrase(job: tuple[str, dataset.Recipe]) -> Clip | None:
+    group, r = job
+    try:
+        pcm = dataset.render_utterance(r)
+    except tts.TtsError:
+        return None
+    return Clip(group, r.text, r.voice, "noisy" if r.strength else "clean", pcm)
+
+
+def _tight(x: np.ndarray, floor_db: float = 40.0) -> np.ndarray:
+    """`x` cut to its first and last 10 ms within `floor_db` of its loudest 10 ms (a word with no silence around)."""
+    frames = x[: x.size // 160 * 160].reshape(-1, 160)
+    level = 10 * np.log10(np.mean(frames**2, axis=1) + 1e-12)
+    loud = np.flatnonzero(level >= level.max() - floor_db)
+    return x[loud[0] * 160 : (loud[-1] + 1) * 160]
+
+
+def _render_pair(job: tuple[tuple[str, str], str, float]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The pair's two parts, each said alone by the voice at the speed and cut to its sound."""
+    (first, second), voice, speed = job
+    try:
+        return _tight(tts.synthesise(first, voice, speed)), _tight(tts.synthesise(second, voice, speed))
+    except tts.TtsError:
+        return None
+
+
+def stream(pcm: bytes, engine: Engine, policy: Policy) -> list[str]:
+    """What the robot hears in a stream, utterance by utterance: the service's VAD cut (`stream_utterances`, its
+    default settings) and the engine, as `services.voice.service` does."""
+    step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
+    chunks = (pcm[k : k + step] for k in range(0, len(pcm), step))
+    return [heard(u.recognition or engine.recognise(u.pcm), policy)
+            for u in stream_utterances(chunks, "pair", recognise=engine.recognise)]
+
+
+def spoken_pair(first: np.ndarray, second: np.ndarray, pause_s: float, snr_db: float | None,
+                rng: np.random.Generator) -> bytes:
+    """The two parts with `pause_s` between, 0.8 s of room before and 1 s after, in quiet or in pink noise."""
+    speech = np.concatenate([first, np.zeros(int(pause_s * SAMPLE_RATE)), second])
+    room = augment.Augment(noise=None if snr_db is None else "pink", snr_db=snr_db or 30.0, peak=0.3, pad_s=(0.8, 1.0))
+    return to_pcm(augment.apply(speech, room, rng))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--renderings", type=int, default=8, help="renderings of each phrase and each pair")
+    ap.add_argument("--engine", default="spotter")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
+                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
+    ap.add_argument("--json", type=Path, help="also write the figures here")
+    args = ap.parse_args()
+    policy = Policy.from_knowledge()
+    extra = list(corpus.HELDOUT_EXTRA)
+    missing = tts.unavailable(extra)
+    for voice, why in missing.items():
+        print(f"left out, cannot speak here: {voice} ({why})", flush=True)
+    voices = corpus.voices("heldout") + [v for v in extra if v not in missing]
+    rng = random.Random(f"phrases:{args.seed}")
+    jobs = [(group, dataset.Recipe(phrase, len(corpus.VOCABULARY), rng.choice(voices), rng.choice((0.85, 1.0, 1.15)),
+                                   1.0, rng.randrange(2**31), float(k % 2)))
+            for group, (_, phrases) in GROUPS.items() for phrase in phrases for k in range(args.renderings)]
+    pair_jobs = [(pair, rng.choice(voices), rng.choice((0.85, 1.0, 1.15)))
+                 for pair in PAIRS for _ in range(args.renderings)]
+    with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
+        clips = [c for c in pool.map(_render_phrase, jobs, chunksize=8) if c is not None]
+        pairs = [p for p in pool.map(_render_pair, pair_jobs, chunksize=4) if p is not None]
+    engine = make_engine(args.engine, stop_in_phrase=args.stop_in_phrase if args.engine == "spotter" else None)
+    in_phrase = getattr(engine, "phrase_stop", None) is not None
+    print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}); reasoner policy {policy}; {len(voices)} held-out voices; {len(clips)} of "
+          f"{len(jobs)} phrase clips and {len(pairs)} of {len(pair_jobs)} pairs rendered\n", flush=True)
+
+    out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
+                              "voices": len(voices)}
+    print("One utterance: what the robot heard, per group (clips)")
+    by_group: dict[str, dict[str, object]] = {}
+    said = [(c, heard(engine.recognise(c.pcm), policy)) for c in clips]
+    for group, (should, phrases) in GROUPS.items():
+        got = Counter(h for c, h in said if c.group == group)
+        per_phrase = {p: dict(Counter(h for c, h in said if c.phrase == p)) for p in phrases}
+        by_group[group] = {"should": should, "clips": sum(got.values()), "heard": dict(got), "per_phrase": per_phrase}
+        print(f"  {group:28} ({should}): {sum(got.values())} clips, {dict(got.most_common())}")
+    out["one_utterance"] = by_group
+
+    print("\nTwo utterances, a pause between (streams; a walk or a question anywhere in the stream)")
+    np_rng = np.random.default_rng(args.seed)
+    by_pause: dict[str, dict[str, object]] = {}
+    for room, snr in ROOMS:
+        for pause in PAUSES:
+            results = [stream(spoken_pair(a, b, pause, snr, np_rng), engine, policy) for a, b in pairs]
+            walks = sum(WALK in r for r in results)
+            asks = sum(ASK in r and WALK not in r for r in results)
+            split = sum(len(r) >= 2 for r in results)
+            key = f"{room}, pause {pause * 1000:.0f} ms"
+            by_pause[key] = {"streams": len(results), "heard_as_two": split, "walked": walks, "asked": asks,
+                             "heard": dict(Counter(" / ".join(r) or "(nothing)" for r in results).most_common(6))}
+            print(f"  {key:28} {len(results)} streams: heard as two utterances {split}, walked {walks}, asked {asks}")
+    out["two_utterances"] = by_pause
+    if args.json:
+        args.json.write_text(json.dumps(out, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
