@@ -54,8 +54,8 @@ DecoderOption = Annotated[
 StopInPhraseOption = Annotated[
     str | None,
     typer.Option("--stop-in-phrase", envvar="HRI_VOICE_STOP_IN_PHRASE",
-                 help="spotter: 'on' also hears 'stop' within a phrase the head heard no command in ('please stop', "
-                      "'stop it'); only 'stop', the safe direction [default: off]"),
+                 help="spotter: also hear 'stop' within a phrase the head heard no command in ('please stop', "
+                      "'stop it'), on or off; only 'stop', the safe direction [default: on]"),
 ]
 VadOption = Annotated[
     str,

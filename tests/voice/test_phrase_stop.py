@@ -1,0 +1,117 @@
+""""stop" said within a phrase (round voice31, `engine_spotter.PhraseStop`), and `bench/voice_phrases.py`'s own
+machinery: held-out espeak-ng and flite voices saying phrases the head alone hears no command in."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bench import voice_phrases
+from bench.voice_bench import Policy
+from schemas.messages import Command
+from services.voice import synth
+from services.voice.audio import SAMPLE_RATE, write_wav
+from services.voice.engine import EngineError, Recognition, make_engine
+from services.voice.engine_spotter import STOP_IN_PHRASE_ENV, PhraseStop, SpotterEngine, stop_in_phrase_from
+from services.voice.training import tts
+from tests.voice.test_spotter import _cli, _utterance
+
+pytestmark = pytest.mark.skipif(not (synth.espeak_available() and shutil.which("flite")),
+                                reason="espeak-ng and flite are needed")
+
+STOP_PHRASES = (("stop please", "espeak:en-029+m7"), ("stop please", "espeak:en-gb-scotland+f4"),
+                ("stop please", "espeak:en-us-nyc+Denis"), ("stop it", "espeak:en-gb-scotland+f4"),
+                ("stop it", "espeak:en-us-nyc+Denis"))
+"""Held-out voices saying "stop" first in a phrase, which the head alone hears as no command."""
+OTHER_PHRASES = ("don't go", "let's go", "go away", "don't go there", "yes please", "stop")
+OTHER_VOICES = ("flite:rms", "flite:slt", "espeak:en-029+m7", "espeak:en-us-nyc+Denis")
+
+
+@pytest.fixture(scope="module")
+def off() -> SpotterEngine:
+    return SpotterEngine.from_path(stop_in_phrase=False)
+
+
+@pytest.fixture(scope="module")
+def on() -> SpotterEngine:
+    """The default engine: "stop" within a phrase is on since round voice31."""
+    engine = SpotterEngine.from_path()
+    assert engine.phrase_stop is not None
+    return engine
+
+
+def test_windows_cover_the_utterance_and_end_with_it() -> None:
+    ps = PhraseStop()
+    pcm = bytes(2 * round(1.3 * SAMPLE_RATE))
+    windows = ps.windows(pcm)
+    assert [round(s, 2) for s, _ in windows] == [0.0, 0.2, 0.4, 0.6]  # the last one ends with the utterance
+    assert all(len(w) == 2 * round(ps.window_s * SAMPLE_RATE) for _, w in windows)
+    assert windows[-1][1] == pcm[-len(windows[-1][1]):]
+    assert ps.windows(bytes(2 * round(0.7 * SAMPLE_RATE))) == []  # one window long: the head's own look is enough
+
+
+def test_stop_first_in_a_phrase_is_heard_only_with_the_option(off: SpotterEngine, on: SpotterEngine) -> None:
+    heard = []
+    for phrase, voice in STOP_PHRASES:
+        pcm = _utterance(phrase, voice)
+        assert off.recognise(pcm).command is None, (phrase, voice)
+        rec = on.recognise(pcm)
+        heard.append(rec.command)
+        if rec.command is Command.STOP:
+            assert rec.confidence >= PhraseStop.at and rec.detail["reason"].startswith("stop within the utterance")
+    assert heard.count(Command.STOP) >= 4, heard
+
+
+def test_the_option_adds_only_stop_and_never_a_walk(off: SpotterEngine, on: SpotterEngine) -> None:
+    for phrase in OTHER_PHRASES:
+        for voice in OTHER_VOICES:
+            pcm = _utterance(phrase, voice)
+            a, b = off.recognise(pcm), on.recognise(pcm)
+            if a.command is not None:  # what the head accepts is never looked at again
+                assert (b.command, b.confidence) == (a.command, a.confidence), (phrase, voice)
+            else:
+                assert b.command in (None, Command.STOP), (phrase, voice, b)
+
+
+@pytest.mark.parametrize(("raw", "value"), [(None, True), ("", True), ("on", True), ("0", False), ("off", False),
+                                            (False, False)])
+def test_the_setting(raw: str | bool | None, value: bool) -> None:
+    assert stop_in_phrase_from(raw) is value
+
+
+def test_a_bad_setting_is_refused_naming_the_variable() -> None:
+    with pytest.raises(EngineError, match=STOP_IN_PHRASE_ENV):
+        make_engine("spotter", stop_in_phrase="sometimes")
+    out = _cli("--source", "stdin", env={STOP_IN_PHRASE_ENV: "sometimes"})
+    assert out.returncode == 2 and STOP_IN_PHRASE_ENV in out.stderr
+
+
+def test_transcribe_takes_the_option(tmp_path: Path) -> None:
+    wav = tmp_path / "stop-please.wav"
+    write_wav(wav, _utterance(*STOP_PHRASES[0]))
+    said = {flag: _cli("transcribe", "--stop-in-phrase", flag, str(wav)) for flag in ("off", "on")}
+    assert all(out.returncode == 0 for out in said.values()), said
+    assert '"command":null' in said["off"].stdout.replace(" ", "")
+    assert '"command":"stop"' in said["on"].stdout.replace(" ", "")
+
+
+def test_the_bench_reads_a_go_as_the_reasoner_does() -> None:
+    policy = Policy(min_confidence=0.5, confirm_below=0.85)
+    assert voice_phrases.heard(Recognition(Command.GO, "go", 0.9, "spotter"), policy) == voice_phrases.WALK
+    assert voice_phrases.heard(Recognition(Command.GO, "go", 0.6, "spotter"), policy) == voice_phrases.ASK
+    assert voice_phrases.heard(Recognition(Command.GO, "go", 0.4, "spotter"), policy) == "none"
+    assert voice_phrases.heard(Recognition(Command.STOP, "stop", 0.6, "spotter"), policy) == "stop"
+    assert voice_phrases.heard(Recognition(None, "other", 0.1, "spotter"), policy) == "none"
+
+
+def test_a_pause_splits_a_pair_into_two_utterances_in_the_service_s_stream(off: SpotterEngine) -> None:
+    first, second = (voice_phrases._tight(tts.synthesise(w, "espeak:en-029+m7")) for w in ("don't", "go"))
+    rng = np.random.default_rng(1)
+    policy = Policy()
+    together = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.0, None, rng), off, policy)
+    apart = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.5, None, rng), off, policy)
+    assert len(together) == 1 and together != [voice_phrases.WALK]
+    assert len(apart) == 2
