@@ -262,7 +262,7 @@ class SpotterEngine:
             if rescued is not None:  # the head heard no command; the decoder writes one first, sure of it
                 word, conf = rescued
                 command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
-        if command is None and self.phrase_stop is not None:
+        if head_refused and command is None and self.phrase_stop is not None:  # not after the veto: that head did hear
             heard = self._stop_within(pcm)
             if heard is not None:
                 at_s, conf = heard

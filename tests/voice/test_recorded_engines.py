@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import shutil
+import subprocess
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,12 +23,12 @@ from tests.voice.pitch import f0
 def test_rhvoice_and_pico_get_speed_as_a_rate_and_pitch_as_a_percentage(monkeypatch: pytest.MonkeyPatch) -> None:
     calls: list[tuple[list[str], bytes | None]] = []
 
-    def run(argv: list[str], stdin: bytes | None = None, package: str = "") -> bytes:
+    def run(argv: list[str], stdin: bytes | None = None, package: str = "") -> subprocess.CompletedProcess[bytes]:
         calls.append((argv, stdin))
         write_wav(argv[argv.index("-o" if "-o" in argv else "-w") + 1], to_pcm(np.full(1600, 0.1)))
-        return b""
+        return subprocess.CompletedProcess(argv, 0, b"", b"")
 
-    monkeypatch.setattr(tts, "_run", run)
+    monkeypatch.setattr(tts, "_completed", run)
     tts.rhvoice("stand", "bdl", speed=1.25, pitch=0.8)
     argv, stdin = calls[-1]
     assert argv[:7] == ["RHVoice-test", "-p", "bdl", "-r", "80", "-t", "80"] and stdin == b"stand"
