@@ -24,7 +24,8 @@ Printed per class:
   reasoner's latch replayed on the confirmed marks is latched at the clip's end (for an O clip: a false X or
   triangle the O did not lift again);
 - the same detections replayed under other windows and under each rule for what may lift a danger (`SAFE_RULES`:
-  before round vision31, round vision31's window clear of danger, round vision32's O shown anew);
+  before round vision31, round vision31's window clear of danger, round vision32's O shown anew, round vision33's
+  stale O held while a danger mark is detected);
 - seen by camera (walking / standing), by mark size, by the clip's longest motion streak, by a finger near the
   mark, and for triangles by filled or outline.
 
@@ -80,7 +81,11 @@ SAFE_RULES: dict[str, tuple[str, Confirmation]] = {  # what may lift a danger, r
     ),
     "new_safe_only": (  # round vision32
         "and not an O that was confirmed before the danger came",
-        Confirmation(clear_of_danger=True, new_safe_only=True),
+        Confirmation(clear_of_danger=True, new_safe_only=True, stale_held_by_danger=False),
+    ),
+    "stale_held_by_danger": (  # round vision33
+        "and that O is not forgotten in frames with a danger mark",
+        Confirmation(clear_of_danger=True, new_safe_only=True, stale_held_by_danger=True),
     ),
 }
 SERVICE = " (the service's)"

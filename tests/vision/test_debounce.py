@@ -141,3 +141,17 @@ def test_an_o_shown_anew_lifts_the_danger_beside_a_stale_one() -> None:
     _run(raised, [[O_]] * 3 + [[X, O_]])
     raised.reset()  # a reset forgets the stale O too
     assert _run(raised, [[O_]] * 3)[-1] == {Shape.O}
+
+
+def test_a_stale_o_is_not_forgotten_in_frames_that_report_a_danger_mark() -> None:
+    """Round vision33 (held-out clip 390 of seed 3141 again, with a rolling shutter or automatic exposure alone): the
+    detector reports only the marks up to a frame's first danger mark, so four triangle frames without the O aged the
+    stale O out, and the same O lifted the danger once the triangle drifted out of view."""
+    frames = [[O_]] * 4 + [[T]] * 4 + [[T, O_]] + [[O_]] * 8
+    aged = _run(Debouncer(Confirmation(stale_held_by_danger=False)), frames)
+    assert aged[3] == {Shape.O} and Shape.O in aged[-1]  # lifted by the O that was there all along
+    held = _run(Debouncer(Confirmation(stale_held_by_danger=True)), frames)
+    assert held[3] == {Shape.O} and held[4] == {Shape.TRIANGLE}
+    assert all(Shape.O not in out for out in held[4:])
+    again = Debouncer(Confirmation(stale_held_by_danger=True))  # out of view for 4 frames without a danger: forgotten
+    assert _run(again, frames[:9] + [[]] * 4 + [[O_]] * 3)[-1] == {Shape.O}
