@@ -74,7 +74,7 @@ class Confirmation:
     clutter O confirmed before a triangle card came lifted the danger once the triangle, drifting out of view,
     was lost for three frames; an O that was there all along is not a person saying "safe again"."""
 
-    stale_held_by_danger: bool = False
+    stale_held_by_danger: bool = True
     """With `new_safe_only`: a frame with an X or triangle detected does not count towards forgetting a stale O. The
     detector reports only the marks found up to a frame's first danger mark (`DetectorConfig.danger_first`), so an O
     missing from such a frame may not have been looked for. On held-out clips with a hand (seed 3141, clip 390 again,

@@ -207,4 +207,4 @@ def test_the_rules_for_lifting_a_danger_replay_on_the_same_detections() -> None:
     assert [w[k]["o_left_in_danger"] for k in vision_clips.SAFE_RULES] == [0, 0, 1, 1]
     w = vision_clips.windows([(_clip(Shape.TRIANGLE, 24), danger_first)])
     assert [w[k]["danger_lifted_events"] for k in vision_clips.SAFE_RULES] == [1, 1, 1, 0]
-    assert [k for k in vision_clips.SAFE_RULES if w[k]["service"]] == ["new_safe_only"]
+    assert [k for k in vision_clips.SAFE_RULES if w[k]["service"]] == ["stale_held_by_danger"]
