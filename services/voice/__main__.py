@@ -91,7 +91,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
-         stop_in_phrase: StopInPhraseOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
+         stop_in_phrase: StopInPhraseOption = None, vad: VadOption = "silero", early_look: EarlyLookOption = None,
+         clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
