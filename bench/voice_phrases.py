@@ -13,10 +13,18 @@ voices of `corpus.HELDOUT_EXTRA` that can speak here), in two ways:
   voice, and fed in chunks through the service's stream path (`sources.stream_utterances`: Silero VAD, its end
   windows) and the engine.
 
-A "go" counts as the reasoner's policy takes it (`voice_bench.Policy`, read from the knowledge file): the robot
-walks at once at or above `^confirm-below` and asks "Shall I walk forward?" between `^min-confidence` and it.
+Each utterance is counted as the reasoner's policy takes it alone (`voice_bench.Policy`, read from the knowledge
+file): a "go" walks at once at or above `^confirm-below` and asks "Shall I walk forward?" between `^min-confidence`
+and it. Each stream is also given, utterance by utterance, to the reasoner's own Soar agent (`SoarAgent`, the
+knowledge and rules the service loads), each `VoiceCommand` stamped where its utterance ends in the stream: what the
+robot does then depends on what came before, e.g. a "go" right after speech that matched no command is asked about
+(`agent/56_after_unclear.soar`). `MEANT_PAIRS` ("okay ... go") are the pairs in which the "go" was meant: what that
+rule costs.
 
-    .venv/bin/python bench/voice_phrases.py --seed 1 [--renderings 8] [--engine spotter] [--json out.json]
+`--voices train` says the phrases and pairs with the voices the head was trained on instead: their "go" is heard
+surely, as an enrolled user's is, which held-out voices' rarely is.
+
+    .venv/bin/python bench/voice_phrases.py --seed 1 [--renderings 8] [--engine spotter] [--voices heldout] [--knowledge F] [--json out.json]
 """
 
 from __future__ import annotations
@@ -37,6 +45,15 @@ sys.path.insert(0, str(ROOT))
 
 from bench.voice_bench import Policy  # noqa: E402
 from schemas.messages import Command  # noqa: E402
+from services.reasoner.agent_host import (  # noqa: E402
+    KNOWLEDGE_FILE,
+    AgentConfig,
+    CommandInput,
+    DecisionOutput,
+    Memory,
+    MotionOutput,
+    SoarAgent,
+)
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
 from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
 from services.voice.sources import CHUNK_S, stream_utterances  # noqa: E402
@@ -62,6 +79,8 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
 PAIRS: tuple[tuple[str, str], ...] = (
     ("don't", "go"), ("do not", "go"), ("never", "go"), ("no", "go"), ("not", "go"), ("wait", "go"))
 """Said word by word, with a pause between: the first part forbids the "go" that follows."""
+MEANT_PAIRS: tuple[tuple[str, str], ...] = (("okay", "go"), ("robot", "go"), ("ready", "go"), ("all right", "go"))
+"""Said the same way, but the "go" is meant: a walk, or a question, is right."""
 PAUSES = (0.0, 0.12, 0.2, 0.3, 0.5)
 """Seconds of pause between the two parts. Silero ends an utterance after 0.09 s of quiet in a clear stream and
 0.15 s otherwise (`SegmenterConfig`), so from about 0.12 s on the "go" is heard on its own."""
@@ -115,13 +134,33 @@ def _render_pair(job: tuple[tuple[str, str], str, float]) -> tuple[np.ndarray, n
         return None
 
 
-def stream(pcm: bytes, engine: Engine, policy: Policy) -> list[str]:
-    """What the robot hears in a stream, utterance by utterance: the service's VAD cut (`stream_utterances`, its
-    default settings) and the engine, as `services.voice.service` does."""
+def stream(pcm: bytes, engine: Engine) -> list[tuple[Recognition, float]]:
+    """What the robot hears in a stream, utterance by utterance, and where each ends (seconds into the stream): the
+    service's VAD cut (`stream_utterances`, its default settings) and the engine, as `services.voice.service` does."""
     step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
     chunks = (pcm[k : k + step] for k in range(0, len(pcm), step))
-    return [heard(u.recognition or engine.recognise(u.pcm), policy)
+    return [(u.recognition or engine.recognise(u.pcm), (u.start_s or 0.0) + u.seconds)
             for u in stream_utterances(chunks, "pair", recognise=engine.recognise)]
+
+
+STREAM_T0 = 1_000_000.0
+"""The UNIX time a stream starts at, for its utterances' stamps (only their differences matter)."""
+WALKED, ASKED, NEITHER = "walked", "asked", "neither"
+
+
+def reasoned(agent: SoarAgent, utterances: list[tuple[Recognition, float]]) -> str:
+    """What the reasoner's agent, fresh and standing, does with a stream's utterances, each given as the reasoner
+    service takes its `VoiceCommand`: `WALKED`, `ASKED` (and did not walk) or `NEITHER`."""
+    agent.reset(Memory())
+    agent.step(posture="standing")
+    outs = []
+    for rec, end_s in utterances:
+        msg = rec.message(stamp=STREAM_T0 + end_s)
+        outs += agent.step(CommandInput(word=msg.command.value if msg.command else None,
+                                        confidence=msg.confidence, stamp=msg.stamp))
+    if any(isinstance(o, MotionOutput) and o.action == "walk_forward" for o in outs):
+        return WALKED
+    return ASKED if any(isinstance(o, DecisionOutput) and o.verdict == "ask" for o in outs) else NEITHER
 
 
 def spoken_pair(first: np.ndarray, second: np.ndarray, pause_s: float, snr_db: float | None,
@@ -132,6 +171,16 @@ def spoken_pair(first: np.ndarray, second: np.ndarray, pause_s: float, snr_db: f
     return to_pcm(augment.apply(speech, room, rng))
 
 
+def _pair_row(results: list[list[tuple[Recognition, float]]], agent: SoarAgent, policy: Policy) -> dict[str, object]:
+    """One pause in one room: each utterance as the policy takes it alone, and each stream through the agent."""
+    labels = [[heard(rec, policy) for rec, _ in r] for r in results]
+    outcomes = Counter(reasoned(agent, r) for r in results)
+    return {"streams": len(results), "heard_as_two": sum(len(r) >= 2 for r in results),
+            "walked": sum(WALK in r for r in labels), "asked": sum(ASK in r and WALK not in r for r in labels),
+            "reasoner": {k: outcomes[k] for k in (WALKED, ASKED, NEITHER)},
+            "heard": dict(Counter(" / ".join(r) or "(nothing)" for r in labels).most_common(6))}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seed", type=int, default=1)
@@ -140,30 +189,45 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
                                              "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
+    ap.add_argument("--walk-gate", help="the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: "
+                                        "the engine's)")
+    ap.add_argument("--voices", choices=("heldout", "train"), default="heldout",
+                    help="who says them: the held-out voices (default) or the head's training voices")
+    ap.add_argument("--knowledge", type=Path, default=KNOWLEDGE_FILE,
+                    help="the reasoner's knowledge file for its agent and the policy (HRI_REASONER_KNOWLEDGE; default: "
+                         "the service's). One Soar kernel per process (REFERENCE.md): to compare two, run twice")
     ap.add_argument("--json", type=Path, help="also write the figures here")
     args = ap.parse_args()
-    policy = Policy.from_knowledge()
-    extra = list(corpus.HELDOUT_EXTRA)
-    missing = tts.unavailable(extra)
+    policy = Policy.from_knowledge(args.knowledge)
+    pool_voices = corpus.voices(args.voices)
+    extra = list(corpus.HELDOUT_EXTRA) if args.voices == "heldout" else []
+    missing = tts.unavailable(pool_voices + extra)
     for voice, why in missing.items():
         print(f"left out, cannot speak here: {voice} ({why})", flush=True)
-    voices = corpus.voices("heldout") + [v for v in extra if v not in missing]
+    voices = [v for v in pool_voices + extra if v not in missing]
     rng = random.Random(f"phrases:{args.seed}")
     jobs = [(group, dataset.Recipe(phrase, len(corpus.VOCABULARY), rng.choice(voices), rng.choice((0.85, 1.0, 1.15)),
                                    1.0, rng.randrange(2**31), float(k % 2)))
             for group, (_, phrases) in GROUPS.items() for phrase in phrases for k in range(args.renderings)]
     pair_jobs = [(pair, rng.choice(voices), rng.choice((0.85, 1.0, 1.15)))
                  for pair in PAIRS for _ in range(args.renderings)]
+    meant_jobs = [(pair, rng.choice(voices), rng.choice((0.85, 1.0, 1.15)))
+                  for pair in MEANT_PAIRS for _ in range(args.renderings)]
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
         clips = [c for c in pool.map(_render_phrase, jobs, chunksize=8) if c is not None]
         pairs = [p for p in pool.map(_render_pair, pair_jobs, chunksize=4) if p is not None]
-    engine = make_engine(args.engine, stop_in_phrase=args.stop_in_phrase if args.engine == "spotter" else None)
+        meant = [p for p in pool.map(_render_pair, meant_jobs, chunksize=4) if p is not None]
+    spotter = args.engine == "spotter"
+    engine = make_engine(args.engine, stop_in_phrase=args.stop_in_phrase if spotter else None,
+                         walk_gate=args.walk_gate if spotter else None)
     in_phrase = getattr(engine, "phrase_stop", None) is not None
-    print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}); reasoner policy {policy}; {len(voices)} held-out voices; {len(clips)} of "
-          f"{len(jobs)} phrase clips and {len(pairs)} of {len(pair_jobs)} pairs rendered\n", flush=True)
+    print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}); reasoner policy {policy}; "
+          f"{len(voices)} {args.voices} voices; {len(clips)} of {len(jobs)} phrase clips, {len(pairs)} of "
+          f"{len(pair_jobs)} forbidding pairs and {len(meant)} of {len(meant_jobs)} meant pairs rendered\n", flush=True)
 
     out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
-                              "voices": len(voices)}
+                              "voices": len(voices), "voice_split": args.voices,
+                              "knowledge": str(args.knowledge)}
     print("One utterance: what the robot heard, per group (clips)")
     by_group: dict[str, dict[str, object]] = {}
     said = [(c, heard(engine.recognise(c.pcm), policy)) for c in clips]
@@ -174,20 +238,19 @@ def main() -> int:
         print(f"  {group:28} ({should}): {sum(got.values())} clips, {dict(got.most_common())}")
     out["one_utterance"] = by_group
 
-    print("\nTwo utterances, a pause between (streams; a walk or a question anywhere in the stream)")
     np_rng = np.random.default_rng(args.seed)
-    by_pause: dict[str, dict[str, object]] = {}
-    for room, snr in ROOMS:
-        for pause in PAUSES:
-            results = [stream(spoken_pair(a, b, pause, snr, np_rng), engine, policy) for a, b in pairs]
-            walks = sum(WALK in r for r in results)
-            asks = sum(ASK in r and WALK not in r for r in results)
-            split = sum(len(r) >= 2 for r in results)
-            key = f"{room}, pause {pause * 1000:.0f} ms"
-            by_pause[key] = {"streams": len(results), "heard_as_two": split, "walked": walks, "asked": asks,
-                             "heard": dict(Counter(" / ".join(r) or "(nothing)" for r in results).most_common(6))}
-            print(f"  {key:28} {len(results)} streams: heard as two utterances {split}, walked {walks}, asked {asks}")
-    out["two_utterances"] = by_pause
+    with SoarAgent(AgentConfig(knowledge_file=args.knowledge)) as agent:
+        for title, said_pairs, key_out in (("the first part forbids the \"go\"", pairs, "two_utterances"),
+                                           ("the \"go\" is meant", meant, "meant_pairs")):
+            print(f"\nTwo utterances, a pause between; {title} (streams: a walk or a question anywhere in the stream, "
+                  "utterance by utterance, then by the reasoner's agent over the stream)")
+            out[key_out] = {f"{room}, pause {pause * 1000:.0f} ms": _pair_row(
+                [stream(spoken_pair(a, b, pause, snr, np_rng), engine) for a, b in said_pairs], agent, policy)
+                for room, snr in ROOMS for pause in PAUSES}
+            for key, row in out[key_out].items():  # type: ignore[attr-defined]
+                print(f"  {key:28} {row['streams']} streams: heard as two utterances {row['heard_as_two']}; "
+                      f"utterance by utterance walked {row['walked']}, asked {row['asked']}; the reasoner walked "
+                      f"{row['reasoner'][WALKED]}, asked {row['reasoner'][ASKED]}")
     if args.json:
         args.json.write_text(json.dumps(out, indent=2))
     return 0

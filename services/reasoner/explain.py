@@ -21,6 +21,7 @@ TEMPLATES: dict[str, str] = {
     "confirmed": "I asked whether to walk, and you said yes {ago}.",
     "declined": "I asked whether to walk, and you said no {ago}.",
     "asked": "I was not sure I heard '{word}', so I asked first.",
+    "asked-after-unclear": "You said something I did not understand just before '{word}', so I asked first.",
     "timed-out": "I asked whether to {word}, and you did not answer.",
     "already-done": "I had already done that when you said '{word}'.",
     "busy": "I was still moving when you said '{word}': that must finish first.",

@@ -107,11 +107,33 @@ def test_the_bench_reads_a_go_as_the_reasoner_does() -> None:
     assert voice_phrases.heard(Recognition(None, "other", 0.1, "spotter"), policy) == "none"
 
 
+@pytest.mark.parametrize(("knowledge", "expected"), [(None, "asked"), ("without the rule", "walked")])
+def test_the_bench_gives_a_stream_to_the_reasoner_s_own_agent(tmp_path: Path, knowledge: str | None,
+                                                               expected: str) -> None:
+    """Speech that matched no command, then a sure "go" 0.8 s later: the service's knowledge asks
+    (agent/56_after_unclear.soar); the same knowledge without `^ask-after-unclear` walks."""
+    from services.reasoner.agent_host import KNOWLEDGE_FILE, AgentConfig, SoarAgent
+
+    path = KNOWLEDGE_FILE
+    if knowledge is not None:
+        path = tmp_path / "knowledge.soar"
+        path.write_text("".join(line for line in KNOWLEDGE_FILE.read_text().splitlines(keepends=True)
+                                if "^ask-after-unclear" not in line))
+    said = [(Recognition(None, "other", 0.2, "spotter"), 1.2), (Recognition(Command.GO, "go", 0.97, "spotter"), 2.0)]
+    with SoarAgent(AgentConfig(knowledge_file=path)) as agent:
+        assert voice_phrases.reasoned(agent, said) == expected
+        assert voice_phrases.reasoned(agent, said[1:]) == "walked"  # fresh for each stream
+        assert voice_phrases.reasoned(agent, said[:1]) == "neither"
+
+
 def test_a_pause_splits_a_pair_into_two_utterances_in_the_service_s_stream(off: SpotterEngine) -> None:
     first, second = (voice_phrases._tight(tts.synthesise(w, "espeak:en-029+m7")) for w in ("don't", "go"))
     rng = np.random.default_rng(1)
     policy = Policy()
-    together = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.0, None, rng), off, policy)
-    apart = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.5, None, rng), off, policy)
-    assert len(together) == 1 and together != [voice_phrases.WALK]
+    together = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.0, None, rng), off)
+    apart = voice_phrases.stream(voice_phrases.spoken_pair(first, second, 0.5, None, rng), off)
+    assert len(together) == 1 and voice_phrases.heard(together[0][0], policy) != voice_phrases.WALK
     assert len(apart) == 2
+    (_, end_first), (_, end_second) = apart
+    # where each utterance ends in the stream: 0.8 s of room, the words, the pause (within the VAD's end windows)
+    assert 0.8 < end_first < end_second < 0.8 + (first.size + second.size) / SAMPLE_RATE + 0.5 + 0.5
