@@ -65,6 +65,10 @@ WORDS = corpus.VOCABULARY
 OTHER = len(WORDS)
 
 
+WALK, ASK = "go: walk", "go: ask"
+"""`Policy.takes` for a "go": the robot walks at once, or asks "Shall I walk forward?" first."""
+
+
 @dataclass(frozen=True)
 class Policy:
     """The reasoner's thresholds for "go" and for the confirming "yes"."""
@@ -85,6 +89,16 @@ class Policy:
 
         return cls(num(r"\^min-confidence", block, 0.5), num(r"\^confirm-below", block, 0.85),
                    num(r"\^yes-min-confidence", text, 0.7))
+
+    def takes(self, command: Command | None, confidence: float) -> str | None:
+        """What the reasoner does with one published command, as every voice bench counts it: None if it acts on
+        nothing (no command, or below "go"'s `^min-confidence`, which every command is held to here: the others'
+        own, 0.3, is below anything the spotter publishes), `WALK` or `ASK` for a "go", else the command's word."""
+        if command is None or confidence < self.min_confidence:
+            return None
+        if command is Command.GO:
+            return WALK if confidence >= self.confirm_below else ASK
+        return command.value
 
 
 @dataclass(frozen=True)
@@ -267,9 +281,8 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
             s = scores.setdefault(fam, Score(engine_name, fam))
             s.decode_s += dt
             s.audio_s += len(it.pcm) / 2 / SAMPLE_RATE
-            is_go = cmd == Command.GO
-            walks = is_go and conf >= policy.confirm_below
-            asks = is_go and policy.min_confidence <= conf < policy.confirm_below
+            taken = policy.takes(cmd, conf)
+            walks, asks = taken == WALK, taken == ASK
             if it.label != WORDS.index("go") and walks:
                 s.false_walk_direct += 1
                 s.walked_on[f"{it.text} ({it.voice}, {it.condition})"] += 1
@@ -279,7 +292,7 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
                 word = WORDS[it.label]
                 s.commands += 1
                 s.per_command[word][1] += 1
-                ok = cmd is not None and cmd.value == word and conf >= policy.min_confidence
+                ok = taken is not None and cmd is not None and cmd.value == word
                 if ok and word == "go" and asks:
                     s.asked_go += 1
                     ok = yes_conf.get((it.voice, it.condition), 0.0) >= policy.yes_min
@@ -301,14 +314,19 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
     return list(scores.values()), extra
 
 
+def loud_frames(x: np.ndarray, floor_db: float, eps: float = 1e-9) -> np.ndarray:
+    """The indices of `x`'s 10 ms frames (160 samples) whose power is within `floor_db` of its loudest frame's
+    (`eps` is added to each frame's mean power before the logarithm)."""
+    frames = x[: x.size // 160 * 160].reshape(-1, 160)
+    level = 10 * np.log10(np.mean(frames**2, axis=1) + eps)
+    return np.flatnonzero(level >= level.max() - floor_db)
+
+
 def speech_end_s(pcm: bytes, floor_db: float = 30.0) -> float:
     """Where a clip's speech ends (s): the end of its last 10 ms frame within `floor_db` of its loudest frame.
     (Not the clip's end minus the post-roll: the clip was trimmed by WebRTC's VAD, whose end lags the voice's
     by its window, so a VAD that ends sooner would seem to answer before the speech ended.)"""
-    x = np.frombuffer(pcm, "<i2").astype(np.float64)
-    frames = x[: x.size // 160 * 160].reshape(-1, 160)
-    level = 10 * np.log10(np.mean(frames**2, axis=1) + 1e-9)
-    loud = np.flatnonzero(level >= level.max() - floor_db)
+    loud = loud_frames(np.frombuffer(pcm, "<i2").astype(np.float64), floor_db)
     return float((loud[-1] + 1) * 160 / SAMPLE_RATE) if loud.size else len(pcm) / 2 / SAMPLE_RATE
 
 
@@ -414,6 +432,8 @@ def main() -> int:
                                       "(HRI_VOICE_DECODER; default: the engine's)")
     ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
                                              "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
+    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
+                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the stream latency's early look: seconds of quiet, or off (default: the service's)")
@@ -432,7 +452,8 @@ def main() -> int:
         engine = make_engine(name, head_path=args.head if spotter else None,
                              walk_gate=args.walk_gate if spotter else None, agree_min=args.agree_min if spotter else None,
                              decoder=args.decoder if spotter else None,
-                             stop_in_phrase=args.stop_in_phrase if spotter else None)
+                             stop_in_phrase=args.stop_in_phrase if spotter else None,
+                             stop_in_long=args.stop_in_long if spotter else None)
         scores, extra = score(name, engine, items, policy)
         for s in sorted(scores, key=lambda s: (s.family != "ALL", s.family)):
             row = s.row()

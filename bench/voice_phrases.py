@@ -4,7 +4,8 @@ The robot obeys single command words. People do not always say one word: "please
 This bench asks what the robot does with such speech, on held-out voices only (`corpus.voices("heldout")` and the
 voices of `corpus.HELDOUT_EXTRA` that can speak here), in two ways:
 
-- **One utterance** (a WAV file, or a stream in which the words run together): each phrase of `GROUPS` is said
+- **One utterance** (a WAV file, or a stream in which the words run together): each phrase of `GROUPS` and each
+  sentence of `SENTENCES` is said
   `--renderings` times by random held-out voices at random speeds, half clean and half with the training's kind of
   augmentation (noise at 3-30 dB, reverberation, band limits, tempo; other seeds), trimmed as the service trims a
   WAV file, then recognised.
@@ -43,8 +44,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import Policy  # noqa: E402
-from schemas.messages import Command  # noqa: E402
+from bench.voice_bench import ASK, WALK, Policy, loud_frames  # noqa: E402
 from services.reasoner.agent_host import (  # noqa: E402
     KNOWLEDGE_FILE,
     AgentConfig,
@@ -57,6 +57,7 @@ from services.reasoner.agent_host import (  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
 from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
 from services.voice.sources import CHUNK_S, stream_utterances  # noqa: E402
+from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds  # noqa: E402
 from services.voice.training import augment, corpus, dataset, tts  # noqa: E402
 
 GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
@@ -75,6 +76,17 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
         "no no", "down there", "why me")),
 }
 """Each group: what the robot should do with it, and its phrases."""
+SENTENCES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "stop in a sentence": ("stopping is what was meant", (
+        "please stop walking right now", "hey robot, stop, there is a chair in the way", "I said stop, that is far enough",
+        "can you stop for a second please", "stop moving, someone is coming", "okay robot, you can stop there now")),
+    "sentences without stop": ("nothing", (
+        "the shop on the corner closes at six", "we took the train to the top of the hill",
+        "she put the stamps in the drawer", "my brother told me a story about a storm", "the bus was full this morning",
+        "put the top back on the bottle", "start the car and wait for me outside", "the store is next to the station")),
+}
+"""Whole sentences, most of them longer than one command word may be (`MAX_SPEECH_S`): what round voice33 is about.
+Rendered after everything else, from their own random stream, so that a seed's other clips are those it had before."""
 
 PAIRS: tuple[tuple[str, str], ...] = (
     ("don't", "go"), ("do not", "go"), ("never", "go"), ("no", "go"), ("not", "go"), ("wait", "go"))
@@ -85,18 +97,12 @@ PAUSES = (0.0, 0.12, 0.2, 0.3, 0.5)
 """Seconds of pause between the two parts. Silero ends an utterance after 0.09 s of quiet in a clear stream and
 0.15 s otherwise (`SegmenterConfig`), so from about 0.12 s on the "go" is heard on its own."""
 ROOMS = (("quiet", None), ("noise 20 dB", 20.0))
-WALK, ASK = "go: walk", "go: ask"
 
 
 def heard(rec: Recognition, policy: Policy) -> str:
-    """What the reasoner makes of one recognition: a command's name, `WALK` or `ASK` for a "go", or "none". Every
-    command needs "go"'s `^min-confidence`, as `voice_bench` counts them (the others' own, 0.3, is below anything the
-    spotter publishes)."""
-    if rec.command is None or rec.confidence < policy.min_confidence:
-        return "none"
-    if rec.command is Command.GO:
-        return WALK if rec.confidence >= policy.confirm_below else ASK
-    return rec.command.value
+    """What the reasoner makes of one recognition alone (`Policy.takes`): a command's name, `WALK` or `ASK` for a
+    "go", or "none"."""
+    return policy.takes(rec.command, rec.confidence) or "none"
 
 
 @dataclass(frozen=True)
@@ -119,9 +125,7 @@ def _render_phrase(job: tuple[str, dataset.Recipe]) -> Clip | None:
 
 def _tight(x: np.ndarray, floor_db: float = 40.0) -> np.ndarray:
     """`x` cut to its first and last 10 ms within `floor_db` of its loudest 10 ms (a word with no silence around)."""
-    frames = x[: x.size // 160 * 160].reshape(-1, 160)
-    level = 10 * np.log10(np.mean(frames**2, axis=1) + 1e-12)
-    loud = np.flatnonzero(level >= level.max() - floor_db)
+    loud = loud_frames(x, floor_db, eps=1e-12)
     return x[loud[0] * 160 : (loud[-1] + 1) * 160]
 
 
@@ -189,6 +193,8 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
                                              "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
+    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
+                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
     ap.add_argument("--walk-gate", help="the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: "
                                         "the engine's)")
     ap.add_argument("--voices", choices=("heldout", "train"), default="heldout",
@@ -213,29 +219,40 @@ def main() -> int:
                  for pair in PAIRS for _ in range(args.renderings)]
     meant_jobs = [(pair, rng.choice(voices), rng.choice((0.85, 1.0, 1.15)))
                   for pair in MEANT_PAIRS for _ in range(args.renderings)]
+    rng_sentences = random.Random(f"sentences:{args.seed}")
+    jobs += [(group, dataset.Recipe(text, len(corpus.VOCABULARY), rng_sentences.choice(voices),
+                                    rng_sentences.choice((0.85, 1.0, 1.15)), 1.0, rng_sentences.randrange(2**31),
+                                    float(k % 2)))
+             for group, (_, texts) in SENTENCES.items() for text in texts for k in range(args.renderings)]
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
         clips = [c for c in pool.map(_render_phrase, jobs, chunksize=8) if c is not None]
         pairs = [p for p in pool.map(_render_pair, pair_jobs, chunksize=4) if p is not None]
         meant = [p for p in pool.map(_render_pair, meant_jobs, chunksize=4) if p is not None]
     spotter = args.engine == "spotter"
     engine = make_engine(args.engine, stop_in_phrase=args.stop_in_phrase if spotter else None,
+                         stop_in_long=args.stop_in_long if spotter else None,
                          walk_gate=args.walk_gate if spotter else None)
     in_phrase = getattr(engine, "phrase_stop", None) is not None
-    print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}); reasoner policy {policy}; "
+    in_long = getattr(engine, "long_stop", None) is not None
+    print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}, within a longer utterance: "
+          f"{'on' if in_long else 'off'}); reasoner policy {policy}; "
           f"{len(voices)} {args.voices} voices; {len(clips)} of {len(jobs)} phrase clips, {len(pairs)} of "
           f"{len(pair_jobs)} forbidding pairs and {len(meant)} of {len(meant_jobs)} meant pairs rendered\n", flush=True)
 
-    out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
+    out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase, "stop_in_long": in_long,
                               "voices": len(voices), "voice_split": args.voices,
                               "knowledge": str(args.knowledge)}
     print("One utterance: what the robot heard, per group (clips)")
     by_group: dict[str, dict[str, object]] = {}
     said = [(c, heard(engine.recognise(c.pcm), policy)) for c in clips]
-    for group, (should, phrases) in GROUPS.items():
+    for group, (should, phrases) in (GROUPS | SENTENCES).items():
         got = Counter(h for c, h in said if c.group == group)
+        long = sum(speech_seconds(c.pcm) > MAX_SPEECH_S for c, _ in said if c.group == group)
         per_phrase = {p: dict(Counter(h for c, h in said if c.phrase == p)) for p in phrases}
-        by_group[group] = {"should": should, "clips": sum(got.values()), "heard": dict(got), "per_phrase": per_phrase}
-        print(f"  {group:28} ({should}): {sum(got.values())} clips, {dict(got.most_common())}")
+        by_group[group] = {"should": should, "clips": sum(got.values()), "heard": dict(got), "per_phrase": per_phrase,
+                           "longer_than_a_command": long}
+        print(f"  {group:28} ({should}): {sum(got.values())} clips ({long} longer than {MAX_SPEECH_S} s), "
+              f"{dict(got.most_common())}")
     out["one_utterance"] = by_group
 
     np_rng = np.random.default_rng(args.seed)

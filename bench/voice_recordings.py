@@ -44,7 +44,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import Policy  # noqa: E402
+from bench.voice_bench import ASK, WALK, Policy  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
 from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
@@ -141,16 +141,17 @@ def stream(engine: Engine, rec: Recording, config: SegmenterConfig) -> list[tupl
 
 def score(heard: list[tuple[float, Command | None, float, str]], rec: Recording, policy: Policy) -> dict[str, object]:
     expected, mentioned = said(rec.transcript)
-    acted = Counter(c.value for _, c, conf, _ in heard if c is not None and conf >= policy.min_confidence)
-    gos = [conf for _, c, conf, _ in heard if c == Command.GO and conf >= policy.min_confidence]
+    taken = [(c, policy.takes(c, conf)) for _, c, conf, _ in heard]
+    acted = Counter(c.value for c, t in taken if c is not None and t is not None)
+    gos = [t for _, t in taken if t in (WALK, ASK)]
     nobody_said_go = mentioned["go"] == 0
     return {
         "recording": rec.name, "kind": rec.kind, "seconds": round(rec.samples.size / SAMPLE_RATE, 1),
         "utterances": len(heard),
         "expected": dict(expected), "heard": sum((acted & expected).values()),
         "published": dict(acted), "false": dict(acted - mentioned),
-        "false_walks": sum(c >= policy.confirm_below for c in gos) if nobody_said_go else 0,
-        "false_asks": sum(c < policy.confirm_below for c in gos) if nobody_said_go else 0,
+        "false_walks": gos.count(WALK) if nobody_said_go else 0,
+        "false_asks": gos.count(ASK) if nobody_said_go else 0,
     }
 
 
@@ -176,7 +177,7 @@ def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) 
     """Command words heard as themselves, other words taken for a command (at `^min-confidence` or more)."""
     def acted(r: Recognition) -> str | None:
         """The command word the reasoner acts on, if any."""
-        return r.command.value if r.command is not None and r.confidence >= policy.min_confidence else None
+        return r.command.value if r.command is not None and policy.takes(r.command, r.confidence) else None
 
     commands = [(w, engine.recognise(pcm)) for w, pcm in clips if w in WORDS]
     others = [(w, engine.recognise(pcm)) for w, pcm in clips if w not in WORDS]
@@ -186,7 +187,7 @@ def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) 
         "command_words_heard": sum(acted(r) == w for w, r in commands),
         "other_words": len(others), "other_words_taken": len(taken),
         "taken": [f"{w}->{acted(r)}:{r.confidence:.2f}" for w, r in taken],
-        "go_walks": sum(r.command == Command.GO and r.confidence >= policy.confirm_below for _, r in taken),
+        "go_walks": sum(policy.takes(r.command, r.confidence) == WALK for _, r in taken),
     }
 
 
@@ -200,6 +201,8 @@ def main() -> int:
                                       "(HRI_VOICE_DECODER; default: the engine's)")
     ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
                                              "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
+    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
+                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -209,7 +212,8 @@ def main() -> int:
     for name in args.engines.split(","):
         spotter = name == "spotter"
         engine = make_engine(name, decoder=args.decoder if spotter else None,
-                             stop_in_phrase=args.stop_in_phrase if spotter else None)
+                             stop_in_phrase=args.stop_in_phrase if spotter else None,
+                             stop_in_long=args.stop_in_long if spotter else None)
         for rec in recordings:
             heard = stream(engine, rec, SegmenterConfig())
             if args.show:

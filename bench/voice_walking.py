@@ -38,7 +38,16 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.ego_noise import EgoNoiseModel, ego_noise, mix, unit_rms  # noqa: E402
-from bench.voice_bench import OTHER, WORDS, Item, Policy, early_look_arg, heldout_items, speech_end_s  # noqa: E402
+from bench.voice_bench import (  # noqa: E402
+    OTHER,
+    WALK,
+    WORDS,
+    Item,
+    Policy,
+    early_look_arg,
+    heldout_items,
+    speech_end_s,
+)
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
@@ -125,7 +134,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
         if it.label < OTHER:
             word = WORDS[it.label]
             total[word] += 1
-            ok = cmd is not None and cmd.value == word and conf >= policy.min_confidence
+            ok = cmd is not None and cmd.value == word and policy.takes(cmd, conf) is not None
             heard[word] += ok
             if ok and emit is not None:
                 latency.append(emit - (word_start + speech_end_s(it.pcm)))
@@ -133,8 +142,9 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
                 errors[f"{word}->{cmd.value if cmd else 'none'}"] += 1
         else:
             oov += 1
-            oov_taken += cmd is not None and conf >= policy.min_confidence
-            if cmd == Command.GO and conf >= policy.confirm_below:  # the reasoner walks without asking
+            taken = policy.takes(cmd, conf)
+            oov_taken += taken is not None
+            if taken == WALK:  # the reasoner walks without asking
                 walked_on[it.text] += 1
     commands = sum(total.values())
     lat = np.array(latency) * 1000 if latency else np.zeros(1)
@@ -167,7 +177,7 @@ def noise_only(engine: Engine, seconds: float, level_rms: float, config: Segment
     rng = np.random.default_rng(seed + 1)
     x = noise(seconds, rng) * level_rms
     segs = stream(engine, x, config)
-    heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and conf >= policy.min_confidence)
+    heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and policy.takes(cmd, conf))
     return {"vad": config.vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
             "segment_s_max": round(max((e - s for _, s, e, _, _ in segs), default=0.0), 2)}
 

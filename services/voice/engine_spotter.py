@@ -37,6 +37,11 @@ the utterance is heard as "stop" if one of them is surely enough "stop" ("please
 stopping is the safe direction, while a "go" at a phrase's end may be "don't go". Costs an embedding per window
 (~10 ms) for each utterance the head does not accept, none for one it does.
 
+"stop" within a sentence (`stop_in_long`, `HRI_VOICE_STOP_IN_LONG`, off unless round voice33 decides; `LONG_STOP`): an
+utterance longer than `MAX_SPEECH_S` is not one command word and is rejected before the head; with this on, its
+windows (as above, up to `LONG_STOP_MAX_S` of audio) are looked at for a "stop" at the stricter `LONG_STOP.at`
+("robot, please stop walking now"). Costs an embedding per window of such an utterance (up to ~27 for 6 s).
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -72,6 +77,12 @@ DEFAULT_STOP_IN_PHRASE = True
 """On since round voice31 (rule docs/experiments/rules/voice31_rule.txt): on fresh held-out seeds "stop" said within a
 phrase was heard in 57 instead of 31 of 96 clips, with 4 more of 1,914 other words taken (all for "stop"), no walk and
 no question added (voice README)."""
+STOP_IN_LONG_ENV = "HRI_VOICE_STOP_IN_LONG"
+DEFAULT_STOP_IN_LONG = False
+"""Off unless round voice33 (rule docs/experiments/rules/voice33_rule.txt) lands it."""
+LONG_STOP_MAX_S = 6.0
+"""The longest utterance whose windows are looked at: the stream segmenter's `max_utterance_s`. A longer file is
+rejected as before (hundreds of windows)."""
 
 
 def agree_min_from(raw: str | float | None) -> float:
@@ -109,6 +120,12 @@ def stop_in_phrase_from(raw: str | bool | None) -> bool:
     return _on_off(raw, DEFAULT_STOP_IN_PHRASE, STOP_IN_PHRASE_ENV)
 
 
+def stop_in_long_from(raw: str | bool | None) -> bool:
+    """Whether "stop" is also looked for within an utterance longer than `MAX_SPEECH_S`, from `HRI_VOICE_STOP_IN_LONG`
+    / `--stop-in-long`."""
+    return _on_off(raw, DEFAULT_STOP_IN_LONG, STOP_IN_LONG_ENV)
+
+
 @dataclass(frozen=True)
 class PhraseStop:
     """ "stop" looked for in windows across an utterance the head heard no command in (round voice31). Chosen on the
@@ -133,6 +150,12 @@ class PhraseStop:
         if starts[-1] != len(pcm) - size:
             starts.append(len(pcm) - size)  # the last window ends with the utterance: "please stop"
         return [(k / 2 / SAMPLE_RATE, pcm[k : k + size]) for k in starts]
+
+
+LONG_STOP = PhraseStop(at=0.8)
+"""The windows across an utterance longer than `MAX_SPEECH_S` (round voice33). A sentence has more windows than a
+phrase, so more chances of a false "stop": chosen on the tune voices only (voice README), 0.8 heard "stop" in 35 of 64
+tune sentences holding one and in none of 79 without (0.7: 41 of 64 and 2 of 79; 0.85: 21 of 64)."""
 
 
 @dataclass
@@ -179,7 +202,7 @@ class SpotterEngine:
 
     def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
                  agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER,
-                 stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE) -> None:
+                 stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE, stop_in_long: bool = DEFAULT_STOP_IN_LONG) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
@@ -196,15 +219,19 @@ class SpotterEngine:
         self.phrase_stop: PhraseStop | None = (
             PhraseStop() if stop_in_phrase and Command.STOP.value in head.vocabulary else None)
         """"stop" within a phrase; None (off) unless asked for and the head has "stop"."""
+        self.long_stop: PhraseStop | None = (
+            LONG_STOP if stop_in_long and Command.STOP.value in head.vocabulary else None)
+        """"stop" within an utterance longer than `MAX_SPEECH_S`; None (off) unless asked for and the head has "stop"."""
 
     @classmethod
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
                   agree_min: str | float | None = None, decoder: str | bool | None = None,
-                  stop_in_phrase: str | bool | None = None) -> SpotterEngine:
+                  stop_in_phrase: str | bool | None = None, stop_in_long: str | bool | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
             return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min),
-                       decoder=decoder_from(decoder), stop_in_phrase=stop_in_phrase_from(stop_in_phrase))
+                       decoder=decoder_from(decoder), stop_in_phrase=stop_in_phrase_from(stop_in_phrase),
+                       stop_in_long=stop_in_long_from(stop_in_long))
         except (HeadError, FeatureError, ValueError) as exc:
             raise EngineError(str(exc)) from None
 
@@ -212,6 +239,12 @@ class SpotterEngine:
         t0 = time.perf_counter()
         audio_s = speech_seconds(pcm)
         if audio_s > MAX_SPEECH_S:
+            heard = (self._stop_within(pcm, self.long_stop)
+                     if self.long_stop is not None and audio_s <= LONG_STOP_MAX_S else None)
+            if heard is not None:
+                at_s, conf = heard
+                return Recognition(Command.STOP, Command.STOP.value, conf, self.name, time.perf_counter() - t0, audio_s,
+                                   {"reason": f"stop within a long utterance at {at_s:.1f} s"})
             return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
                                {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
         encoded: np.ndarray | None = None
@@ -263,24 +296,23 @@ class SpotterEngine:
                 word, conf = rescued
                 command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
         if head_refused and command is None and self.phrase_stop is not None:  # not after the veto: that head did hear
-            heard = self._stop_within(pcm)
+            heard = self._stop_within(pcm, self.phrase_stop)
             if heard is not None:
                 at_s, conf = heard
                 word, command, reason = Command.STOP.value, Command.STOP, f"stop within the utterance at {at_s:.1f} s"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)
 
-    def _stop_within(self, pcm: bytes) -> tuple[float, float] | None:
-        """Where a window of the utterance is surely enough "stop" (`PhraseStop.at`): its start (s) and the best such
-        window's confidence; None if no window is."""
-        assert self.phrase_stop is not None
+    def _stop_within(self, pcm: bytes, finder: PhraseStop) -> tuple[float, float] | None:
+        """Where a window of the utterance (`finder.windows`) is surely enough "stop" (`finder.at`): its start (s) and
+        the best such window's confidence; None if no window is."""
         stop = self.head.vocabulary.index(Command.STOP.value)
         best: tuple[float, float] | None = None
-        for start_s, window in self.phrase_stop.windows(pcm):
+        for start_s, window in finder.windows(pcm):
             probs = self.head.probabilities(self.embedder.utterance(window))[0]
             if int(probs.argmax()) != stop:
                 continue
             conf = self.head.confidence(stop, float(probs[stop]))
-            if conf >= self.phrase_stop.at and (best is None or conf > best[1]):
+            if conf >= finder.at and (best is None or conf > best[1]):
                 best = (start_s, conf)
         return best

@@ -30,6 +30,23 @@ def agent(shared_agent: SoarAgent) -> SoarAgent:
     return shared_agent
 
 
+class Clock:
+    """The agent's timer clock, moved by hand."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.fixture
+def clock(agent: SoarAgent) -> Clock:
+    clock = Clock()
+    agent.clock = clock
+    return clock
+
+
 def say(word: str | None, confidence: float = 0.9, stamp: float | None = None) -> CommandInput:
     return CommandInput(word=word, confidence=confidence, stamp=stamp)
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 from services.reasoner.agent_host import Memory, RememberOutput, SoarAgent
-from tests.reasoner.conftest import decisions, motions, only_decision, say, seen, spoken
-from tests.reasoner.test_confirm import ASK, REFUSAL, Clock, clock  # noqa: F401  (the clock fixture)
+from tests.reasoner.conftest import Clock, decisions, motions, only_decision, say, seen, spoken
+from tests.reasoner.test_confirm import ASK, REFUSAL
 from tests.reasoner.test_explain import text, why
 
 T = 1_000_000.0

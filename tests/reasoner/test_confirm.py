@@ -5,27 +5,10 @@ from __future__ import annotations
 import pytest
 
 from services.reasoner.agent_host import Memory, RememberOutput, SoarAgent
-from tests.reasoner.conftest import decisions, motions, only_decision, say, seen, spoken
+from tests.reasoner.conftest import Clock, decisions, motions, only_decision, say, seen, spoken
 
 ASK = "Shall I walk forward?"
 REFUSAL = "Sorry, I cannot do it."
-
-
-class Clock:
-    """The agent's timer clock, moved by hand."""
-
-    def __init__(self) -> None:
-        self.now = 1000.0
-
-    def __call__(self) -> float:
-        return self.now
-
-
-@pytest.fixture
-def clock(agent: SoarAgent) -> Clock:
-    clock = Clock()
-    agent.clock = clock
-    return clock
 
 
 def ask(agent: SoarAgent, confidence: float = 0.6, stamp: float = 1.0) -> None:

@@ -15,7 +15,17 @@ from schemas.messages import Command
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, write_wav
 from services.voice.engine import EngineError, Recognition, make_engine
-from services.voice.engine_spotter import STOP_IN_PHRASE_ENV, PhraseStop, SpotterEngine, stop_in_phrase_from
+from services.voice.engine_spotter import (
+    LONG_STOP,
+    LONG_STOP_MAX_S,
+    STOP_IN_LONG_ENV,
+    STOP_IN_PHRASE_ENV,
+    PhraseStop,
+    SpotterEngine,
+    stop_in_long_from,
+    stop_in_phrase_from,
+)
+from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds
 from services.voice.training import tts
 from tests.voice.test_spotter import _cli, _utterance
 
@@ -87,6 +97,57 @@ def test_a_bad_setting_is_refused_naming_the_variable() -> None:
         make_engine("spotter", stop_in_phrase="sometimes")
     out = _cli("--source", "stdin", env={STOP_IN_PHRASE_ENV: "sometimes"})
     assert out.returncode == 2 and STOP_IN_PHRASE_ENV in out.stderr
+
+
+LONG_STOPS = (("stop moving, there is a wall in front of you", "espeak:en-029+m7"),
+              ("stop moving, there is a wall in front of you", "flite:slt"),
+              ("robot, please stop walking now", "espeak:en-gb-scotland+f4"))
+"""Held-out voices saying "stop" in a sentence longer than one command word may be (tried after `LONG_STOP` was fixed)."""
+LONG_OTHERS = ("we went to the store at the top of the street", "start the car and wait for me outside")
+
+
+@pytest.fixture(scope="module")
+def long_on() -> SpotterEngine:
+    engine = SpotterEngine.from_path(stop_in_long=True)
+    assert engine.long_stop is LONG_STOP
+    return engine
+
+
+def test_stop_in_a_sentence_is_heard_only_with_its_option(on: SpotterEngine, long_on: SpotterEngine) -> None:
+    for text, voice in LONG_STOPS:
+        pcm = _utterance(text, voice)
+        assert speech_seconds(pcm) > MAX_SPEECH_S
+        assert on.recognise(pcm).detail["reason"].startswith(f"longer than {MAX_SPEECH_S} s"), (text, voice)
+        rec = long_on.recognise(pcm)
+        assert (rec.command, rec.text) == (Command.STOP, "stop"), (text, voice, rec)
+        assert rec.confidence >= LONG_STOP.at and rec.detail["reason"].startswith("stop within a long utterance")
+
+
+def test_sentences_without_stop_stay_rejected(long_on: SpotterEngine) -> None:
+    for text in LONG_OTHERS:
+        for voice in OTHER_VOICES:
+            rec = long_on.recognise(_utterance(text, voice))
+            assert rec.command is None and rec.text == "(long utterance)", (text, voice, rec)
+
+
+def test_an_utterance_longer_than_the_segmenter_s_is_not_looked_at(long_on: SpotterEngine) -> None:
+    """A long WAV file: hundreds of windows, so it is rejected as before."""
+    pcm = _utterance(*LONG_STOPS[0])
+    pcm = pcm + bytes(2 * round(SAMPLE_RATE * (LONG_STOP_MAX_S + 0.5 - len(pcm) / 2 / SAMPLE_RATE))) + pcm
+    assert speech_seconds(pcm) > LONG_STOP_MAX_S
+    assert long_on.recognise(pcm).command is None
+
+
+@pytest.mark.parametrize(("raw", "value"), [(None, False), ("", False), ("on", True), ("1", True), ("off", False)])
+def test_the_long_setting(raw: str | None, value: bool) -> None:
+    assert stop_in_long_from(raw) is value
+
+
+def test_a_bad_long_setting_is_refused_naming_the_variable() -> None:
+    with pytest.raises(EngineError, match=STOP_IN_LONG_ENV):
+        make_engine("spotter", stop_in_long="sometimes")
+    out = _cli("--source", "stdin", env={STOP_IN_LONG_ENV: "sometimes"})
+    assert out.returncode == 2 and STOP_IN_LONG_ENV in out.stderr
 
 
 def test_transcribe_takes_the_option(tmp_path: Path) -> None:

@@ -72,6 +72,13 @@ def test_a_command_that_exits_0_without_writing_audio_is_an_error() -> None:
         tts._run_to_wav(["true", tts.OUT])
 
 
+def test_a_command_that_hangs_is_an_error_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A TTS engine that never returns: `subprocess.TimeoutExpired` escaped `unavailable` and stopped the run."""
+    monkeypatch.setattr(tts, "TIMEOUT_S", 0.2)
+    with pytest.raises(tts.TtsError, match="sleep did not finish within 0.2 s"):
+        tts._run(["sleep", "5"])
+
+
 @pytest.mark.skipif(not shutil.which("text2wave"), reason="needs Festival (apt-get install festival)")
 def test_a_festival_voice_that_is_not_installed_is_named_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
     """text2wave asked for a voice it does not have prints a SIOD error and exits 0, writing nothing: before, that

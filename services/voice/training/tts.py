@@ -69,14 +69,20 @@ def _at_sample_rate(x: np.ndarray, rate: int) -> np.ndarray:
     return resample_poly(x, SAMPLE_RATE // g, rate // g)
 
 
+TIMEOUT_S = 30.0
+"""How long one TTS command may take before it counts as failed."""
+
+
 def _completed(argv: list[str], stdin: bytes | None = None,
                package: str = "espeak-ng flite festival") -> subprocess.CompletedProcess[bytes]:
     if shutil.which(argv[0]) is None:
         raise TtsError(f"{argv[0]} is not installed (apt-get install {package})")
     try:
-        return subprocess.run(argv, input=stdin, capture_output=True, check=True, timeout=30)
+        return subprocess.run(argv, input=stdin, capture_output=True, check=True, timeout=TIMEOUT_S)
     except subprocess.CalledProcessError as exc:
         raise TtsError(f"{argv[0]} failed: {exc.stderr.decode(errors='replace')[:200]}") from None
+    except subprocess.TimeoutExpired:  # a hung engine is one voice that cannot speak here, not a crashed run
+        raise TtsError(f"{argv[0]} did not finish within {TIMEOUT_S:g} s") from None
 
 
 def _run(argv: list[str], stdin: bytes | None = None, package: str = "espeak-ng flite festival") -> bytes:
