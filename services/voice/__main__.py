@@ -61,7 +61,7 @@ StopInLongOption = Annotated[
     str | None,
     typer.Option("--stop-in-long", envvar="HRI_VOICE_STOP_IN_LONG",
                  help="spotter: also hear 'stop' within an utterance longer than 1.7 s ('robot, please stop walking "
-                      "now'), on or off [default: off]"),
+                      "now'), on or off; only 'stop' [default: on]"),
 ]
 VadOption = Annotated[
     str,
