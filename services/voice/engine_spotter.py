@@ -5,7 +5,7 @@ embedded (the head's speech embedding: `spotter.embedders`) and classified over 
 most probable class is published if it is a command and its raw probability reaches the command's
 `accept` threshold; the published confidence is calibrated so that 0.5 is `accept` and 0.85 is
 `sure` (for "go": walk without asking). An utterance longer than `MAX_SPEECH_S` is not one command
-word and is rejected without classifying it.
+word and is not classified whole: only a "stop" within it is looked for (`LONG_STOP`, below).
 
 A head made by enrolment keeps the calibrated head's last layer: its "go" is capped just below 0.85
 (the robot asks) unless the calibrated head is sure as well.
