@@ -9,6 +9,8 @@ voices of `corpus.HELDOUT_EXTRA` that can speak here), in two ways:
   `--renderings` times by random held-out voices at random speeds, half clean and half with the training's kind of
   augmentation (noise at 3-30 dB, reverberation, band limits, tempo; other seeds), trimmed as the service trims a
   WAV file, then recognised.
+- **Sentences in a stream**: each rendering of `SENTENCES` in a quiet room, fed through the same stream path, which
+  may cut a sentence at its pauses into utterances short enough for the head.
 - **Two utterances** (a live stream in which the person pauses between the words): each pair of `PAIRS` is said
   word by word by one voice, joined by each pause of `PAUSES`, in a quiet room and in pink noise 20 dB under the
   voice, and fed in chunks through the service's stream path (`sources.stream_utterances`: Silero VAD, its end
@@ -54,7 +56,7 @@ from services.reasoner.agent_host import (  # noqa: E402
     MotionOutput,
     SoarAgent,
 )
-from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, from_pcm, to_pcm  # noqa: E402
 from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
 from services.voice.sources import CHUNK_S, stream_utterances  # noqa: E402
 from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds  # noqa: E402
@@ -167,12 +169,16 @@ def reasoned(agent: SoarAgent, utterances: list[tuple[Recognition, float]]) -> s
     return ASKED if any(isinstance(o, DecisionOutput) and o.verdict == "ask" for o in outs) else NEITHER
 
 
-def spoken_pair(first: np.ndarray, second: np.ndarray, pause_s: float, snr_db: float | None,
-                rng: np.random.Generator) -> bytes:
-    """The two parts with `pause_s` between, 0.8 s of room before and 1 s after, in quiet or in pink noise."""
-    speech = np.concatenate([first, np.zeros(int(pause_s * SAMPLE_RATE)), second])
+def in_room(speech: np.ndarray, snr_db: float | None, rng: np.random.Generator) -> bytes:
+    """`speech` with 0.8 s of room before and 1 s after, in quiet or in pink noise `snr_db` under it."""
     room = augment.Augment(noise=None if snr_db is None else "pink", snr_db=snr_db or 30.0, peak=0.3, pad_s=(0.8, 1.0))
     return to_pcm(augment.apply(speech, room, rng))
+
+
+def spoken_pair(first: np.ndarray, second: np.ndarray, pause_s: float, snr_db: float | None,
+                rng: np.random.Generator) -> bytes:
+    """The two parts with `pause_s` between, in a room (`in_room`)."""
+    return in_room(np.concatenate([first, np.zeros(int(pause_s * SAMPLE_RATE)), second]), snr_db, rng)
 
 
 def _pair_row(results: list[list[tuple[Recognition, float]]], agent: SoarAgent, policy: Policy) -> dict[str, object]:
@@ -268,6 +274,20 @@ def main() -> int:
                 print(f"  {key:28} {row['streams']} streams: heard as two utterances {row['heard_as_two']}; "
                       f"utterance by utterance walked {row['walked']}, asked {row['asked']}; the reasoner walked "
                       f"{row['reasoner'][WALKED]}, asked {row['reasoner'][ASKED]}")
+
+    print("\nSentences in a quiet stream (the service's VAD may cut a sentence at its pauses): streams in which an "
+          "utterance was heard as \"stop\", as any command")
+    sentence_rng = np.random.default_rng([args.seed, 1])  # its own, so that the pairs' streams stay as they were
+    out["sentences_streamed"] = {}
+    for group in SENTENCES:
+        heard_in = [[heard(rec, policy) for rec, _ in stream(in_room(from_pcm(c.pcm), None, sentence_rng), engine)]
+                    for c in clips if c.group == group]
+        row = {"streams": len(heard_in), "stop": sum("stop" in h for h in heard_in),
+               "any_command": sum(any(w != "none" for w in h) for h in heard_in),
+               "utterances_per_stream": round(sum(map(len, heard_in)) / max(1, len(heard_in)), 2)}
+        out["sentences_streamed"][group] = row  # type: ignore[index]
+        print(f"  {group:28} {row['streams']} streams ({row['utterances_per_stream']} utterances each): heard as "
+              f"\"stop\" {row['stop']}, as any command {row['any_command']}")
     if args.json:
         args.json.write_text(json.dumps(out, indent=2))
     return 0
