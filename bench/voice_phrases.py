@@ -27,7 +27,8 @@ rule costs.
 `--voices train` says the phrases and pairs with the voices the head was trained on instead: their "go" is heard
 surely, as an enrolled user's is, which held-out voices' rarely is.
 
-    .venv/bin/python bench/voice_phrases.py --seed 1 [--renderings 8] [--engine spotter] [--voices heldout] [--knowledge F] [--json out.json]
+    .venv/bin/python bench/voice_phrases.py --seed 1 [--renderings 8] [--engine spotter] [--voices heldout]
+                                            [--knowledge F] [--json out.json]
 """
 
 from __future__ import annotations
@@ -80,12 +81,14 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
 """Each group: what the robot should do with it, and its phrases."""
 SENTENCES: dict[str, tuple[str, tuple[str, ...]]] = {
     "stop in a sentence": ("stopping is what was meant", (
-        "please stop walking right now", "hey robot, stop, there is a chair in the way", "I said stop, that is far enough",
-        "can you stop for a second please", "stop moving, someone is coming", "okay robot, you can stop there now")),
+        "please stop walking right now", "hey robot, stop, there is a chair in the way",
+        "I said stop, that is far enough", "can you stop for a second please", "stop moving, someone is coming",
+        "okay robot, you can stop there now")),
     "sentences without stop": ("nothing", (
         "the shop on the corner closes at six", "we took the train to the top of the hill",
-        "she put the stamps in the drawer", "my brother told me a story about a storm", "the bus was full this morning",
-        "put the top back on the bottle", "start the car and wait for me outside", "the store is next to the station")),
+        "she put the stamps in the drawer", "my brother told me a story about a storm",
+        "the bus was full this morning", "put the top back on the bottle", "start the car and wait for me outside",
+        "the store is next to the station")),
 }
 """Whole sentences, most of them longer than one command word may be (`MAX_SPEECH_S`): what round voice33 is about.
 Rendered after everything else, from their own random stream, so that a seed's other clips are those it had before."""
@@ -206,8 +209,9 @@ def main() -> int:
     ap.add_argument("--voices", choices=("heldout", "train"), default="heldout",
                     help="who says them: the held-out voices (default) or the head's training voices")
     ap.add_argument("--knowledge", type=Path, default=KNOWLEDGE_FILE,
-                    help="the reasoner's knowledge file for its agent and the policy (HRI_REASONER_KNOWLEDGE; default: "
-                         "the service's). One Soar kernel per process (REFERENCE.md): to compare two, run twice")
+                    help="the reasoner's knowledge file for its agent and the policy (HRI_REASONER_KNOWLEDGE; "
+                         "default: the service's). One Soar kernel per process (REFERENCE.md): to compare two, run "
+                         "twice")
     ap.add_argument("--json", type=Path, help="also write the figures here")
     args = ap.parse_args()
     policy = Policy.from_knowledge(args.knowledge)
@@ -245,7 +249,8 @@ def main() -> int:
           f"{len(voices)} {args.voices} voices; {len(clips)} of {len(jobs)} phrase clips, {len(pairs)} of "
           f"{len(pair_jobs)} forbidding pairs and {len(meant)} of {len(meant_jobs)} meant pairs rendered\n", flush=True)
 
-    out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase, "stop_in_long": in_long,
+    out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
+                              "stop_in_long": in_long,
                               "voices": len(voices), "voice_split": args.voices,
                               "knowledge": str(args.knowledge)}
     print("One utterance: what the robot heard, per group (clips)")

@@ -37,10 +37,10 @@ the utterance is heard as "stop" if one of them is surely enough "stop" ("please
 stopping is the safe direction, while a "go" at a phrase's end may be "don't go". Costs an embedding per window
 (~10 ms) for each utterance the head does not accept, none for one it does.
 
-"stop" within a sentence (`stop_in_long`, `HRI_VOICE_STOP_IN_LONG`, on by default since round voice33; `LONG_STOP`): an
-utterance longer than `MAX_SPEECH_S` is not one command word and is rejected before the head; with this on, its
-windows (as above, up to `LONG_STOP_MAX_S` of audio) are looked at for a "stop" at the stricter `LONG_STOP.at`
-("robot, please stop walking now"). Costs an embedding per window of such an utterance (up to 27 for 6 s; decoding a
+"stop" within a sentence (`stop_in_long`, `HRI_VOICE_STOP_IN_LONG`, on by default since round voice33;
+`LONG_STOP`): an utterance longer than `MAX_SPEECH_S` is not one command word and is not classified whole; with
+this on, its windows (as above, up to `LONG_STOP_MAX_S` of audio) are looked at for a "stop" at the stricter
+`LONG_STOP.at` ("robot, please stop walking now"). Costs an embedding per window of such an utterance (up to 27 for 6 s; decoding a
 2.7 s sentence takes about 110 ms).
 
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
@@ -224,7 +224,8 @@ class SpotterEngine:
         """"stop" within a phrase; None (off) unless asked for and the head has "stop"."""
         self.long_stop: PhraseStop | None = (
             LONG_STOP if stop_in_long and Command.STOP.value in head.vocabulary else None)
-        """"stop" within an utterance longer than `MAX_SPEECH_S`; None (off) unless asked for and the head has "stop"."""
+        """"stop" within an utterance longer than `MAX_SPEECH_S`; None (off) unless asked for and the head has
+        "stop"."""
 
     @classmethod
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
@@ -246,8 +247,8 @@ class SpotterEngine:
                      if self.long_stop is not None and audio_s <= LONG_STOP_MAX_S else None)
             if heard is not None:
                 at_s, conf = heard
-                return Recognition(Command.STOP, Command.STOP.value, conf, self.name, time.perf_counter() - t0, audio_s,
-                                   {"reason": f"stop within a long utterance at {at_s:.1f} s"})
+                return Recognition(Command.STOP, Command.STOP.value, conf, self.name, time.perf_counter() - t0,
+                                   audio_s, {"reason": f"stop within a long utterance at {at_s:.1f} s"})
             return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
                                {"reason": f"longer than {MAX_SPEECH_S} s: not one command word"})
         encoded: np.ndarray | None = None

@@ -110,7 +110,8 @@ def test_in_danger_it_is_refused_and_the_o_asks(agent: SoarAgent, clock: Clock) 
 def test_why_says_it_asked_because_of_the_unclear_speech(agent: SoarAgent, clock: Clock) -> None:
     before(agent)
     agent.step(say("go", confidence=0.97, stamp=T + 1))
-    assert text(why(agent, stamp=T + 2)) == "You said something I did not understand just before 'go', so I asked first."
+    said = text(why(agent, stamp=T + 2))
+    assert said == "You said something I did not understand just before 'go', so I asked first."
 
 
 def test_why_after_an_unsure_go_alone_still_says_unsure(agent: SoarAgent, clock: Clock) -> None:

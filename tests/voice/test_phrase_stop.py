@@ -4,6 +4,7 @@ machinery: held-out espeak-ng and flite voices saying phrases the head alone hea
 from __future__ import annotations
 
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -86,23 +87,27 @@ def test_the_option_adds_only_stop_and_never_a_walk(off: SpotterEngine, on: Spot
                 assert b.command in (None, Command.STOP), (phrase, voice, b)
 
 
-@pytest.mark.parametrize(("raw", "value"), [(None, True), ("", True), ("on", True), ("0", False), ("off", False),
-                                            (False, False)])
-def test_the_setting(raw: str | bool | None, value: bool) -> None:
-    assert stop_in_phrase_from(raw) is value
+@pytest.mark.parametrize("parse", [stop_in_phrase_from, stop_in_long_from])  # both on by default (rounds 31, 33)
+@pytest.mark.parametrize(("raw", "value"), [(None, True), ("", True), ("on", True), ("1", True), ("0", False),
+                                            ("off", False), (False, False)])
+def test_the_settings(parse: Callable[[str | bool | None], bool], raw: str | bool | None, value: bool) -> None:
+    assert parse(raw) is value
 
 
-def test_a_bad_setting_is_refused_naming_the_variable() -> None:
-    with pytest.raises(EngineError, match=STOP_IN_PHRASE_ENV):
-        make_engine("spotter", stop_in_phrase="sometimes")
-    out = _cli("--source", "stdin", env={STOP_IN_PHRASE_ENV: "sometimes"})
-    assert out.returncode == 2 and STOP_IN_PHRASE_ENV in out.stderr
+@pytest.mark.parametrize(("option", "env"), [("stop_in_phrase", STOP_IN_PHRASE_ENV),
+                                             ("stop_in_long", STOP_IN_LONG_ENV)])
+def test_a_bad_setting_is_refused_naming_the_variable(option: str, env: str) -> None:
+    with pytest.raises(EngineError, match=env):
+        make_engine("spotter", **{option: "sometimes"})
+    out = _cli("--source", "stdin", env={env: "sometimes"})
+    assert out.returncode == 2 and env in out.stderr
 
 
 LONG_STOPS = (("stop moving, there is a wall in front of you", "espeak:en-029+m7"),
               ("stop moving, there is a wall in front of you", "flite:slt"),
               ("robot, please stop walking now", "espeak:en-gb-scotland+f4"))
-"""Held-out voices saying "stop" in a sentence longer than one command word may be (tried after `LONG_STOP` was fixed)."""
+"""Held-out voices saying "stop" in a sentence longer than one command word may be (tried after `LONG_STOP` was
+fixed)."""
 LONG_OTHERS = ("we went to the store at the top of the street", "start the car and wait for me outside")
 
 
@@ -139,17 +144,6 @@ def test_an_utterance_longer_than_the_segmenter_s_is_not_looked_at(long_on: Spot
     assert speech_seconds(pcm) > LONG_STOP_MAX_S
     assert long_on.recognise(pcm).command is None
 
-
-@pytest.mark.parametrize(("raw", "value"), [(None, True), ("", True), ("on", True), ("1", True), ("off", False)])
-def test_the_long_setting(raw: str | None, value: bool) -> None:
-    assert stop_in_long_from(raw) is value
-
-
-def test_a_bad_long_setting_is_refused_naming_the_variable() -> None:
-    with pytest.raises(EngineError, match=STOP_IN_LONG_ENV):
-        make_engine("spotter", stop_in_long="sometimes")
-    out = _cli("--source", "stdin", env={STOP_IN_LONG_ENV: "sometimes"})
-    assert out.returncode == 2 and STOP_IN_LONG_ENV in out.stderr
 
 
 def test_transcribe_takes_the_option(tmp_path: Path) -> None:
