@@ -164,9 +164,7 @@ def reasoned(agent: SoarAgent, utterances: list[tuple[Recognition, float]]) -> s
     agent.step(posture="standing")
     outs = []
     for rec, end_s in utterances:
-        msg = rec.message(stamp=STREAM_T0 + end_s)
-        outs += agent.step(CommandInput(word=msg.command.value if msg.command else None,
-                                        confidence=msg.confidence, stamp=msg.stamp))
+        outs += agent.step(CommandInput.of(rec.message(stamp=STREAM_T0 + end_s)))
     if any(isinstance(o, MotionOutput) and o.action == "walk_forward" for o in outs):
         return WALKED
     return ASKED if any(isinstance(o, DecisionOutput) and o.verdict == "ask" for o in outs) else NEITHER

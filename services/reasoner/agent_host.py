@@ -23,11 +23,14 @@ from collections import OrderedDict, deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import soar_sml as sml
 
 from services.runtime import get_logger
+
+if TYPE_CHECKING:
+    from schemas.messages import VoiceCommand
 
 AGENT_DIR = Path(__file__).with_name("agent")
 KNOWLEDGE_FILE = AGENT_DIR / "knowledge.soar"
@@ -94,6 +97,11 @@ class CommandInput:
     word: str | None
     confidence: float
     stamp: float | None = None
+
+    @classmethod
+    def of(cls, msg: VoiceCommand) -> CommandInput:
+        """A published `VoiceCommand`, as the reasoner service (and a bench standing in for it) takes it."""
+        return cls(word=msg.command.value if msg.command else None, confidence=msg.confidence, stamp=msg.stamp)
 
 
 @dataclass(frozen=True)

@@ -152,8 +152,7 @@ def serve(ctx: ServiceContext, options: ReasonerOptions | None = None) -> None:
         if driver.backlog() >= COMMAND_BACKLOG:
             ctx.count_drop(keys.voice_command)
             return
-        driver.submit(CommandInput(word=msg.command.value if msg.command else None,
-                                   confidence=msg.confidence, stamp=msg.stamp))
+        driver.submit(CommandInput.of(msg))
 
     def on_marks(msg: MarkObservation) -> None:
         # No mark carries no news (DESIGN.md); only observations with marks reach the agent.
