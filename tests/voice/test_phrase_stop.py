@@ -26,6 +26,7 @@ from services.voice.engine_spotter import (
     stop_in_long_from,
     stop_in_phrase_from,
 )
+from services.voice.segmenter import SegmenterConfig
 from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds
 from services.voice.training import tts
 from tests.voice.test_spotter import _cli, _utterance
@@ -139,6 +140,7 @@ def test_sentences_without_stop_stay_rejected(long_on: SpotterEngine) -> None:
 
 def test_an_utterance_longer_than_the_segmenter_s_is_not_looked_at(long_on: SpotterEngine) -> None:
     """A long WAV file: hundreds of windows, so it is rejected as before."""
+    assert LONG_STOP_MAX_S == SegmenterConfig.max_utterance_s  # the stream's longest utterance is looked at
     pcm = _utterance(*LONG_STOPS[0])
     pcm = pcm + bytes(2 * round(SAMPLE_RATE * (LONG_STOP_MAX_S + 0.5 - len(pcm) / 2 / SAMPLE_RATE))) + pcm
     assert speech_seconds(pcm) > LONG_STOP_MAX_S
