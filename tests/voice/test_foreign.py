@@ -7,6 +7,7 @@ Czech voice (`apt-get install festival festvox-czech-dita`, not installed by CI)
 from __future__ import annotations
 
 import re
+import tempfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -92,9 +93,11 @@ def test_the_foreign_split_says_commands_and_training_negatives_only() -> None:
     assert recipes == dataset.recipes("foreign", FOREIGN_SIZES, 12)
 
 
-def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> None:
+def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     if not tts.foreign_available("cs_dita"):
         pytest.skip("Festival's Czech voice is not installed (apt-get install festival festvox-czech-dita)")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     x = tts.synthesise("stop", "foreign:cs_dita")
     slow = tts.synthesise("stop", "foreign:cs_dita", speed=1.5)
     high = tts.synthesise("stop", "foreign:cs_dita", pitch=1.3)
@@ -103,6 +106,7 @@ def test_a_foreign_voice_says_an_english_word_at_the_asked_speed_and_pitch() -> 
     assert f0(high) > 1.1 * f0(x)
     with pytest.raises(tts.TtsError, match="unknown foreign voice"):
         tts.synthesise("stop", "foreign:nobody")
+    assert not list(tmp_path.iterdir())  # the session's wave files are gone while its process lives on
 
 
 def test_train_foreign_option_sets_only_the_foreign_split(train_cli: TrainCli, tmp_path: Path) -> None:

@@ -416,7 +416,6 @@ class _FestivalSession:
         self.voice = voice
         self.proc = subprocess.Popen(["stdbuf", "-oL", "festival", "--pipe"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, bufsize=1)
-        self.tmp = tempfile.mkdtemp(prefix="festival-")
         self.request(f"(voice_{voice.function})")
         if voice.diphone:  # pitch: every F0 target the voice's intonation places, scaled by zq_pitch
             self.request("(set! zq_pitch 1.0) (set! zq_int_targets Int_Targets)")
@@ -444,17 +443,19 @@ class _FestivalSession:
         entries = " ".join(f"(lex.add.entry '(\"{t}\" nil {_lisp_syllables(s)}))" for t, s in zip(tokens, sylls, strict=True))
         utt = (f'(Utterance Text "{" ".join(tokens)}")' if self.voice.text_utterance
                else f"(Utterance Words ({' '.join(tokens)}))")
-        out = Path(self.tmp) / "x.wav"
         scale = pitch if self.voice.diphone else 1.0
-        self.request(f"{entries} (Parameter.set 'Duration_Stretch {speed:.3f}) (set! zq_pitch {scale:.3f})"
-                     f' (set! zqu (utt.synth {utt})) (utt.save.wave zqu "{out}" \'riff)')
-        return wav_samples(out.read_bytes())
+        # a folder per utterance, not per session: a session lives as long as its process, and a pool's worker is
+        # ended by SIGTERM, which runs no clean-up (a folder per session was left in /tmp by every worker)
+        with tempfile.TemporaryDirectory(prefix="festival-") as tmp:
+            out = Path(tmp) / "x.wav"
+            self.request(f"{entries} (Parameter.set 'Duration_Stretch {speed:.3f}) (set! zq_pitch {scale:.3f})"
+                         f' (set! zqu (utt.synth {utt})) (utt.save.wave zqu "{out}" \'riff)')
+            return wav_samples(out.read_bytes())
 
     def close(self) -> None:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
-        shutil.rmtree(self.tmp, ignore_errors=True)
 
 
 _SESSIONS: dict[str, _FestivalSession] = {}
