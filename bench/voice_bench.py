@@ -45,6 +45,7 @@ import re
 import sys
 import time
 from collections import Counter, defaultdict
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -366,6 +367,31 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
             "max_ms": round(float(a.max()), 1), "early_taken": taken}
 
 
+SPOTTER_OPTIONS = {
+    "walk_gate": "the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: the engine's)",
+    "agree_min": "the spotter's agreement veto (HRI_VOICE_AGREE_MIN; default: the engine's)",
+    "decoder": "the spotter's second opinion from Whisper's decoder, on or off (HRI_VOICE_DECODER; default: the engine's)",
+    "stop_in_phrase": "the spotter also hears \"stop\" within a phrase, on or off (HRI_VOICE_STOP_IN_PHRASE; default: the "
+                      "engine's)",
+    "stop_in_long": "the spotter also hears \"stop\" within an utterance longer than 1.7 s, on or off "
+                    "(HRI_VOICE_STOP_IN_LONG; default: the engine's)",
+    "warped_look": "the spotter's second look, at other speeds, of an utterance it came near to accepting, on or off "
+                   "(HRI_VOICE_WARPED_LOOK; default: the engine's)",
+}
+"""The spotter's settings a bench takes as options (`--walk-gate`, ...), each a `make_engine` keyword, with its help."""
+
+
+def add_spotter_options(ap: argparse.ArgumentParser, names: Iterable[str]) -> None:
+    """`--walk-gate`, `--stop-in-phrase`, ... for the spotter settings `names` (keys of `SPOTTER_OPTIONS`)."""
+    for name in names:
+        ap.add_argument("--" + name.replace("_", "-"), help=SPOTTER_OPTIONS[name])
+
+
+def spotter_settings(args: argparse.Namespace, names: Iterable[str]) -> dict[str, str | None]:
+    """The `make_engine` keywords of the spotter settings `names`, as the options gave them (None: the engine's)."""
+    return {name: getattr(args, name) for name in names}
+
+
 def early_look_arg(text: str) -> float | None:
     """`--early-look`, `--clear-window`: seconds of quiet, or `off`."""
     return None if text.strip().lower() == "off" else float(text)
@@ -425,15 +451,7 @@ def main() -> int:
     ap.add_argument("--enrol", action="store_true", help="also measure enrolment on one unseen voice")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     ap.add_argument("--head", help="spotter head file (default: the committed default head)")
-    ap.add_argument("--walk-gate", help="the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: "
-                                        "the engine's)")
-    ap.add_argument("--agree-min", help="the spotter's agreement veto (HRI_VOICE_AGREE_MIN; default: the engine's)")
-    ap.add_argument("--decoder", help="the spotter's second opinion from Whisper's decoder, on or off "
-                                      "(HRI_VOICE_DECODER; default: the engine's)")
-    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
-                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
-    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
-                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
+    add_spotter_options(ap, SPOTTER_OPTIONS)
     ap.add_argument("--vad", default=SegmenterConfig.vad, help="the stream latency's VAD (default: the service's)")
     ap.add_argument("--early-look", type=early_look_arg, default=SegmenterConfig.early_quiet_s,
                     help="the stream latency's early look: seconds of quiet, or off (default: the service's)")
@@ -450,10 +468,7 @@ def main() -> int:
     for name in args.engines.split(","):
         spotter = name == "spotter"
         engine = make_engine(name, head_path=args.head if spotter else None,
-                             walk_gate=args.walk_gate if spotter else None, agree_min=args.agree_min if spotter else None,
-                             decoder=args.decoder if spotter else None,
-                             stop_in_phrase=args.stop_in_phrase if spotter else None,
-                             stop_in_long=args.stop_in_long if spotter else None)
+                             **(spotter_settings(args, SPOTTER_OPTIONS) if spotter else {}))
         scores, extra = score(name, engine, items, policy)
         for s in sorted(scores, key=lambda s: (s.family != "ALL", s.family)):
             row = s.row()

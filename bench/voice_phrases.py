@@ -47,7 +47,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import ASK, WALK, Policy, loud_frames  # noqa: E402
+from bench.voice_bench import ASK, WALK, Policy, add_spotter_options, loud_frames, spotter_settings  # noqa: E402
 from services.reasoner.agent_host import (  # noqa: E402
     KNOWLEDGE_FILE,
     AgentConfig,
@@ -192,18 +192,17 @@ def _pair_row(results: list[list[tuple[Recognition, float]]], agent: SoarAgent, 
             "heard": dict(Counter(" / ".join(r) or "(nothing)" for r in labels).most_common(6))}
 
 
+SPOTTER_SETTINGS = ("stop_in_phrase", "stop_in_long", "walk_gate", "warped_look")
+"""The spotter's settings this bench takes (`voice_bench.SPOTTER_OPTIONS`)."""
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--renderings", type=int, default=8, help="renderings of each phrase and each pair")
     ap.add_argument("--engine", default="spotter")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
-                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
-    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
-                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
-    ap.add_argument("--walk-gate", help="the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: "
-                                        "the engine's)")
+    add_spotter_options(ap, SPOTTER_SETTINGS)
     ap.add_argument("--voices", choices=("heldout", "train"), default="heldout",
                     help="who says them: the held-out voices (default) or the head's training voices")
     ap.add_argument("--knowledge", type=Path, default=KNOWLEDGE_FILE,
@@ -237,9 +236,7 @@ def main() -> int:
         pairs = [p for p in pool.map(_render_pair, pair_jobs, chunksize=4) if p is not None]
         meant = [p for p in pool.map(_render_pair, meant_jobs, chunksize=4) if p is not None]
     spotter = args.engine == "spotter"
-    engine = make_engine(args.engine, stop_in_phrase=args.stop_in_phrase if spotter else None,
-                         stop_in_long=args.stop_in_long if spotter else None,
-                         walk_gate=args.walk_gate if spotter else None)
+    engine = make_engine(args.engine, **(spotter_settings(args, SPOTTER_SETTINGS) if spotter else {}))
     in_phrase = getattr(engine, "phrase_stop", None) is not None
     in_long = getattr(engine, "long_stop", None) is not None
     print(f"engine {args.engine} (stop within a phrase: {'on' if in_phrase else 'off'}, within a longer utterance: "
@@ -248,7 +245,7 @@ def main() -> int:
           f"{len(pair_jobs)} forbidding pairs and {len(meant)} of {len(meant_jobs)} meant pairs rendered\n", flush=True)
 
     out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
-                              "stop_in_long": in_long,
+                              "stop_in_long": in_long, "warped_look": getattr(engine, "warped_look", None) is not None,
                               "voices": len(voices), "voice_split": args.voices,
                               "knowledge": str(args.knowledge)}
     print("One utterance: what the robot heard, per group (clips)")

@@ -44,7 +44,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import ASK, WALK, Policy  # noqa: E402
+from bench.voice_bench import ASK, WALK, Policy, add_spotter_options, spotter_settings  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
 from services.voice.engine import Engine, Recognition, make_engine  # noqa: E402
@@ -191,18 +191,17 @@ def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) 
     }
 
 
+SPOTTER_SETTINGS = ("decoder", "stop_in_phrase", "stop_in_long", "warped_look")
+"""The spotter's settings this bench takes (`voice_bench.SPOTTER_OPTIONS`)."""
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engines", default="spotter,pocketsphinx")
     ap.add_argument("--folder", type=Path, help="NAME.wav + NAME.txt pairs (default: the moonshine-voice wheel's two)")
     ap.add_argument("--show", action="store_true", help="print every utterance's start, command and text")
     ap.add_argument("--words", action="store_true", help="also each word alone, cut out by Whisper's timestamps")
-    ap.add_argument("--decoder", help="the spotter's second opinion from Whisper's decoder, on or off "
-                                      "(HRI_VOICE_DECODER; default: the engine's)")
-    ap.add_argument("--stop-in-phrase", help="the spotter also hears \"stop\" within a phrase, on or off "
-                                             "(HRI_VOICE_STOP_IN_PHRASE; default: the engine's)")
-    ap.add_argument("--stop-in-long", help="the spotter also hears \"stop\" within an utterance longer than 1.7 s, "
-                                           "on or off (HRI_VOICE_STOP_IN_LONG; default: the engine's)")
+    add_spotter_options(ap, SPOTTER_SETTINGS)
     ap.add_argument("--json", type=Path, help="also write the rows here")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
@@ -211,9 +210,7 @@ def main() -> int:
     clips: dict[str, list[tuple[str, bytes]]] = {}
     for name in args.engines.split(","):
         spotter = name == "spotter"
-        engine = make_engine(name, decoder=args.decoder if spotter else None,
-                             stop_in_phrase=args.stop_in_phrase if spotter else None,
-                             stop_in_long=args.stop_in_long if spotter else None)
+        engine = make_engine(name, **(spotter_settings(args, SPOTTER_SETTINGS) if spotter else {}))
         for rec in recordings:
             heard = stream(engine, rec, SegmenterConfig())
             if args.show:

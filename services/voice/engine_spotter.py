@@ -43,6 +43,13 @@ this on, its windows (as above, up to `LONG_STOP_MAX_S` of audio) are looked at 
 `LONG_STOP.at` ("robot, please stop walking now"). Costs an embedding per window of such an utterance (up to 27 for 6 s; decoding a
 2.7 s sentence takes about 110 ms).
 
+The warped second look (`warped_look`, `HRI_VOICE_WARPED_LOOK`, round voice34; `WarpedLook`): where the head accepts
+no command but came near (its most probable command at half that command's accept or more), the utterance is heard
+again at two other speeds (resampled: faster and higher, slower and lower, as another speaker's vocal tract), and the
+three hearings' class probabilities are combined (geometric mean); a command the combination accepts is published
+with a confidence of at most `WarpedLook.cap` (0.6): enough to act on, too little for a "go" to walk unasked or a
+"yes" to confirm a question. Two more embeddings (~20 ms) for each utterance that comes near, none for the others.
+
 The head is `HRI_VOICE_HEAD` if set, else the enrolled head in the state folder if there is one,
 else the committed `spotter/head.npz`.
 """
@@ -54,6 +61,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import resample_poly
 
 from schemas.messages import Command
 from services.runtime.flags import parse_flag
@@ -83,6 +91,9 @@ DEFAULT_STOP_IN_LONG = True
 """On since round voice33 (rule docs/experiments/rules/voice33_rule.txt): on a fresh held-out seed "stop" said in a
 sentence longer than 1.7 s was heard in 23 instead of 0 of 47 clips, and in none of 64 sentences without it; a real
 person reading and a dialogue gained no command; 2 more of 504 held-out commands heard (voice README)."""
+WARPED_LOOK_ENV = "HRI_VOICE_WARPED_LOOK"
+DEFAULT_WARPED_LOOK = False
+"""Off until round voice34's rule (docs/experiments/rules/voice34_rule.txt) decides."""
 LONG_STOP_MAX_S = 6.0
 """The longest utterance whose windows are looked at: the stream segmenter's `max_utterance_s`. A longer file is
 rejected as before (hundreds of windows)."""
@@ -127,6 +138,33 @@ def stop_in_long_from(raw: str | bool | None) -> bool:
     """Whether "stop" is also looked for within an utterance longer than `MAX_SPEECH_S`, from `HRI_VOICE_STOP_IN_LONG`
     / `--stop-in-long`."""
     return _on_off(raw, DEFAULT_STOP_IN_LONG, STOP_IN_LONG_ENV)
+
+
+def warped_look_from(raw: str | bool | None) -> bool:
+    """Whether the warped second look is on, from `HRI_VOICE_WARPED_LOOK` / `--warped-look`."""
+    return _on_off(raw, DEFAULT_WARPED_LOOK, WARPED_LOOK_ENV)
+
+
+@dataclass(frozen=True)
+class WarpedLook:
+    """A second hearing, at other speeds, of an utterance the head came near to accepting (round voice34). Chosen on
+    the tune voices only (voice README): on 690 tune commands and 605 tune other words (one-edit neighbours among
+    them) the head alone heard 0.874 and took 47 words; with this look 0.890 (11 more: "stand", "no", "down", ...) and
+    48 ("sand" for "stand"). Speeds 0.9 / 1.1 or the copies' plain mean did no better; one copy alone at 0.95 heard
+    17 more commands for 11 more words."""
+
+    speeds: tuple[tuple[int, int], ...] = ((20, 19), (20, 21))
+    """Each copy's resampling (up, down): 20/19 plays the utterance at 0.95 of its speed, 20/21 at 1.05."""
+    near: float = 0.5
+    """Looked at again where the head's most probable command has at least this share of its accept probability."""
+    cap: float = 0.6
+    """The highest confidence a command heard so is published with."""
+
+    def copies(self, pcm: bytes) -> list[bytes]:
+        """The utterance at the other speeds (16-bit PCM)."""
+        x = np.frombuffer(pcm, "<i2").astype(np.float64)
+        return [np.clip(np.round(resample_poly(x, up, down)), -32768, 32767).astype("<i2").tobytes()
+                for up, down in self.speeds]
 
 
 @dataclass(frozen=True)
@@ -205,7 +243,8 @@ class SpotterEngine:
 
     def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
                  agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER,
-                 stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE, stop_in_long: bool = DEFAULT_STOP_IN_LONG) -> None:
+                 stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE, stop_in_long: bool = DEFAULT_STOP_IN_LONG,
+                 warped_look: bool = DEFAULT_WARPED_LOOK) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
@@ -226,16 +265,19 @@ class SpotterEngine:
             LONG_STOP if stop_in_long and Command.STOP.value in head.vocabulary else None)
         """"stop" within an utterance longer than `MAX_SPEECH_S`; None (off) unless asked for and the head has
         "stop"."""
+        self.warped_look: WarpedLook | None = WarpedLook() if warped_look else None
+        """The warped second look; None (off) unless asked for."""
 
     @classmethod
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
                   agree_min: str | float | None = None, decoder: str | bool | None = None,
-                  stop_in_phrase: str | bool | None = None, stop_in_long: str | bool | None = None) -> SpotterEngine:
+                  stop_in_phrase: str | bool | None = None, stop_in_long: str | bool | None = None,
+                  warped_look: str | bool | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
             return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min),
                        decoder=decoder_from(decoder), stop_in_phrase=stop_in_phrase_from(stop_in_phrase),
-                       stop_in_long=stop_in_long_from(stop_in_long))
+                       stop_in_long=stop_in_long_from(stop_in_long), warped_look=warped_look_from(warped_look))
         except (HeadError, FeatureError, ValueError) as exc:
             raise EngineError(str(exc)) from None
 
@@ -290,7 +332,17 @@ class SpotterEngine:
                 detail["gate"] = round(gate_conf, 3)
                 if gate_conf < SURE_CONFIDENCE:  # one embedding alone never makes the robot walk unasked
                     conf, reason = SURE_CONFIDENCE - 0.01, "accepted (the walk gate's head is not sure: ask)"
-        if head_refused and encoded is not None:
+        near = self.warped_look is not None and probs[top_cmd] >= self.warped_look.near * self.head.accept[top_cmd]
+        if head_refused and near:
+            assert self.warped_look is not None
+            heard = self._warped(pcm, feats)
+            detail["warped"] = {c: round(float(p), 3) for c, p in zip(self.head.classes, heard, strict=True) if p >= 0.01}
+            again = int(heard.argmax())
+            if again < n and heard[again] >= self.head.accept[again]:  # heard at other speeds as well: a command
+                word, command = self.head.classes[again], Command(self.head.classes[again])
+                conf = min(self.head.confidence(again, float(heard[again])), self.warped_look.cap)
+                reason = f"heard at other speeds (at most {self.warped_look.cap}: a go asks, a yes confirms nothing)"
+        if head_refused and command is None and encoded is not None:
             assert self.decoder is not None
             opinion = self.decoder.of(encoded)
             detail["decoder"] = {"first": {w: round(p, 3) for w, p in opinion.first.items() if p >= 0.01},
@@ -306,6 +358,15 @@ class SpotterEngine:
                 word, command, reason = Command.STOP.value, Command.STOP, f"stop within the utterance at {at_s:.1f} s"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)
+
+    def _warped(self, pcm: bytes, feats: np.ndarray) -> np.ndarray:
+        """The head's class probabilities over the utterance (`feats`) and its `warped_look` copies: their geometric
+        mean, normalised."""
+        assert self.warped_look is not None
+        hearings = [feats] + [self.embedder.utterance(copy) for copy in self.warped_look.copies(pcm)]
+        logs = np.log(np.clip(np.concatenate([self.head.probabilities(f) for f in hearings]), 1e-6, 1.0))
+        mean = np.exp(logs.mean(axis=0))
+        return mean / mean.sum()
 
     def _stop_within(self, pcm: bytes, finder: PhraseStop) -> tuple[float, float] | None:
         """Where a window of the utterance (`finder.windows`) is surely enough "stop" (`finder.at`): its start (s) and
