@@ -63,6 +63,13 @@ StopInLongOption = Annotated[
                  help="spotter: also hear 'stop' within an utterance longer than 1.7 s ('robot, please stop walking "
                       "now'), on or off; only 'stop' [default: on]"),
 ]
+WarpedLookOption = Annotated[
+    str | None,
+    typer.Option("--warped-look", envvar="HRI_VOICE_WARPED_LOOK",
+                 help="spotter: hear an utterance the head came near to accepting again at 0.95 and 1.05 of its "
+                      "speed, and publish a command the three hearings accept together, below the confidence that "
+                      "walks or confirms (a 'go' heard so asks), on or off [default: off]"),
+]
 VadOption = Annotated[
     str,
     typer.Option("--vad", envvar="HRI_VOICE_VAD",
@@ -97,14 +104,16 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          source: SourceOption = None, engine: EngineOption = DEFAULT_ENGINE,
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
-         stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None, vad: VadOption = "silero",
+         stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
+         warped_look: WarpedLookOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
-                             stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, vad=vad,
+                             stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
+                             vad=vad,
                              early_look=early_look, clear_window=clear_window)
     try:
         check_settings(settings)
@@ -126,12 +135,13 @@ def transcribe(
     decoder: DecoderOption = None,
     stop_in_phrase: StopInPhraseOption = None,
     stop_in_long: StopInLongOption = None,
+    warped_look: WarpedLookOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
         eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate,
                           agree_min=agree_min, decoder=decoder, stop_in_phrase=stop_in_phrase,
-                          stop_in_long=stop_in_long)
+                          stop_in_long=stop_in_long, warped_look=warped_look)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

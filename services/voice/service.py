@@ -56,6 +56,9 @@ class VoiceSettings:
     stop_in_long: str | None = None
     """`HRI_VOICE_STOP_IN_LONG`: the spotter also looks for "stop" within an utterance longer than one command word,
     on or off (`engine_spotter.stop_in_long_from`); None: the default."""
+    warped_look: str | None = None
+    """`HRI_VOICE_WARPED_LOOK`: the spotter hears an utterance it came near to accepting again at other speeds, on or
+    off (`engine_spotter.warped_look_from`); None: the default."""
     vad: str = "silero"
     """The live stream's voice activity detector (`segmenter.VADS`); files are always trimmed with WebRTC's."""
     early_look: str | None = None
@@ -80,6 +83,7 @@ class VoiceSettings:
             decoder=os.environ.get("HRI_VOICE_DECODER") or None,
             stop_in_phrase=os.environ.get("HRI_VOICE_STOP_IN_PHRASE") or None,
             stop_in_long=os.environ.get("HRI_VOICE_STOP_IN_LONG") or None,
+            warped_look=os.environ.get("HRI_VOICE_WARPED_LOOK") or None,
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
@@ -137,12 +141,14 @@ def check_settings(settings: VoiceSettings) -> None:
             decoder_from,
             stop_in_long_from,
             stop_in_phrase_from,
+            warped_look_from,
         )
 
         agree_min_from(settings.agree_min)
         decoder_from(settings.decoder)
         stop_in_phrase_from(settings.stop_in_phrase)
         stop_in_long_from(settings.stop_in_long)
+        warped_look_from(settings.warped_look)
         from services.voice.spotter.head import Head, HeadError
 
         files = {"HRI_VOICE_HEAD": settings.head,
@@ -276,7 +282,8 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
             engine = make_engine(settings.engine, vosk_model=settings.vosk_model, lexicon_path=settings.lexicon,
                                  head_path=settings.head or _enrolled_head(ctx), walk_gate=settings.walk_gate,
                                  agree_min=settings.agree_min, decoder=settings.decoder,
-                                 stop_in_phrase=settings.stop_in_phrase, stop_in_long=settings.stop_in_long)
+                                 stop_in_phrase=settings.stop_in_phrase, stop_in_long=settings.stop_in_long,
+                                 warped_look=settings.warped_look)
             head = getattr(engine, "head", None)  # the spotter: which speech embedding its head reads
             if head is not None:
                 gate = getattr(engine, "gate", None)
@@ -285,7 +292,8 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
                                   spotter_agree_min=getattr(engine, "agree_min", 0.0),
                                   spotter_decoder=getattr(engine, "decoder", None) is not None,
                                   spotter_stop_in_phrase=getattr(engine, "phrase_stop", None) is not None,
-                                  spotter_stop_in_long=getattr(engine, "long_stop", None) is not None)
+                                  spotter_stop_in_long=getattr(engine, "long_stop", None) is not None,
+                                  spotter_warped_look=getattr(engine, "warped_look", None) is not None)
             ctx.log.info("engine ready", engine=engine.name, **({"embedding": head.embedding} if head else {}))
             return engine
         except EngineError as exc:

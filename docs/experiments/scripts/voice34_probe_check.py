@@ -9,11 +9,11 @@ recs = [r for sp in ("tune", "speakers-tune", "recorded-tune", "neighbours-tune"
 cmds = [r for r in recs if r.label < 7][::2]; others = [r for r in recs if r.label == 7][::2]
 on, off = SpotterEngine.from_path(warped_look=True), SpotterEngine.from_path(warped_look=False)
 n = 0; diff = []
-for r in (cmds + others)[:: 7]:
+for r in (cmds + others)[:: int(sys.argv[1]) if len(sys.argv) > 1 else 7]:
     pcm = dataset.render(r)
     if pcm is None: continue
     a, b = off.recognise(pcm), on.recognise(pcm)
     if (a.command, round(a.confidence, 3)) != (b.command, round(b.confidence, 3)):
-        diff.append((r.text, r.label, a.command, b.command, round(b.confidence, 3), b.detail.get("reason")))
+        diff.append((repr(r), a.command, b.command, round(b.confidence, 3), b.detail.get("p"), b.detail.get("warped")))
     n += 1
 print(n, "checked;", len(diff), "changed:"); [print(d) for d in diff]
