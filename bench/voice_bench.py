@@ -370,15 +370,17 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
 SPOTTER_OPTIONS = {
     "walk_gate": "the spotter's walk gate: a head file or none (HRI_VOICE_WALK_GATE; default: the engine's)",
     "agree_min": "the spotter's agreement veto (HRI_VOICE_AGREE_MIN; default: the engine's)",
-    "decoder": "the spotter's second opinion from Whisper's decoder, on or off (HRI_VOICE_DECODER; default: the engine's)",
-    "stop_in_phrase": "the spotter also hears \"stop\" within a phrase, on or off (HRI_VOICE_STOP_IN_PHRASE; default: the "
-                      "engine's)",
+    "decoder": "the spotter's second opinion from Whisper's decoder, on or off (HRI_VOICE_DECODER; default: the "
+               "engine's)",
+    "stop_in_phrase": "the spotter also hears \"stop\" within a phrase, on or off (HRI_VOICE_STOP_IN_PHRASE; "
+                      "default: the engine's)",
     "stop_in_long": "the spotter also hears \"stop\" within an utterance longer than 1.7 s, on or off "
                     "(HRI_VOICE_STOP_IN_LONG; default: the engine's)",
     "warped_look": "the spotter's second look, at other speeds, of an utterance it came near to accepting, on or off "
                    "(HRI_VOICE_WARPED_LOOK; default: the engine's)",
 }
-"""The spotter's settings a bench takes as options (`--walk-gate`, ...), each a `make_engine` keyword, with its help."""
+"""The spotter's settings a bench takes as options (`--walk-gate`, ...): each a `make_engine` keyword, with its
+help."""
 
 
 def add_spotter_options(ap: argparse.ArgumentParser, names: Iterable[str]) -> None:

@@ -113,8 +113,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
-                             vad=vad,
-                             early_look=early_look, clear_window=clear_window)
+                             vad=vad, early_look=early_look, clear_window=clear_window)
     try:
         check_settings(settings)
     except EngineError as exc:
