@@ -376,6 +376,8 @@ SPOTTER_OPTIONS = {
                       "default: the engine's)",
     "stop_in_long": "the spotter also hears \"stop\" within an utterance longer than 1.7 s, on or off "
                     "(HRI_VOICE_STOP_IN_LONG; default: the engine's)",
+    "down_in_phrase": "the spotter also hears \"down\" within a phrase (\"sit down\"), on or off "
+                      "(HRI_VOICE_DOWN_IN_PHRASE; default: the engine's)",
     "warped_look": "the spotter's second look, at other speeds, of an utterance it came near to accepting, on or off "
                    "(HRI_VOICE_WARPED_LOOK; default: the engine's)",
 }

@@ -192,7 +192,7 @@ def _pair_row(results: list[list[tuple[Recognition, float]]], agent: SoarAgent, 
             "heard": dict(Counter(" / ".join(r) or "(nothing)" for r in labels).most_common(6))}
 
 
-SPOTTER_SETTINGS = ("stop_in_phrase", "stop_in_long", "walk_gate", "warped_look")
+SPOTTER_SETTINGS = ("stop_in_phrase", "stop_in_long", "walk_gate", "warped_look", "down_in_phrase")
 """The spotter's settings this bench takes (`voice_bench.SPOTTER_OPTIONS`)."""
 
 
@@ -246,6 +246,7 @@ def main() -> int:
 
     out: dict[str, object] = {"seed": args.seed, "engine": args.engine, "stop_in_phrase": in_phrase,
                               "stop_in_long": in_long, "warped_look": getattr(engine, "warped_look", None) is not None,
+                              "down_in_phrase": bool(getattr(getattr(engine, "phrase_stop", None), "others", ())),
                               "voices": len(voices), "voice_split": args.voices,
                               "knowledge": str(args.knowledge)}
     print("One utterance: what the robot heard, per group (clips)")

@@ -191,7 +191,7 @@ def score_words(engine: Engine, clips: list[tuple[str, bytes]], policy: Policy) 
     }
 
 
-SPOTTER_SETTINGS = ("decoder", "stop_in_phrase", "stop_in_long", "warped_look")
+SPOTTER_SETTINGS = ("decoder", "stop_in_phrase", "stop_in_long", "warped_look", "down_in_phrase")
 """The spotter's settings this bench takes (`voice_bench.SPOTTER_OPTIONS`)."""
 
 

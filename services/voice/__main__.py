@@ -70,6 +70,12 @@ WarpedLookOption = Annotated[
                       "speed, and publish a command the three hearings accept together, below the confidence that "
                       "walks or confirms (a 'go' heard so asks), on or off [default: off]"),
 ]
+DownInPhraseOption = Annotated[
+    str | None,
+    typer.Option("--down-in-phrase", envvar="HRI_VOICE_DOWN_IN_PHRASE",
+                 help="spotter, with --stop-in-phrase on: also hear 'down' within a phrase the head heard no command "
+                      "in ('sit down', 'get down'), on or off [default: off]"),
+]
 VadOption = Annotated[
     str,
     typer.Option("--vad", envvar="HRI_VOICE_VAD",
@@ -105,7 +111,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          vosk_model: VoskModelOption = None, lexicon: LexiconOption = None, head: HeadOption = None,
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
-         warped_look: WarpedLookOption = None, vad: VadOption = "silero",
+         warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
@@ -113,7 +119,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
-                             vad=vad, early_look=early_look, clear_window=clear_window)
+                             down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -135,12 +141,13 @@ def transcribe(
     stop_in_phrase: StopInPhraseOption = None,
     stop_in_long: StopInLongOption = None,
     warped_look: WarpedLookOption = None,
+    down_in_phrase: DownInPhraseOption = None,
 ) -> None:
     """Print one VoiceCommand JSON line per file (a bad file prints an error line and exit code 1)."""
     try:
         eng = make_engine(engine, vosk_model=vosk_model, lexicon_path=lexicon, head_path=head, walk_gate=walk_gate,
                           agree_min=agree_min, decoder=decoder, stop_in_phrase=stop_in_phrase,
-                          stop_in_long=stop_in_long, warped_look=warped_look)
+                          stop_in_long=stop_in_long, warped_look=warped_look, down_in_phrase=down_in_phrase)
     except EngineError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None

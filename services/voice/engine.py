@@ -58,7 +58,7 @@ def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str |
                 head_path: str | None = None, walk_gate: str | None = None,
                 agree_min: str | float | None = None, decoder: str | bool | None = None,
                 stop_in_phrase: str | bool | None = None, stop_in_long: str | bool | None = None,
-                warped_look: str | bool | None = None) -> Engine:
+                warped_look: str | bool | None = None, down_in_phrase: str | bool | None = None) -> Engine:
     """Build an engine by name; `EngineError` says what is missing."""
     from services.voice.lexicon import Lexicon, LexiconError
 
@@ -67,7 +67,7 @@ def make_engine(name: str, *, vosk_model: str | None = None, lexicon_path: str |
         from services.voice.engine_spotter import SpotterEngine
 
         return SpotterEngine.from_path(head_path, walk_gate, agree_min, decoder, stop_in_phrase, stop_in_long,
-                                       warped_look)
+                                       warped_look, down_in_phrase)
 
     try:
         lexicon = Lexicon.load(lexicon_path) if lexicon_path else None

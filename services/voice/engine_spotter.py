@@ -181,6 +181,9 @@ class PhraseStop:
     """From one window's start to the next's."""
     at: float = 0.7
     """The published confidence (calibrated: 0.5 is the head's accept, 0.85 its sure) a window's "stop" needs."""
+    others: tuple[tuple[str, float], ...] = ()
+    """Other commands heard within the utterance this way, each with the confidence a window needs (round voice35:
+    "down", as in "sit down"); "stop" wins over them wherever a window hears it."""
 
     def windows(self, pcm: bytes) -> list[tuple[float, bytes]]:
         """The utterance's windows from its start to its end, each with its start (s); none for an utterance no
@@ -192,6 +195,20 @@ class PhraseStop:
         if starts[-1] != len(pcm) - size:
             starts.append(len(pcm) - size)  # the last window ends with the utterance: "please stop"
         return [(k / 2 / SAMPLE_RATE, pcm[k : k + size]) for k in starts]
+
+
+DOWN_IN_PHRASE = (("down", 0.85),)
+"""`PhraseStop.others` with `down_in_phrase` on (round voice35). Chosen on the tune voices only (voice README): windows
+at 0.85 heard "down" in 11 of 30 tune phrases ("sit down", "get down", "lie down", ...) and in 2 of 168 without it
+("download", "a good town"); at 0.7 in 15 of 30, and in 6 of 168."""
+DOWN_IN_PHRASE_ENV = "HRI_VOICE_DOWN_IN_PHRASE"
+DEFAULT_DOWN_IN_PHRASE = False
+"""Off until round voice35's rule (docs/experiments/rules/voice35_rule.txt) decides."""
+
+
+def down_in_phrase_from(raw: str | bool | None) -> bool:
+    """Whether "down" is also heard within a phrase, from `HRI_VOICE_DOWN_IN_PHRASE` / `--down-in-phrase`."""
+    return _on_off(raw, DEFAULT_DOWN_IN_PHRASE, DOWN_IN_PHRASE_ENV)
 
 
 LONG_STOP = PhraseStop(at=0.8)
@@ -245,7 +262,7 @@ class SpotterEngine:
     def __init__(self, head: Head, embedder: UtteranceEmbedder | None = None, gate: WalkGate | None = None,
                  agree_min: float = DEFAULT_AGREE_MIN, decoder: bool = DEFAULT_DECODER,
                  stop_in_phrase: bool = DEFAULT_STOP_IN_PHRASE, stop_in_long: bool = DEFAULT_STOP_IN_LONG,
-                 warped_look: bool = DEFAULT_WARPED_LOOK) -> None:
+                 warped_look: bool = DEFAULT_WARPED_LOOK, down_in_phrase: bool = DEFAULT_DOWN_IN_PHRASE) -> None:
         unknown = [w for w in head.vocabulary if w not in {c.value for c in Command}]
         if unknown:
             raise EngineError(f"spotter head vocabulary has words that are not commands: {unknown}")
@@ -259,9 +276,11 @@ class SpotterEngine:
         if decoder and isinstance(self.embedder, WhisperEmbedder):
             self.decoder = FirstWord(self.embedder.ctranslate2_model, str(self.embedder.path / "tokenizer.json"),
                                      head.vocabulary)
+        others = DOWN_IN_PHRASE if down_in_phrase and Command.DOWN.value in head.vocabulary else ()
         self.phrase_stop: PhraseStop | None = (
-            PhraseStop() if stop_in_phrase and Command.STOP.value in head.vocabulary else None)
-        """"stop" within a phrase; None (off) unless asked for and the head has "stop"."""
+            PhraseStop(others=others) if stop_in_phrase and Command.STOP.value in head.vocabulary else None)
+        """"stop" (and with `down_in_phrase` "down") within a phrase; None (off) unless asked for and the head has
+        "stop"."""
         self.long_stop: PhraseStop | None = (
             LONG_STOP if stop_in_long and Command.STOP.value in head.vocabulary else None)
         """"stop" within an utterance longer than `MAX_SPEECH_S`; None (off) unless asked for and the head has
@@ -273,12 +292,13 @@ class SpotterEngine:
     def from_path(cls, path: Path | str | None = None, walk_gate: str | None = None,
                   agree_min: str | float | None = None, decoder: str | bool | None = None,
                   stop_in_phrase: str | bool | None = None, stop_in_long: str | bool | None = None,
-                  warped_look: str | bool | None = None) -> SpotterEngine:
+                  warped_look: str | bool | None = None, down_in_phrase: str | bool | None = None) -> SpotterEngine:
         try:
             head = Head.load(path or DEFAULT_HEAD)
             return cls(head, gate=walk_gate_for(head, walk_gate), agree_min=agree_min_from(agree_min),
                        decoder=decoder_from(decoder), stop_in_phrase=stop_in_phrase_from(stop_in_phrase),
-                       stop_in_long=stop_in_long_from(stop_in_long), warped_look=warped_look_from(warped_look))
+                       stop_in_long=stop_in_long_from(stop_in_long), warped_look=warped_look_from(warped_look),
+                       down_in_phrase=down_in_phrase_from(down_in_phrase))
         except (HeadError, FeatureError, ValueError) as exc:
             raise EngineError(str(exc)) from None
 
@@ -289,7 +309,7 @@ class SpotterEngine:
             heard = (self._stop_within(pcm, self.long_stop)
                      if self.long_stop is not None and audio_s <= LONG_STOP_MAX_S else None)
             if heard is not None:
-                at_s, conf = heard
+                _, at_s, conf = heard
                 return Recognition(Command.STOP, Command.STOP.value, conf, self.name, time.perf_counter() - t0,
                                    audio_s, {"reason": f"stop within a long utterance at {at_s:.1f} s"})
             return Recognition(None, "(long utterance)", 0.0, self.name, time.perf_counter() - t0, audio_s,
@@ -355,8 +375,8 @@ class SpotterEngine:
         if head_refused and command is None and self.phrase_stop is not None:  # not after the veto: that head did hear
             heard = self._stop_within(pcm, self.phrase_stop)
             if heard is not None:
-                at_s, conf = heard
-                word, command, reason = Command.STOP.value, Command.STOP, f"stop within the utterance at {at_s:.1f} s"
+                word, at_s, conf = heard
+                command, reason = Command(word), f"{word} within the utterance at {at_s:.1f} s"
         detail["reason"] = reason
         return Recognition(command, word, conf, self.name, time.perf_counter() - t0, audio_s, detail)
 
@@ -368,16 +388,22 @@ class SpotterEngine:
         mean = np.exp(logs.mean(axis=0))
         return mean / mean.sum()
 
-    def _stop_within(self, pcm: bytes, finder: PhraseStop) -> tuple[float, float] | None:
-        """Where a window of the utterance (`finder.windows`) is surely enough "stop" (`finder.at`): its start (s) and
-        the best such window's confidence; None if no window is."""
-        stop = self.head.vocabulary.index(Command.STOP.value)
-        best: tuple[float, float] | None = None
+    def _stop_within(self, pcm: bytes, finder: PhraseStop) -> tuple[str, float, float] | None:
+        """Where a window of the utterance (`finder.windows`) is surely enough "stop" (`finder.at`), or one of
+        `finder.others`: the word, the window's start (s) and the best such window's confidence; "stop" wherever a
+        window hears it, else the surest other; None if no window is."""
+        needs = {Command.STOP.value: finder.at, **dict(finder.others)}
+        best: dict[str, tuple[float, float]] = {}
         for start_s, window in finder.windows(pcm):
             probs = self.head.probabilities(self.embedder.utterance(window))[0]
-            if int(probs.argmax()) != stop:
+            top = int(probs.argmax())
+            word = self.head.classes[top]
+            if word not in needs:
                 continue
-            conf = self.head.confidence(stop, float(probs[stop]))
-            if conf >= finder.at and (best is None or conf > best[1]):
-                best = (start_s, conf)
-        return best
+            conf = self.head.confidence(top, float(probs[top]))
+            if conf >= needs[word] and (word not in best or conf > best[word][1]):
+                best[word] = (start_s, conf)
+        if not best:
+            return None
+        word = Command.STOP.value if Command.STOP.value in best else max(best, key=lambda w: best[w][1])
+        return (word, *best[word])

@@ -59,6 +59,9 @@ class VoiceSettings:
     warped_look: str | None = None
     """`HRI_VOICE_WARPED_LOOK`: the spotter hears an utterance it came near to accepting again at other speeds, on or
     off (`engine_spotter.warped_look_from`); None: the default."""
+    down_in_phrase: str | None = None
+    """`HRI_VOICE_DOWN_IN_PHRASE`: the spotter also hears "down" within a phrase ("sit down"), on or off
+    (`engine_spotter.down_in_phrase_from`); None: the default."""
     vad: str = "silero"
     """The live stream's voice activity detector (`segmenter.VADS`); files are always trimmed with WebRTC's."""
     early_look: str | None = None
@@ -84,6 +87,7 @@ class VoiceSettings:
             stop_in_phrase=os.environ.get("HRI_VOICE_STOP_IN_PHRASE") or None,
             stop_in_long=os.environ.get("HRI_VOICE_STOP_IN_LONG") or None,
             warped_look=os.environ.get("HRI_VOICE_WARPED_LOOK") or None,
+            down_in_phrase=os.environ.get("HRI_VOICE_DOWN_IN_PHRASE") or None,
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
@@ -139,6 +143,7 @@ def check_settings(settings: VoiceSettings) -> None:
             NO_GATE,
             agree_min_from,
             decoder_from,
+            down_in_phrase_from,
             stop_in_long_from,
             stop_in_phrase_from,
             warped_look_from,
@@ -149,6 +154,7 @@ def check_settings(settings: VoiceSettings) -> None:
         stop_in_phrase_from(settings.stop_in_phrase)
         stop_in_long_from(settings.stop_in_long)
         warped_look_from(settings.warped_look)
+        down_in_phrase_from(settings.down_in_phrase)
         from services.voice.spotter.head import Head, HeadError
 
         files = {"HRI_VOICE_HEAD": settings.head,
@@ -283,17 +289,18 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
                                  head_path=settings.head or _enrolled_head(ctx), walk_gate=settings.walk_gate,
                                  agree_min=settings.agree_min, decoder=settings.decoder,
                                  stop_in_phrase=settings.stop_in_phrase, stop_in_long=settings.stop_in_long,
-                                 warped_look=settings.warped_look)
+                                 warped_look=settings.warped_look, down_in_phrase=settings.down_in_phrase)
             head = getattr(engine, "head", None)  # the spotter: which speech embedding its head reads
             if head is not None:
-                gate = getattr(engine, "gate", None)
+                gate, phrase = getattr(engine, "gate", None), getattr(engine, "phrase_stop", None)
                 ctx.update_detail(spotter_embedding=head.embedding,
                                   spotter_walk_gate=gate.head.embedding if gate is not None else "none",
                                   spotter_agree_min=getattr(engine, "agree_min", 0.0),
                                   spotter_decoder=getattr(engine, "decoder", None) is not None,
-                                  spotter_stop_in_phrase=getattr(engine, "phrase_stop", None) is not None,
+                                  spotter_stop_in_phrase=phrase is not None,
                                   spotter_stop_in_long=getattr(engine, "long_stop", None) is not None,
-                                  spotter_warped_look=getattr(engine, "warped_look", None) is not None)
+                                  spotter_warped_look=getattr(engine, "warped_look", None) is not None,
+                                  spotter_down_in_phrase=bool(getattr(phrase, "others", ())))
             ctx.log.info("engine ready", engine=engine.name, **({"embedding": head.embedding} if head else {}))
             return engine
         except EngineError as exc:
