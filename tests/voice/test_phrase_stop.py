@@ -17,18 +17,22 @@ from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, write_wav
 from services.voice.engine import EngineError, Recognition, make_engine
 from services.voice.engine_spotter import (
+    DEFAULT_DOWN_IN_PHRASE,
+    DOWN_IN_PHRASE,
+    DOWN_IN_PHRASE_ENV,
     LONG_STOP,
     LONG_STOP_MAX_S,
     STOP_IN_LONG_ENV,
     STOP_IN_PHRASE_ENV,
     PhraseStop,
     SpotterEngine,
+    down_in_phrase_from,
     stop_in_long_from,
     stop_in_phrase_from,
 )
 from services.voice.segmenter import SegmenterConfig
 from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds
-from services.voice.training import tts
+from services.voice.training import dataset, tts
 from tests.voice.test_spotter import _cli, _utterance
 
 pytestmark = pytest.mark.skipif(not (synth.espeak_available() and shutil.which("flite")),
@@ -196,3 +200,54 @@ def test_a_pause_splits_a_pair_into_two_utterances_in_the_service_s_stream(off: 
     (_, end_first), (_, end_second) = apart
     # where each utterance ends in the stream: 0.8 s of room, the words, the pause (within the VAD's end windows)
     assert 0.8 < end_first < end_second < 0.8 + (first.size + second.size) / SAMPLE_RATE + 0.5 + 0.5
+
+
+DOWN_PHRASES = (dataset.Recipe("sit down", 7, "espeak:en-gb-x-rp+klatt3", 1.0, 1.0, 1654509781, 0.0),
+                dataset.Recipe("get down", 7, "espeak:en-gb-x-gbcwmd+Alex", 1.0, 1.0, 1596208991, 0.0),
+                dataset.Recipe("lie down", 7, "espeak:en-gb-x-rp+klatt3", 1.0, 1.0, 1074137765, 0.0))
+"""Tune voices saying "down" last in a phrase, which the head alone hears as nothing (voice35_probe_check.py)."""
+
+
+@pytest.fixture(scope="module")
+def down_on() -> SpotterEngine:
+    engine = SpotterEngine.from_path(down_in_phrase=True)
+    assert engine.phrase_stop is not None and engine.phrase_stop.others == DOWN_IN_PHRASE
+    return engine
+
+
+def test_down_in_a_phrase_is_heard_only_with_its_option(on: SpotterEngine, down_on: SpotterEngine) -> None:
+    assert on.phrase_stop is not None and on.phrase_stop.others == ()  # off by default
+    for recipe in DOWN_PHRASES:
+        pcm = dataset.render_utterance(recipe)
+        assert on.recognise(pcm).command is None, recipe
+        rec = down_on.recognise(pcm)
+        assert (rec.command, rec.text) == (Command.DOWN, "down"), (recipe, rec)
+        assert rec.confidence >= dict(DOWN_IN_PHRASE)["down"]
+        assert rec.detail["reason"].startswith("down within the utterance")
+
+
+def test_a_window_that_hears_stop_wins_over_one_that_hears_down(down_on: SpotterEngine) -> None:
+    voice = "espeak:en-029+m7"
+    pcm = _utterance("stop", voice) + bytes(2 * round(0.3 * SAMPLE_RATE)) + dataset.render_utterance(DOWN_PHRASES[0])
+    finder = down_on.phrase_stop
+    assert finder is not None
+    alone = down_on._stop_within(dataset.render_utterance(DOWN_PHRASES[0]), finder)
+    assert alone is not None and alone[0] == "down"
+    both = down_on._stop_within(pcm, finder)
+    assert both is not None and both[0] == "stop", both
+
+
+def test_the_long_utterance_path_hears_only_stop(down_on: SpotterEngine) -> None:
+    assert LONG_STOP.others == () and down_on.long_stop is LONG_STOP
+
+
+@pytest.mark.parametrize(("raw", "value"), [(None, DEFAULT_DOWN_IN_PHRASE), ("on", True), ("off", False)])
+def test_the_down_setting(raw: str | None, value: bool) -> None:
+    assert down_in_phrase_from(raw) is value
+
+
+def test_a_bad_down_setting_is_refused_naming_the_variable() -> None:
+    with pytest.raises(EngineError, match=DOWN_IN_PHRASE_ENV):
+        make_engine("spotter", down_in_phrase="sometimes")
+    out = _cli("--source", "stdin", env={DOWN_IN_PHRASE_ENV: "sometimes"})
+    assert out.returncode == 2 and DOWN_IN_PHRASE_ENV in out.stderr

@@ -15,7 +15,12 @@ import pytest
 from schemas.messages import Health, HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice import synth
-from services.voice.engine_spotter import DEFAULT_STOP_IN_LONG, DEFAULT_STOP_IN_PHRASE, DEFAULT_WARPED_LOOK
+from services.voice.engine_spotter import (
+    DEFAULT_DOWN_IN_PHRASE,
+    DEFAULT_STOP_IN_LONG,
+    DEFAULT_STOP_IN_PHRASE,
+    DEFAULT_WARPED_LOOK,
+)
 from services.voice.segmenter import SegmenterConfig
 from tests.conftest import ROOT, service_env, wait_for
 
@@ -76,6 +81,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert h.detail["spotter_stop_in_phrase"] is DEFAULT_STOP_IN_PHRASE  # "stop" within a phrase: the default
     assert h.detail["spotter_stop_in_long"] is DEFAULT_STOP_IN_LONG  # and within a longer utterance
     assert h.detail["spotter_warped_look"] is DEFAULT_WARPED_LOOK  # the second look at other speeds
+    assert h.detail["spotter_down_in_phrase"] is DEFAULT_DOWN_IN_PHRASE  # "down" within a phrase
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(15) == 0
 

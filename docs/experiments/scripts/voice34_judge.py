@@ -22,6 +22,22 @@ QUIET_GROUPS = ("go forbidden", "go-words", "sentences without stop")
 """Groups whose clips hold no command the robot should act on."""
 
 
+def bench_figures(control: Path, candidate: Path) -> tuple[dict[str, float], dict[str, float]]:
+    """Both `voice_bench.py --json` files' figures (voice23_judge's and the rules' others), printed side by side; a
+    family this machine could not speak (no row in either) is left out of the pooled rows."""
+    present = {r["family"] for p in (control, candidate) for r in json.loads(p.read_text()) if "family" in r}
+    for module, name in ((voice23_judge, "EIGHT"), (voice31_judge, "EXTRA")):
+        setattr(module, name, tuple(f for f in getattr(module, name) if f in present))
+    c, k = figures(control), figures(candidate)
+    for d, path in ((c, control), (k, candidate)):
+        d["latency_p50"], d["noise"], d["extra_taken"], d["rtf_max"] = (
+            latency_p50(path), noise(path), extra_taken(path), rtf_max(path))
+        d["all_asks"] = next(r["false_asks"] for r in json.loads(path.read_text()) if r.get("family") == "ALL")
+    for key in c:
+        print(f"{key:28} {c[key]:10.3f} {k[key]:10.3f}")
+    return c, k
+
+
 def phrases(path: Path) -> dict[str, object]:
     d = json.loads(path.read_text())
     groups = d["one_utterance"]
@@ -37,16 +53,7 @@ def phrases(path: Path) -> dict[str, object]:
 
 def main() -> int:
     a_c, a_k, b_c, b_k, c_c, c_k = (Path(p) for p in sys.argv[1:7])
-    present = {r["family"] for p in (a_c, a_k) for r in json.loads(p.read_text()) if "family" in r}
-    for module, name in ((voice23_judge, "EIGHT"), (voice31_judge, "EXTRA")):  # a voice this machine cannot speak
-        setattr(module, name, tuple(f for f in getattr(module, name) if f in present))  # has no row
-    c, k = figures(a_c), figures(a_k)
-    for d, path in ((c, a_c), (k, a_k)):
-        d["latency_p50"], d["noise"], d["extra_taken"], d["rtf_max"] = (
-            latency_p50(path), noise(path), extra_taken(path), rtf_max(path))
-        d["all_asks"] = next(r["false_asks"] for r in json.loads(path.read_text()) if r.get("family") == "ALL")
-    for key in c:
-        print(f"{key:28} {c[key]:10.3f} {k[key]:10.3f}")
+    c, k = bench_figures(a_c, a_k)
     pc, pk = phrases(b_c), phrases(b_k)
     for key in pc:
         print(f"{key:28} {pc[key]}  ->  {pk[key]}")
