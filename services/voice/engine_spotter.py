@@ -309,7 +309,7 @@ class SpotterEngine:
         t0 = time.perf_counter()
         audio_s = speech_seconds(pcm)
         if audio_s > MAX_SPEECH_S:
-            heard = (self._stop_within(pcm, self.long_stop)
+            heard = (self._heard_within(pcm, self.long_stop)
                      if self.long_stop is not None and audio_s <= LONG_STOP_MAX_S else None)
             if heard is not None:
                 _, at_s, conf = heard
@@ -376,7 +376,7 @@ class SpotterEngine:
                 word, conf = rescued
                 command, reason = Command(word), "rescued by the decoder (below 0.85 and 0.7: asks, confirms nothing)"
         if head_refused and command is None and self.phrase_stop is not None:  # not after the veto: that head did hear
-            heard = self._stop_within(pcm, self.phrase_stop)
+            heard = self._heard_within(pcm, self.phrase_stop)
             if heard is not None:
                 word, at_s, conf = heard
                 command, reason = Command(word), f"{word} within the utterance at {at_s:.1f} s"
@@ -391,7 +391,7 @@ class SpotterEngine:
         mean = np.exp(logs.mean(axis=0))
         return mean / mean.sum()
 
-    def _stop_within(self, pcm: bytes, finder: PhraseStop) -> tuple[str, float, float] | None:
+    def _heard_within(self, pcm: bytes, finder: PhraseStop) -> tuple[str, float, float] | None:
         """Where a window of the utterance (`finder.windows`) is surely enough "stop" (`finder.at`), or one of
         `finder.others`: the word, the window's start (s) and the best such window's confidence; "stop" wherever a
         window hears it, else the surest other; None if no window is."""

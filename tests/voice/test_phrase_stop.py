@@ -234,9 +234,9 @@ def test_a_window_that_hears_stop_wins_over_one_that_hears_down(down_on: Spotter
     pcm = _utterance("stop", voice) + bytes(2 * round(0.3 * SAMPLE_RATE)) + dataset.render_utterance(DOWN_PHRASES[0])
     finder = down_on.phrase_stop
     assert finder is not None
-    alone = down_on._stop_within(dataset.render_utterance(DOWN_PHRASES[0]), finder)
+    alone = down_on._heard_within(dataset.render_utterance(DOWN_PHRASES[0]), finder)
     assert alone is not None and alone[0] == "down"
-    both = down_on._stop_within(pcm, finder)
+    both = down_on._heard_within(pcm, finder)
     assert both is not None and both[0] == "stop", both
 
 
