@@ -18,6 +18,7 @@ from services.voice.audio import SAMPLE_RATE, write_wav
 from services.voice.engine import EngineError, Recognition, make_engine
 from services.voice.engine_spotter import (
     DEFAULT_DOWN_IN_PHRASE,
+    DEFAULT_WARPED_LOOK,
     DOWN_IN_PHRASE,
     DOWN_IN_PHRASE_ENV,
     LONG_STOP,
@@ -30,6 +31,7 @@ from services.voice.engine_spotter import (
     down_in_phrase_from,
     stop_in_long_from,
     stop_in_phrase_from,
+    warped_look_from,
 )
 from services.voice.segmenter import SegmenterConfig
 from services.voice.spotter.features import MAX_SPEECH_S, speech_seconds
@@ -93,11 +95,15 @@ def test_the_option_adds_only_stop_and_never_a_walk(off: SpotterEngine, on: Spot
                 assert b.command in (None, Command.STOP), (phrase, voice, b)
 
 
-@pytest.mark.parametrize("parse", [stop_in_phrase_from, stop_in_long_from])  # both on by default (rounds 31, 33)
-@pytest.mark.parametrize(("raw", "value"), [(None, True), ("", True), ("on", True), ("1", True), ("0", False),
+@pytest.mark.parametrize(("parse", "default"), [(stop_in_phrase_from, True), (stop_in_long_from, True),  # rounds 31, 33
+                                               (down_in_phrase_from, DEFAULT_DOWN_IN_PHRASE),
+                                               (warped_look_from, DEFAULT_WARPED_LOOK)])
+@pytest.mark.parametrize(("raw", "value"), [(None, None), ("", None), ("on", True), ("1", True), ("0", False),
                                             ("off", False), (False, False)])
-def test_the_settings(parse: Callable[[str | bool | None], bool], raw: str | bool | None, value: bool) -> None:
-    assert parse(raw) is value
+def test_the_settings(parse: Callable[[str | bool | None], bool], default: bool, raw: str | bool | None,
+                      value: bool | None) -> None:
+    """Each on/off setting: unset or empty is its default (None here), otherwise what it says."""
+    assert parse(raw) is (default if value is None else value)
 
 
 @pytest.mark.parametrize(("option", "env"), [("stop_in_phrase", STOP_IN_PHRASE_ENV),
@@ -242,8 +248,3 @@ def test_a_window_that_hears_stop_wins_over_one_that_hears_down(down_on: Spotter
 
 def test_the_long_utterance_path_hears_only_stop(down_on: SpotterEngine) -> None:
     assert LONG_STOP.others == () and down_on.long_stop is LONG_STOP
-
-
-@pytest.mark.parametrize(("raw", "value"), [(None, DEFAULT_DOWN_IN_PHRASE), ("on", True), ("off", False)])
-def test_the_down_setting(raw: str | None, value: bool) -> None:
-    assert down_in_phrase_from(raw) is value
