@@ -52,7 +52,7 @@ import numpy as np
 
 from schemas.messages import Mark, Shape
 from services.vision.proposer import Proposer
-from services.vision.verifier import CLASSES, MODEL_PATH, Verifier, claim, crops
+from services.vision.verifier import CLASSES, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
 
@@ -200,6 +200,13 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
     proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
+    hand_triangle: float = 0.0
+    """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
+    the triangles drawn by hand; round vision34): a TRIANGLE the shape tests claimed and the card tests passed,
+    which the verifier refused, is kept if the second network gives TRIANGLE at least this probability (0: not
+    asked). Only danger marks are added: a missed triangle lets the robot walk on, a false one stops it. The
+    verifier refused a third of the filled triangles drawn by hand (`bench/vision_stages.py --hand-drawn 1`),
+    having learnt exact triangles. Needs `verify`."""
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -233,6 +240,8 @@ class DetectorConfig:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
         if len(self.propose_thresholds) != 3:
             raise ValueError(f"propose_thresholds: {self.propose_thresholds}: three, for X, O and TRIANGLE")
+        if not 0.0 <= self.hand_triangle <= 1.0:
+            raise ValueError(f"hand_triangle: {self.hand_triangle}: a probability, 0 (off) to 1")
 
 
 @dataclass
@@ -404,6 +413,9 @@ class MarkDetector:
             verifier = Verifier.load(MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
         self.proposer = Proposer.load() if self.config.propose > 0 and self.verifier is not None else None
+        asked = self.config.hand_triangle > 0 and self.verifier is not None
+        self.triangles = Verifier.load(TRIANGLES_PATH) if asked else None
+        """the second network `hand_triangle` asks, or None"""
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None
         self._claimed: Shape | None = None  # the shape the last judged component was taken for
@@ -572,11 +584,12 @@ class MarkDetector:
         """The learned verifier on every candidate of the frame in one call: a claimed one stays if it
         agrees; a loose one gets the shape it names, then the card tests judge it like any other."""
         assert self.verifier is not None
-        probs = self.verifier.probabilities(
-            np.stack([self._crops(p) for p in pending]), np.stack([claim(p.shape) for p in pending])
-        )
+        patches = np.stack([self._crops(p) for p in pending])
+        claims = np.stack([claim(p.shape) for p in pending])
+        probs = self.verifier.probabilities(patches, claims)
+        second = self._second_triangles(pending, patches, claims, probs)
         out: list[Detection] = []
-        for p, row in zip(pending, probs, strict=True):
+        for p, row, kept in zip(pending, probs, second, strict=True):
             det: Detection | None = None
             if p.rescue:
                 assert p.shape is not None
@@ -585,7 +598,7 @@ class MarkDetector:
                     det, stage = p.det, "kept"
             elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
-                if self.verifier.accepts(row, p.shape):
+                if self.verifier.accepts(row, p.shape) or kept:
                     det, stage = p.det, "kept"
             else:
                 claimed, prob, ok = self.verifier.name(row)
@@ -608,6 +621,26 @@ class MarkDetector:
                 self._trace[p.trace_at] = Traced(t.box, claimed, stage, t.scale)
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
+        return out
+
+    def _second_triangles(
+        self, pending: list[_Pending], patches: np.ndarray, claims: np.ndarray, probs: np.ndarray
+    ) -> list[bool]:
+        """For each candidate, whether the second network keeps it (`hand_triangle`): asked only about a
+        claimed TRIANGLE the verifier refused (not one the card tests refused: `rescue`), a few a frame."""
+        out = [False] * len(pending)
+        if self.triangles is None:
+            return out
+        assert self.verifier is not None
+        ask = [
+            j
+            for j, (p, row) in enumerate(zip(pending, probs, strict=True))
+            if p.shape is Shape.TRIANGLE and not p.rescue and not self.verifier.accepts(row, p.shape)
+        ]
+        if ask:
+            k = CLASSES.index(Shape.TRIANGLE)
+            for j, row in zip(ask, self.triangles.probabilities(patches[ask], claims[ask]), strict=True):
+                out[j] = bool(row[k] >= self.config.hand_triangle)
         return out
 
     def _crops(self, p: _Pending) -> np.ndarray:

@@ -36,6 +36,8 @@ from schemas.messages import Shape
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 SHAPES: tuple[Shape, ...] = (Shape.X, Shape.O, Shape.TRIANGLE)
 MODEL_PATH = Path(__file__).with_name("verifier.onnx")
+TRIANGLES_PATH = Path(__file__).with_name("verifier_triangles.onnx")
+"""a second network, trained with triangles drawn by hand, asked only about triangles (`DetectorConfig.hand_triangle`)"""
 PATCH = 32
 TIGHT, WIDE, CONTEXT = 1.2, 2.2, 4.0
 N_CLAIM = len(SHAPES) + 1  # the claimed shape, one-hot, and one slot for 'loose' (no shape claimed)
