@@ -12,12 +12,12 @@ from services.vision.detector import DetectorConfig, MarkDetector, box_overlap, 
 from services.vision.synthetic import SceneGenerator, Variation
 from services.vision.verifier import INPUT_FORMAT, TRIANGLES_PATH, Verifier, claim
 
-ON = 0.8  # the threshold round vision34 chose on tuning frames (its rule: docs/experiments/rules)
+ON = 0.8  # the threshold round vision34 chose on tuning frames, the default since (docs/experiments/rules)
 
 
 @pytest.fixture(scope="module")
 def detectors() -> tuple[MarkDetector, MarkDetector]:
-    return MarkDetector(), MarkDetector(DetectorConfig(hand_triangle=ON))
+    return MarkDetector(DetectorConfig(hand_triangle=0.0)), MarkDetector(DetectorConfig(hand_triangle=ON))
 
 
 def _frames(seed: int, count: int, shapes: tuple[Shape | None, ...]) -> list[tuple[np.ndarray, object]]:
@@ -68,8 +68,9 @@ def test_the_second_network_is_asked_only_about_claimed_triangles_and_adds_only_
     assert added and all(d.shape is Shape.TRIANGLE for d in added)
 
 
-def test_off_by_default_loads_nothing_and_a_bad_threshold_is_refused() -> None:
-    assert DetectorConfig().hand_triangle == 0.0 and MarkDetector().triangles is None
+def test_on_by_default_off_loads_nothing_and_a_bad_threshold_is_refused() -> None:
+    assert DetectorConfig().hand_triangle == ON and MarkDetector().triangles is not None  # since round vision34
+    assert MarkDetector(DetectorConfig(hand_triangle=0.0)).triangles is None
     assert MarkDetector(DetectorConfig(hand_triangle=ON, verify=False)).triangles is None  # it needs the verifier
     assert parse_settings(f"hand_triangle={ON}").hand_triangle == ON
     with pytest.raises(ValueError, match=r"hand_triangle: 1.5: a probability"):
