@@ -627,8 +627,8 @@ class MarkDetector:
     def _second_triangles(
         self, pending: list[_Pending], patches: np.ndarray, claims: np.ndarray, probs: np.ndarray
     ) -> list[bool]:
-        """For each candidate, whether the second network keeps it (`hand_triangle`): asked only about a
-        claimed TRIANGLE the verifier refused (not one the card tests refused: `rescue`), a few a frame."""
+        """For each candidate, whether the second network keeps it (`hand_triangle`). It is asked only about
+        a claimed TRIANGLE the verifier refused (not one the card tests refused: `rescue`): few, so it costs little."""
         out = [False] * len(pending)
         if self.triangles is None:
             return out

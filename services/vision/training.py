@@ -1,7 +1,9 @@
 """Train the mark verifier (`verifier.onnx`) on candidates from the TUNING generator (`--blind`: the blind one's too).
 
 The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday`,
-joined by `python -m services.vision.ensemble` (round vision23g; see there).
+joined by `python -m services.vision.ensemble` (round vision23g; see there). The committed `verifier_triangles.onnx`,
+asked only about claimed triangles the first refuses (`DetectorConfig.hand_triangle`, round vision34), is `--hand-drawn
+0.4 --hand-drawn-shapes TRIANGLE` (never written by default: `--out` names the file).
 
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
