@@ -208,6 +208,15 @@ class DetectorConfig:
     filled triangles drawn by hand (`bench/vision_stages.py --hand-drawn 1`), having learnt exact ones. On since
     round vision34 (the vision README): on fresh held-out seeds 30 of 160 missed triangles found for 4 more false
     ones in 4,000 frames; on the blind generator 36 of 236 for none; about 3 % of the speed. Needs `verify`."""
+    hand_triangle_loose: float = 0.0
+    """the second network's word on a loose candidate too (0: not asked): one the verifier did not name, to which it
+    gives TRIANGLE at least `hand_triangle_floor`, is named a TRIANGLE if the second network gives TRIANGLE at least
+    this probability; the card tests then judge it like any loose candidate (with no rescue: the verifier did not
+    vouch for it). Round vision35 (the vision README); off unless its rule landed it."""
+    hand_triangle_floor: float = 0.3
+    """the verifier's TRIANGLE probability a loose candidate needs before the second network is asked about it
+    (`hand_triangle_loose`): most loose candidates are clutter the verifier is sure of, and asking about each
+    cost about 6 % of the speed in round vision34's probe"""
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -241,8 +250,9 @@ class DetectorConfig:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
         if len(self.propose_thresholds) != 3:
             raise ValueError(f"propose_thresholds: {self.propose_thresholds}: three, for X, O and TRIANGLE")
-        if not 0.0 <= self.hand_triangle <= 1.0:
-            raise ValueError(f"hand_triangle: {self.hand_triangle}: a probability, 0 (off) to 1")
+        for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
 
 
 @dataclass
@@ -414,7 +424,7 @@ class MarkDetector:
             verifier = Verifier.load(MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
         self.proposer = Proposer.load() if self.config.propose > 0 and self.verifier is not None else None
-        asked = self.config.hand_triangle > 0 and self.verifier is not None
+        asked = max(self.config.hand_triangle, self.config.hand_triangle_loose) > 0 and self.verifier is not None
         self.triangles = Verifier.load(TRIANGLES_PATH) if asked else None
         """the second network `hand_triangle` asks, or None"""
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
@@ -599,11 +609,17 @@ class MarkDetector:
                     det, stage = p.det, "kept"
             elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
-                if self.verifier.accepts(row, p.shape) or kept:
+                if self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
             else:
                 claimed, prob, ok = self.verifier.name(row)
                 stage = "verifier"
+                if kept is not None:  # named by the second network alone: the card tests must pass
+                    claimed, prob = Shape.TRIANGLE, kept
+                    assert p.blob is not None and p.own is not None
+                    det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box)
+                    stage = "kept" if det is not None else self._why
+                    ok = False
                 if ok and not (p.part and claimed is Shape.O):
                     assert p.blob is not None and p.own is not None
                     blob = p.blob
@@ -626,22 +642,35 @@ class MarkDetector:
 
     def _second_triangles(
         self, pending: list[_Pending], patches: np.ndarray, claims: np.ndarray, probs: np.ndarray
-    ) -> list[bool]:
-        """For each candidate, whether the second network keeps it (`hand_triangle`). It is asked only about
-        a claimed TRIANGLE the verifier refused (not one the card tests refused: `rescue`): few, so it costs little."""
-        out = [False] * len(pending)
+    ) -> list[float | None]:
+        """For each candidate, the second network's TRIANGLE probability if it keeps it, else None. It is asked
+        only about a claimed TRIANGLE the verifier refused (`hand_triangle`; not one the card tests refused:
+        `rescue`) and a loose candidate the verifier named nothing but half-believes a TRIANGLE
+        (`hand_triangle_loose`, `hand_triangle_floor`): few, so it costs little."""
+        out: list[float | None] = [None] * len(pending)
         if self.triangles is None:
             return out
         assert self.verifier is not None
-        ask = [
-            j
-            for j, (p, row) in enumerate(zip(pending, probs, strict=True))
-            if p.shape is Shape.TRIANGLE and not p.rescue and not self.verifier.accepts(row, p.shape)
-        ]
-        if ask:
-            k = CLASSES.index(Shape.TRIANGLE)
+        cfg = self.config
+        k = CLASSES.index(Shape.TRIANGLE)
+        need: dict[int, float] = {}
+        for j, (p, row) in enumerate(zip(pending, probs, strict=True)):
+            if p.rescue:
+                continue
+            if p.shape is Shape.TRIANGLE and cfg.hand_triangle > 0 and not self.verifier.accepts(row, p.shape):
+                need[j] = cfg.hand_triangle
+            elif (
+                p.shape is None
+                and cfg.hand_triangle_loose > 0
+                and row[k] >= cfg.hand_triangle_floor
+                and not self.verifier.name(row)[2]
+            ):
+                need[j] = cfg.hand_triangle_loose
+        if need:
+            ask = list(need)
             for j, row in zip(ask, self.triangles.probabilities(patches[ask], claims[ask]), strict=True):
-                out[j] = bool(row[k] >= self.config.hand_triangle)
+                if row[k] >= need[j]:
+                    out[j] = float(row[k])
         return out
 
     def _crops(self, p: _Pending) -> np.ndarray:

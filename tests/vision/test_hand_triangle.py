@@ -4,13 +4,15 @@ triangles."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector, box_overlap, parse_settings
 from services.vision.synthetic import SceneGenerator, Variation
-from services.vision.verifier import INPUT_FORMAT, TRIANGLES_PATH, Verifier, claim
+from services.vision.verifier import INPUT_FORMAT, TRIANGLES_PATH, Verifier, claim, crops
 
 ON = 0.8  # the threshold round vision34 chose on tuning frames, the default since (docs/experiments/rules)
 
@@ -82,3 +84,49 @@ def test_the_committed_second_network_takes_the_verifiers_inputs() -> None:
     meta = second.session.get_modelmeta().custom_metadata_map
     assert meta["input_format"] == INPUT_FORMAT
     assert TRIANGLES_PATH.stat().st_size < 400_000  # small, as the README says
+
+
+def test_loose_candidates_are_asked_only_when_the_verifier_half_believes_a_triangle(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """`hand_triangle_loose` (round vision35): which rows of a frame's verifier call reach the second network."""
+    det = MarkDetector(DetectorConfig(hand_triangle=ON, hand_triangle_loose=0.9, hand_triangle_floor=0.3))
+    assert det.triangles is not None
+    asked: list[int] = []
+    second = det.triangles
+
+    class Spy:  # the real second network, recording how many rows it is asked about
+        def probabilities(self, crops: np.ndarray, claims: np.ndarray) -> np.ndarray:
+            asked.append(len(crops))
+            return second.probabilities(crops, claims)
+
+    monkeypatch.setattr(det, "triangles", Spy())
+    # the verifier's rows (X, O, TRIANGLE, none) for: a loose one it half-believes a triangle (asked), a loose one
+    # under the floor, a loose one it names itself, a claimed triangle it refuses (asked), a card-test rescue
+    # and a claimed X it refuses (neither asked)
+    pending = [
+        SimpleNamespace(shape=None, rescue=False),
+        SimpleNamespace(shape=None, rescue=False),
+        SimpleNamespace(shape=None, rescue=False),
+        SimpleNamespace(shape=Shape.TRIANGLE, rescue=False),
+        SimpleNamespace(shape=Shape.TRIANGLE, rescue=True),
+        SimpleNamespace(shape=Shape.X, rescue=False),
+    ]
+    probs = np.array(
+        [[0, 0, 0.5, 0.5], [0, 0, 0.2, 0.8], [0, 0, 0.95, 0.05], [0, 0, 0.5, 0.5], [0, 0, 0.5, 0.5], [0.1, 0, 0, 0.9]],
+        dtype=np.float32,
+    )
+    img, label = _frames(2, 20, (Shape.TRIANGLE,))[19]
+    assert label is not None
+    patches = np.stack([crops(img[:, :, 1], label.box)] * len(pending))  # type: ignore[attr-defined]
+    claims = np.stack([claim(p.shape) for p in pending])
+    out = det._second_triangles(pending, patches, claims, probs)  # type: ignore[arg-type]
+    assert asked == [2]
+    assert all(out[j] is None for j in (1, 2, 4, 5))
+    off = MarkDetector(DetectorConfig(hand_triangle=ON, hand_triangle_loose=0.0))
+    monkeypatch.setattr(off, "triangles", Spy())
+    asked.clear()
+    off._second_triangles(pending, patches, claims, probs)  # type: ignore[arg-type]
+    assert asked == [1]  # off: the claimed triangle only, as in round vision34
+    with pytest.raises(ValueError, match=r"hand_triangle_floor: -0.1: a probability"):
+        parse_settings("hand_triangle_floor=-0.1")

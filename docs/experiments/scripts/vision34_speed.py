@@ -1,7 +1,8 @@
 """Round vision34's speed condition (f): the first FRAMES frames of a held-out seed, detected by the base and the
 variant in turn, PASSES times each in one process, one thread; prints each pass's frames per CPU-second and the
-medians.
-    PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision34_speed.py SEED [FRAMES] [PASSES]"""
+medians. Round vision35 passes its variant's settings as SETTINGS (default: vision34's, hand_triangle=0.8; the base is
+always the default detector of the code run).
+    PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision34_speed.py SEED [FRAMES] [PASSES] [SETTINGS]"""
 import statistics
 import sys
 import time
@@ -16,10 +17,11 @@ cv2.setNumThreads(1)
 seed = int(sys.argv[1])
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 400
 passes = int(sys.argv[3]) if len(sys.argv) > 3 else 5
+settings = sys.argv[4] if len(sys.argv) > 4 else "hand_triangle=0.8"
 gen = HeldOutGenerator(seed=seed)
 shapes = (*SHAPES, None)
 frames = [gen.frame(shapes[i % 4])[0] for i in range(n)]
-dets = {"base": MarkDetector(), "variant": MarkDetector(parse_settings("hand_triangle=0.8"))}
+dets = {"base": MarkDetector(), "variant": MarkDetector(parse_settings(settings))}
 rates: dict[str, list[float]] = {k: [] for k in dets}
 for det in dets.values():  # warm up
     for f in frames[:20]:
