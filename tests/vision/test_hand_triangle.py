@@ -130,3 +130,17 @@ def test_loose_candidates_are_asked_only_when_the_verifier_half_believes_a_trian
     assert asked == [1]  # off: the claimed triangle only, as in round vision34
     with pytest.raises(ValueError, match=r"hand_triangle_floor: -0.1: a probability"):
         parse_settings("hand_triangle_floor=-0.1")
+
+
+@pytest.mark.parametrize(("seed", "index"), [(2, 16), (2, 34)])
+def test_a_loose_triangle_drawn_by_hand_is_named_by_the_second_network(seed: int, index: int) -> None:
+    """Round vision35: triangles drawn by hand that the shape tests read nothing in and the verifier does not name
+    are found with `hand_triangle_loose` and not without."""
+    img, label = _frames(seed, index + 1, (Shape.TRIANGLE,))[index]
+    assert label is not None
+
+    def found(config: DetectorConfig) -> bool:
+        dets = MarkDetector(config).detect(img)
+        return any(d.shape is Shape.TRIANGLE and box_overlap(d.box, label.box) >= 0.5 for d in dets)  # type: ignore[attr-defined]
+
+    assert not found(DetectorConfig(hand_triangle_loose=0.0)) and found(DetectorConfig(hand_triangle_loose=0.8))
