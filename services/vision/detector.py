@@ -218,6 +218,11 @@ class DetectorConfig:
     """the verifier's TRIANGLE probability a loose candidate needs before the second network is asked about it
     (`hand_triangle_loose`): most loose candidates are clutter the verifier is sure of, and asking about each
     cost about 6 % of the speed in round vision34's probe"""
+    hand_triangle_solid: float = 0.8
+    """a loose candidate is asked about (`hand_triangle_loose`) only if it has a hole or fills less than this share
+    of its convex hull: round vision35's new false triangles on tuning frames were solid dark shapes off a card,
+    clutter the second network took for filled triangles (round vision35b); 1 asks about every one, as round
+    vision35 did"""
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -251,7 +256,7 @@ class DetectorConfig:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
         if len(self.propose_thresholds) != 3:
             raise ValueError(f"propose_thresholds: {self.propose_thresholds}: three, for X, O and TRIANGLE")
-        for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor"):
+        for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
 
@@ -665,6 +670,7 @@ class MarkDetector:
                 and cfg.hand_triangle_loose > 0
                 and row[k] >= cfg.hand_triangle_floor
                 and not self.verifier.name(row)[2]
+                and not _solid(p.blob, cfg.hand_triangle_solid)
             ):
                 need[j] = cfg.hand_triangle_loose
         if need:
@@ -1342,6 +1348,14 @@ def _classify(b: _Blob) -> tuple[Shape, float] | None:
             return None
         return _cross(b, hull, hull_area) or _filled_triangle(b, hull_area)
     return None
+
+
+def _solid(b: _Blob | None, share: float) -> bool:
+    """Whether `b` has no hole and fills at least `share` (under 1) of its convex hull: a solid shape."""
+    if share >= 1 or b is None or b.holes:
+        return False
+    hull = cv2.contourArea(cv2.convexHull(b.outer))
+    return hull > 0 and b.area / hull >= share
 
 
 def _filled_triangle(b: _Blob, hull_area: float) -> tuple[Shape, float] | None:
