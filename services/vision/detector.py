@@ -432,7 +432,7 @@ class MarkDetector:
         self.proposer = Proposer.load() if self.config.propose > 0 and self.verifier is not None else None
         asked = max(self.config.hand_triangle, self.config.hand_triangle_loose) > 0 and self.verifier is not None
         self.triangles = Verifier.load(TRIANGLES_PATH) if asked else None
-        """the second network `hand_triangle` asks, or None"""
+        """the second network `hand_triangle` (and `hand_triangle_loose`) asks, or None"""
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None
         self._claimed: Shape | None = None  # the shape the last judged component was taken for

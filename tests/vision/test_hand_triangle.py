@@ -4,13 +4,15 @@ triangles."""
 
 from __future__ import annotations
 
+import functools
 from types import SimpleNamespace
 
+import cv2
 import numpy as np
 import pytest
 
 from schemas.messages import Shape
-from services.vision.detector import DetectorConfig, MarkDetector, box_overlap, parse_settings
+from services.vision.detector import DetectorConfig, MarkDetector, _blob, box_overlap, parse_settings
 from services.vision.synthetic import SceneGenerator, Variation
 from services.vision.verifier import INPUT_FORMAT, TRIANGLES_PATH, Verifier, claim, crops
 
@@ -86,12 +88,30 @@ def test_the_committed_second_network_takes_the_verifiers_inputs() -> None:
     assert TRIANGLES_PATH.stat().st_size < 400_000  # small, as the README says
 
 
+@functools.cache
+def _triangles(seed: int, count: int) -> list[tuple[np.ndarray, object]]:
+    """`_frames` of triangles only, rendered once for every test that picks one of them."""
+    return _frames(seed, count, (Shape.TRIANGLE,))
+
+
+def _triangle_blob(filled: bool) -> object:
+    """The detector's view of a triangle component: solid (filled) or an outline with a hole."""
+    mask = np.zeros((64, 64), np.uint8)
+    pts = np.array([(32, 6), (58, 56), (6, 56)], np.int32)
+    if filled:
+        cv2.fillPoly(mask, [pts], 255)
+    else:
+        cv2.polylines(mask, [pts], True, 255, 6)
+    return _blob(mask, 52.0)
+
+
 def test_loose_candidates_are_asked_only_when_the_verifier_half_believes_a_triangle(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """`hand_triangle_loose` (round vision35): which rows of a frame's verifier call reach the second network."""
+    """`hand_triangle_loose` (rounds vision35 and 35b): which rows of a frame's verifier call reach the second
+    network."""
     det = MarkDetector(DetectorConfig(hand_triangle=ON, hand_triangle_loose=0.9, hand_triangle_floor=0.3))
-    assert det.triangles is not None
+    assert det.triangles is not None and det.config.hand_triangle_solid == 0.8
     asked: list[int] = []
     second = det.triangles
 
@@ -100,47 +120,60 @@ def test_loose_candidates_are_asked_only_when_the_verifier_half_believes_a_trian
             asked.append(len(crops))
             return second.probabilities(crops, claims)
 
-    monkeypatch.setattr(det, "triangles", Spy())
-    # the verifier's rows (X, O, TRIANGLE, none) for: a loose one it half-believes a triangle (asked), a loose one
-    # under the floor, a loose one it names itself, a claimed triangle it refuses (asked), a card-test rescue
-    # and a claimed X it refuses (neither asked)
+    outline, solid = _triangle_blob(filled=False), _triangle_blob(filled=True)
+    # the verifier's rows (X, O, TRIANGLE, none) for: a loose outline it half-believes a triangle (asked), a loose
+    # one under the floor, a loose one it names itself, a claimed triangle it refuses (asked), a card-test rescue,
+    # a claimed X it refuses (neither asked) and a solid loose one it half-believes a triangle (asked only with
+    # hand_triangle_solid 1, as in round vision35)
     pending = [
-        SimpleNamespace(shape=None, rescue=False),
-        SimpleNamespace(shape=None, rescue=False),
-        SimpleNamespace(shape=None, rescue=False),
-        SimpleNamespace(shape=Shape.TRIANGLE, rescue=False),
-        SimpleNamespace(shape=Shape.TRIANGLE, rescue=True),
-        SimpleNamespace(shape=Shape.X, rescue=False),
+        SimpleNamespace(shape=None, rescue=False, blob=outline),
+        SimpleNamespace(shape=None, rescue=False, blob=outline),
+        SimpleNamespace(shape=None, rescue=False, blob=outline),
+        SimpleNamespace(shape=Shape.TRIANGLE, rescue=False, blob=None),
+        SimpleNamespace(shape=Shape.TRIANGLE, rescue=True, blob=None),
+        SimpleNamespace(shape=Shape.X, rescue=False, blob=None),
+        SimpleNamespace(shape=None, rescue=False, blob=solid),
     ]
     probs = np.array(
-        [[0, 0, 0.5, 0.5], [0, 0, 0.2, 0.8], [0, 0, 0.95, 0.05], [0, 0, 0.5, 0.5], [0, 0, 0.5, 0.5], [0.1, 0, 0, 0.9]],
+        [[0, 0, 0.5, 0.5], [0, 0, 0.2, 0.8], [0, 0, 0.95, 0.05], [0, 0, 0.5, 0.5], [0, 0, 0.5, 0.5], [0.1, 0, 0, 0.9]]
+        + [[0, 0, 0.5, 0.5]],
         dtype=np.float32,
     )
     img, label = _frames(2, 20, (Shape.TRIANGLE,))[19]
     assert label is not None
     patches = np.stack([crops(img[:, :, 1], label.box)] * len(pending))  # type: ignore[attr-defined]
     claims = np.stack([claim(p.shape) for p in pending])
-    out = det._second_triangles(pending, patches, claims, probs)  # type: ignore[arg-type]
-    assert asked == [2]
-    assert all(out[j] is None for j in (1, 2, 4, 5))
-    off = MarkDetector(DetectorConfig(hand_triangle=ON, hand_triangle_loose=0.0))
-    monkeypatch.setattr(off, "triangles", Spy())
-    asked.clear()
-    off._second_triangles(pending, patches, claims, probs)  # type: ignore[arg-type]
-    assert asked == [1]  # off: the claimed triangle only, as in round vision34
+
+    def rows_asked(config: DetectorConfig) -> tuple[list[int], list[float | None]]:
+        d = MarkDetector(config)
+        monkeypatch.setattr(d, "triangles", Spy())
+        asked.clear()
+        out = d._second_triangles(pending, patches, claims, probs)  # type: ignore[arg-type]
+        return list(asked), out
+
+    n, out = rows_asked(det.config)
+    assert n == [2] and all(out[j] is None for j in (1, 2, 4, 5, 6))
+    assert rows_asked(DetectorConfig(hand_triangle_loose=0.9, hand_triangle_solid=1.0))[0] == [3]  # the solid one too
+    assert rows_asked(DetectorConfig(hand_triangle=ON, hand_triangle_loose=0.0))[0] == [1]  # off: as in round vision34
     with pytest.raises(ValueError, match=r"hand_triangle_floor: -0.1: a probability"):
         parse_settings("hand_triangle_floor=-0.1")
 
 
-@pytest.mark.parametrize(("seed", "index"), [(2, 16), (2, 34)])
-def test_a_loose_triangle_drawn_by_hand_is_named_by_the_second_network(seed: int, index: int) -> None:
-    """Round vision35: triangles drawn by hand that the shape tests read nothing in and the verifier does not name
-    are found with `hand_triangle_loose` and not without."""
-    img, label = _frames(seed, index + 1, (Shape.TRIANGLE,))[index]
+@pytest.mark.parametrize(
+    ("seed", "index", "solid"), [(2, 16, 1.0), (2, 34, 1.0), (2, 95, 0.8), (2, 104, 0.8)]
+)
+def test_a_loose_triangle_drawn_by_hand_is_named_by_the_second_network(seed: int, index: int, solid: float) -> None:
+    """Triangles drawn by hand that the shape tests read nothing in and the verifier does not name are found with
+    `hand_triangle_loose` and not without: two filled ones (solid: found only when solid ones are asked about, as in
+    round vision35) and two outlines."""
+    img, label = _triangles(seed, 105)[index]
     assert label is not None
 
     def found(config: DetectorConfig) -> bool:
         dets = MarkDetector(config).detect(img)
         return any(d.shape is Shape.TRIANGLE and box_overlap(d.box, label.box) >= 0.5 for d in dets)  # type: ignore[attr-defined]
 
-    assert not found(DetectorConfig(hand_triangle_loose=0.0)) and found(DetectorConfig(hand_triangle_loose=0.8))
+    assert not found(DetectorConfig(hand_triangle_loose=0.0))
+    assert found(DetectorConfig(hand_triangle_loose=0.8, hand_triangle_solid=solid))
+    if solid == 1.0:  # a solid candidate is not asked about with round vision35b's gate
+        assert not found(DetectorConfig(hand_triangle_loose=0.8, hand_triangle_solid=0.8))
