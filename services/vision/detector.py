@@ -135,6 +135,11 @@ class DetectorConfig:
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
     (0: any shape as dark as `dark` counts, however much darker than the mark)"""
+    letter_other_ink: float = 0.0
+    """where the letter test refuses a mark, and none of the letter-sized shapes beside it is printed in the mark's
+    ink by `letter_ink`'s measure at this value, the refusal is "beside" instead of "letter" (another card's print,
+    a sign, a bracket in another ink): a reason `card_rescue_from` may name, unlike "letter", whose same-ink
+    neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; round vision36b)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -275,7 +280,7 @@ class Candidate:
     kept: bool = False
 
 
-CARD_TESTS: tuple[str, ...] = ("band", "faint", "letter", "ratio", "texture", "ink")
+CARD_TESTS: tuple[str, ...] = ("band", "faint", "letter", "beside", "ratio", "texture", "ink")
 """The card tests `_on_card` can refuse a mark for (its docstring says what each checks)."""
 
 STAGES: tuple[str, ...] = (
@@ -1107,7 +1112,7 @@ def _on_card(
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
     grey level, or the first test that refused it, in this order: "band" (no band), "faint" (less
     than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a letter-sized shape
-    beside it: a word), "ratio" (the ink not dark enough next to the paper), "band" (the band not
+    beside it: a word; "beside" if none is in the mark's ink, with `letter_other_ink`), "ratio" (the ink not dark enough next to the paper), "band" (the band not
     paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
     only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
     the two it may not.
@@ -1134,6 +1139,10 @@ def _on_card(
     if cfg.letter_gap > 0 and _letter_beside(
         g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink
     ):
+        if cfg.letter_other_ink > 0 and not _letter_beside(
+            g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, max(8.0, cfg.letter_other_ink * (paper - ink))
+        ):
+            return "beside"
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
