@@ -140,6 +140,10 @@ class DetectorConfig:
     ink by `letter_ink`'s measure at this value, the refusal is "beside" instead of "letter" (another card's print,
     a sign, a bracket in another ink): a reason `card_rescue_from` may name, unlike "letter", whose same-ink
     neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; round vision36b)"""
+    letter_card: bool = False
+    """... likewise "beside" where none of those shapes is printed on the mark's own card (the paper round it is
+    not the light region the mark's band touches: another card, a page or a face beyond the card's edge); with
+    `letter_other_ink` too, a letter must be both (round vision36b)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -1139,25 +1143,18 @@ def _on_card(
     if cfg.letter_gap > 0 and _letter_beside(
         g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink
     ):
-        if cfg.letter_other_ink > 0 and not _letter_beside(
-            g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, max(8.0, cfg.letter_other_ink * (paper - ink))
-        ):
-            return "beside"
+        if cfg.letter_other_ink > 0 or cfg.letter_card:
+            # is any of them a letter of the mark's word: in its ink, on its card? If not, "beside"
+            other_ink = max(8.0, cfg.letter_other_ink * (paper - ink)) if cfg.letter_other_ink > 0 else same_ink
+            mine = _card(g_roi, filled, band, cut)[1] if cfg.letter_card else None
+            if not _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, other_ink, mine):
+                return "beside"
         return "letter"
     if ink > cfg.max_contrast_ratio * paper:
         return "ratio"
-    # lighter than half-way from ink to paper, `cut` (for whole grey levels, > t is > floor(t))
-    light = cv2.threshold(g_roi, math.floor(cut), 255, cv2.THRESH_BINARY)[1]
-    light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
-    band_paper = cv2.bitwise_and(light, band)
+    band_paper, card = _card(g_roi, filled, band, cut)
     if cv2.countNonZero(band_paper) < cfg.min_band_paper * band_n:
         return "band"
-    # the card: light regions touching the band
-    n, labels = _labels(light)
-    touching = np.zeros(n, np.uint8)
-    touching[labels[band_paper > 0]] = 255
-    touching[0] = 0
-    card = touching[labels]
     near = cv2.inRange(dist, 1.5, max(3.0, cfg.surround * extent))
     card_near = cv2.bitwise_and(card, near)
     mean, std = cv2.meanStdDev(g_roi, mask=card_near)
@@ -1214,6 +1211,19 @@ def _clear_margin(
     return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
 
 
+def _card(g_roi: np.ndarray, filled: np.ndarray, band: np.ndarray, cut: float) -> tuple[np.ndarray, np.ndarray]:
+    """The paper in the mark's `band` (lighter than half-way from ink to paper, `cut`: for whole grey levels,
+    > t is > floor(t)), and the card: every light region outside the mark (`filled`) that touches it."""
+    light = cv2.threshold(g_roi, math.floor(cut), 255, cv2.THRESH_BINARY)[1]
+    light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
+    band_paper = cv2.bitwise_and(light, band)
+    n, labels = _labels(light)
+    touching = np.zeros(n, np.uint8)
+    touching[labels[band_paper > 0]] = 255
+    touching[0] = 0
+    return band_paper, touching[labels]
+
+
 def _letter_beside(
     g_roi: np.ndarray,
     filled: np.ndarray,
@@ -1224,11 +1234,13 @@ def _letter_beside(
     gap: float,
     mark_ink: float = 0.0,
     same_ink: float = math.inf,
+    card: np.ndarray | None = None,
 ) -> bool:
     """A word at any angle: another letter-sized shape as dark as the ink (mean grey at most `dark`)
     within `gap` x the mark's extent, made of strokes (not a solid blob), wholly in view of the
     region looked at (the background beyond a card's edge runs on out of it) and printed in the mark's
-    ink (its mean grey within `same_ink` of `mark_ink`'s)."""
+    ink (its mean grey within `same_ink` of `mark_ink`'s); with `card` (the mark's card, `_card`), printed on
+    that card: the paper round it is the mark's, not another card's or a page's beyond the card's edge."""
     # as dark as `dark` (for whole grey levels, <= t is <= floor(t)), and not the mark itself
     ink = cv2.threshold(g_roi, math.floor(dark), 255, cv2.THRESH_BINARY_INV)[1]
     ink = cv2.bitwise_and(ink, cv2.bitwise_not(filled))
@@ -1259,7 +1271,7 @@ def _letter_beside(
             if abs(cv2.mean(box, mask=mine.view(np.uint8))[0] - mark_ink) > same_ink:
                 continue
         # printed on the same paper: light all round it (unlike the background beyond a card's edge)
-        if _paper_round(g_roi, labels, stats, int(j), paper_cut) >= 0.8:
+        if _paper_round(g_roi, labels, stats, int(j), paper_cut, card) >= 0.8:
             return True
     return False
 
@@ -1661,8 +1673,11 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray) -> bool:
     return bool((near & twin_line).any())
 
 
-def _paper_round(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, cut: float) -> float:
-    """The share of a thin ring just outside component `j` that is lighter than `cut`."""
+def _paper_round(
+    g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, cut: float, within: np.ndarray | None = None
+) -> float:
+    """The share of a thin ring just outside component `j` that is lighter than `cut` (and, with `within`, a mask
+    over `g`, inside it)."""
     x, y, w, h = (int(v) for v in stats[j][:4])
     x0, y0 = max(0, x - 4), max(0, y - 4)
     x1, y1 = min(g.shape[1], x + w + 4), min(g.shape[0], y + h + 4)
@@ -1673,7 +1688,10 @@ def _paper_round(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, j: int, c
     n = cv2.countNonZero(ring)
     if n == 0:
         return 0.0
-    return float(np.count_nonzero(g[y0:y1, x0:x1][ring > 0] > cut)) / n
+    light = g[y0:y1, x0:x1][ring > 0] > cut
+    if within is not None:
+        light &= within[y0:y1, x0:x1][ring > 0] > 0
+    return float(np.count_nonzero(light)) / n
 
 
 def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
