@@ -621,6 +621,40 @@ def test_an_x_in_a_word_of_its_own_ink_is_still_a_letter(
     assert same_ink.detect(_x_beside_a_letter(ink, ink)) == []
 
 
+def _x_and_a_letter_on_two_cards(gap: int) -> np.ndarray:
+    """An X on one card and a K of its ink on the next card, the two cards `gap` grey between them (235: one card)."""
+    img = np.full((480, 640, 3), 110, np.uint8)
+    cv2.rectangle(img, (120, 90), (560, 390), (235, 235, 235), -1)
+    cv2.rectangle(img, (395, 90), (399, 390), (gap, gap, gap), -1)
+    cv2.line(img, (260, 180), (380, 300), (30, 30, 30), 18, cv2.LINE_AA)
+    cv2.line(img, (380, 180), (260, 300), (30, 30, 30), 18, cv2.LINE_AA)
+    cv2.putText(img, "K", (405, 300), cv2.FONT_HERSHEY_SIMPLEX, 4.2, (30, 30, 30), 14, cv2.LINE_AA)
+    return img
+
+
+def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled() -> None:
+    """Round vision36b's options: with `letter_other_ink` or `letter_card`, a letter-test refusal where no shape
+    beside the mark is in its ink, or on its card, is "beside", which the rescue may overrule when named in
+    `card_rescue_from`; an X in a word of its own ink on its own card ("XK") stays a letter."""
+    rescue = (*DetectorConfig().card_rescue_from, "beside")
+    by_ink = DetectorConfig(letter_other_ink=0.25, card_rescue_from=rescue)
+    by_card = DetectorConfig(letter_card=True, card_rescue_from=rescue)
+    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=rescue)
+    pale_beside_black = _x_beside_a_letter((150, 150, 150), (20, 20, 20))
+    word = _x_beside_a_letter((30, 30, 30), (30, 30, 30))
+    assert [d.shape for d in MarkDetector(by_ink).detect(pale_beside_black)] == [Shape.X]
+    assert MarkDetector(by_card).detect(pale_beside_black) == []  # on its card: a letter, whatever its ink
+    assert [d.shape for d in MarkDetector(both).detect(pale_beside_black)] == [Shape.X]
+    for config in (by_ink, by_card, both):
+        assert MarkDetector(config).detect(word) == []
+    apart, together = _x_and_a_letter_on_two_cards(110), _x_and_a_letter_on_two_cards(235)
+    assert [d.shape for d in MarkDetector(by_card).detect(apart)] == [Shape.X]
+    assert MarkDetector(by_card).detect(together) == [] and MarkDetector(by_ink).detect(apart) == []
+    # "beside" is overruled only where `card_rescue_from` names it; without the options there is no "beside"
+    assert MarkDetector(DetectorConfig(letter_card=True)).detect(apart) == []
+    assert MarkDetector(DetectorConfig(card_rescue_from=rescue)).detect(apart) == []
+
+
 def _poster(word: str, size: int) -> np.ndarray:
     """A word printed big on a light poster in Pillow's bundled typeface (not the held-out generator's
     DejaVu, not OpenCV's stroke fonts): its O and X are thick rings and crosses, as on a real sign."""
