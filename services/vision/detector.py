@@ -139,11 +139,12 @@ class DetectorConfig:
     """where the letter test refuses a mark, and none of the letter-sized shapes beside it is printed in the mark's
     ink by `letter_ink`'s measure at this value, the refusal is "beside" instead of "letter" (another card's print,
     a sign, a bracket in another ink): a reason `card_rescue_from` may name, unlike "letter", whose same-ink
-    neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; round vision36b)"""
+    neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; round vision36b, not landed: 3 more
+    held-out X in 4,000 frames, 0.958 x the speed)"""
     letter_card: bool = False
     """... likewise "beside" where none of those shapes is printed on the mark's own card (the paper round it is
     not the light region the mark's band touches: another card, a page or a face beyond the card's edge); with
-    `letter_other_ink` too, a letter must be both (round vision36b)"""
+    `letter_other_ink` too, a letter must be both: "XK" in one ink on one card stays a word (round vision36b, off)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -176,7 +177,8 @@ class DetectorConfig:
     """the card tests (`_on_card`'s reasons) the verifier may overrule: not "faint" (under
     `min_contrast` a cross is a shadow or a crease; the network sees contrast-stretched crops and
     cannot tell) and not "letter" (a letter of a word; a rescued letter was the false X the tuning
-    frames showed), nor a letter inside a line of text"""
+    frames showed, and the X of "XK" in round vision36), nor a letter inside a line of text. "beside" (a letter-test
+    refusal with no letter of the mark's word beside it: `letter_other_ink`, `letter_card`) may be named"""
     split: str = "grey,loose,edge"
     """separate a mark from a finger it touches ("" turns it off): a big component in which the shape
     tests find no mark, dark on a light box, made of two clearly different grey levels (ink, and a
