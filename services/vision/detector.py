@@ -1118,7 +1118,8 @@ def _on_card(
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
     grey level, or the first test that refused it, in this order: "band" (no band), "faint" (less
     than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a letter-sized shape
-    beside it: a word; "beside" if none is in the mark's ink, with `letter_other_ink`), "ratio" (the ink not dark enough next to the paper), "band" (the band not
+    beside it: a word; "beside" instead where none is a letter of the mark's word by `letter_other_ink` and
+    `letter_card`), "ratio" (the ink not dark enough next to the paper), "band" (the band not
     paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
     only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
     the two it may not.
