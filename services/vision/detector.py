@@ -895,7 +895,8 @@ class MarkDetector:
         ink = cv2.mean(g_roi, mask=comp)[0]
         extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(blob.outer)), 1.0))
         dist = _distance(filled, (x - x0, y - y0, w, h), _reach(cfg, extent))
-        paper = _on_card(g_roi, filled, ink, extent, dist, cfg)
+        may_rescue = cfg.card_rescue > 0 and shape in (Shape.X, Shape.TRIANGLE)
+        paper = _on_card(g_roi, filled, ink, extent, dist, cfg, may_rescue)
         if isinstance(paper, str):
             self._card_refusal = paper
             self._vetoes.append(_up((x, y, w, h), level.f))
@@ -1112,7 +1113,13 @@ def _distance(filled: np.ndarray, box: Box, reach: float) -> np.ndarray:
 
 
 def _on_card(
-    g_roi: np.ndarray, filled: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig
+    g_roi: np.ndarray,
+    filled: np.ndarray,
+    ink: float,
+    extent: float,
+    dist: np.ndarray,
+    cfg: DetectorConfig,
+    may_rescue: bool = True,
 ) -> float | str:
     """The card test: is the mark (filled outline `filled`, mean grey `ink`, `extent`, every pixel's
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
@@ -1122,7 +1129,9 @@ def _on_card(
     `letter_card`), "ratio" (the ink not dark enough next to the paper), "band" (the band not
     paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
     only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
-    the two it may not.
+    the two it may not. "beside" is looked for only where the rescue could overrule it (`may_rescue`: the
+    mark is an X or triangle; and `card_rescue_from` names "beside"): elsewhere it would be refused all the
+    same, and the second look costs time (round vision36c).
 
     The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
     `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
@@ -1146,7 +1155,7 @@ def _on_card(
     if cfg.letter_gap > 0 and _letter_beside(
         g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, same_ink
     ):
-        if cfg.letter_other_ink > 0 or cfg.letter_card:
+        if (cfg.letter_other_ink > 0 or cfg.letter_card) and may_rescue and "beside" in cfg.card_rescue_from:
             # is any of them a letter of the mark's word: in its ink, on its card? If not, "beside"
             other_ink = max(8.0, cfg.letter_other_ink * (paper - ink)) if cfg.letter_other_ink > 0 else same_ink
             mine = _card(g_roi, filled, band, cut)[1] if cfg.letter_card else None

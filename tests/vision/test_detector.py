@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image, ImageDraw, ImageFont
 
+import services.vision.detector as detector_module
 from schemas.messages import Shape
 from services.vision.detector import (
     Detection,
@@ -608,8 +609,9 @@ def test_a_pale_mark_beside_a_black_letter_is_no_letter_of_its_word(
     """`letter_ink`: a letter of the same word is printed in the same ink; a black letter beside a pale
     X (another card's print, a stroke on the wall behind) does not make the X a letter."""
     img = _x_beside_a_letter(mark_ink, (20, 20, 20))
-    assert MarkDetector(dataclasses.replace(detector.config, letter_ink=0.0)).detect(img) == []
-    found = MarkDetector(dataclasses.replace(detector.config, letter_ink=0.25)).detect(img)
+    config = dataclasses.replace(detector.config, letter_card=False, letter_other_ink=0.0)  # no "beside"
+    assert MarkDetector(dataclasses.replace(config, letter_ink=0.0)).detect(img) == []
+    found = MarkDetector(dataclasses.replace(config, letter_ink=0.25)).detect(img)
     assert [d.shape for d in found] == [Shape.X]
 
 
@@ -636,9 +638,10 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     """Round vision36b's options: with `letter_other_ink` or `letter_card`, a letter-test refusal where no shape
     beside the mark is in its ink, or on its card, is "beside", which the rescue may overrule when named in
     `card_rescue_from`; an X in a word of its own ink on its own card ("XK") stays a letter."""
-    rescue = (*DetectorConfig().card_rescue_from, "beside")
-    by_ink = DetectorConfig(letter_other_ink=0.25, card_rescue_from=rescue)
-    by_card = DetectorConfig(letter_card=True, card_rescue_from=rescue)
+    no_beside = tuple(r for r in DetectorConfig().card_rescue_from if r != "beside")
+    rescue = (*no_beside, "beside")
+    by_ink = DetectorConfig(letter_card=False, letter_other_ink=0.25, card_rescue_from=rescue)
+    by_card = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=rescue)
     both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=rescue)
     pale_beside_black = _x_beside_a_letter((150, 150, 150), (20, 20, 20))
     word = _x_beside_a_letter((30, 30, 30), (30, 30, 30))
@@ -651,8 +654,47 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     assert [d.shape for d in MarkDetector(by_card).detect(apart)] == [Shape.X]
     assert MarkDetector(by_card).detect(together) == [] and MarkDetector(by_ink).detect(apart) == []
     # "beside" is overruled only where `card_rescue_from` names it; without the options there is no "beside"
-    assert MarkDetector(DetectorConfig(letter_card=True)).detect(apart) == []
-    assert MarkDetector(DetectorConfig(card_rescue_from=rescue)).detect(apart) == []
+    assert MarkDetector(dataclasses.replace(by_card, card_rescue_from=no_beside)).detect(apart) == []
+    no_options = DetectorConfig(letter_card=False, letter_other_ink=0.0, card_rescue_from=rescue)
+    assert MarkDetector(no_options).detect(apart) == []
+
+
+def _o_and_a_letter_on_two_cards() -> np.ndarray:
+    """An O on one card and a K of its ink on the next card, a dark gap between the cards."""
+    img = _x_and_a_letter_on_two_cards(110)
+    cv2.rectangle(img, (240, 160), (392, 320), (235, 235, 235), -1)
+    cv2.circle(img, (320, 240), 60, (30, 30, 30), 18, cv2.LINE_AA)
+    return img
+
+
+def test_the_second_look_for_beside_is_only_where_the_rescue_could_keep_the_mark(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Round vision36c: the rescue never keeps an O, so for an O refused by the letter test the second look (is any
+    shape beside it a letter of its word?) is not made; for an X it is, and only if `card_rescue_from` names
+    "beside"."""
+    calls: list[bool] = []
+    real = detector_module._letter_beside
+
+    def counted(*args: object, **kwargs: object) -> bool:
+        calls.append(True)
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(detector_module, "_letter_beside", counted)
+    no_beside = tuple(r for r in DetectorConfig().card_rescue_from if r != "beside")
+    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=(*no_beside, "beside"))
+    cases = [
+        (both, _x_and_a_letter_on_two_cards(110), [Shape.X], True),
+        (both, _o_and_a_letter_on_two_cards(), [], False),
+        (dataclasses.replace(both, card_rescue_from=no_beside), _x_and_a_letter_on_two_cards(110), [], False),
+    ]
+    for config, img, shapes, second_look in cases:
+        MarkDetector(dataclasses.replace(config, letter_card=False, letter_other_ink=0.0)).detect(img)
+        first_looks = len(calls)  # the letter test's looks without the options
+        calls.clear()
+        assert [d.shape for d in MarkDetector(config).detect(img)] == shapes
+        assert first_looks > 0 and (len(calls) > first_looks) == second_look
+        calls.clear()
 
 
 def _poster(word: str, size: int) -> np.ndarray:
