@@ -28,8 +28,8 @@ quarter for large ones):
    clearly different grey levels (ink, and a lighter finger touching it), is cut to its darker level
    and its largest parts are judged like components (`split`; X and TRIANGLE only);
 5. the learned verifier (`verifier.py`) must agree that the patch shows the claimed shape; and it
-   may keep an X or triangle that some card tests refused (not for faint ink or a letter beside it)
-   if it is very sure (`card_rescue`): a missed danger mark is the worst miss;
+   may keep an X or triangle that some card tests refused (not for faint ink or a letter of its own word
+   beside it: in its ink, on its card) if it is very sure (`card_rescue`): a missed danger mark is the worst miss;
 6. a small network over the whole frame (`proposer.py`, `propose`) proposes marks where no component
    showed one; the verifier judges each like a loose candidate;
 7. overlapping detections (the same mark at two pyramid levels) are merged, best confidence wins.
@@ -135,16 +135,16 @@ class DetectorConfig:
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
     (0: any shape as dark as `dark` counts, however much darker than the mark)"""
-    letter_other_ink: float = 0.0
-    """where the letter test refuses a mark, and none of the letter-sized shapes beside it is printed in the mark's
-    ink by `letter_ink`'s measure at this value, the refusal is "beside" instead of "letter" (another card's print,
-    a sign, a bracket in another ink): a reason `card_rescue_from` may name, unlike "letter", whose same-ink
-    neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; round vision36b, not landed: 3 more
-    held-out X in 4,000 frames, 0.958 x the speed)"""
-    letter_card: bool = False
+    letter_other_ink: float = 0.25
+    """where the letter test refuses an X or triangle, and none of the letter-sized shapes beside it is printed in the
+    mark's ink by `letter_ink`'s measure at this value, the refusal is "beside" instead of "letter" (another card's
+    print, a sign, a bracket in another ink): a reason `card_rescue_from` may name, unlike "letter", whose same-ink
+    neighbour makes the mark a letter of a word (0: off, every refusal is "letter"; rounds vision36b and 36c: with
+    `letter_card`, the default since 36c, 5 more held-out X and triangles in 8,000 frames, no false mark added)"""
+    letter_card: bool = True
     """... likewise "beside" where none of those shapes is printed on the mark's own card (the paper round it is
     not the light region the mark's band touches: another card, a page or a face beyond the card's edge); with
-    `letter_other_ink` too, a letter must be both: "XK" in one ink on one card stays a word (round vision36b, off)"""
+    `letter_other_ink` too, a letter must be both: "XK" in one ink on one card stays a word (rounds vision36b, 36c)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -173,12 +173,13 @@ class DetectorConfig:
     the card tests in `card_rescue_from` refused is still kept if the verifier gives its shape at least
     this probability (0: off). Only danger marks: a false one stops the robot, a missed one lets it
     walk on; an O is never rescued (a false O lifts a danger)."""
-    card_rescue_from: tuple[str, ...] = ("band", "texture", "ink", "ratio")
+    card_rescue_from: tuple[str, ...] = ("band", "texture", "ink", "ratio", "beside")
     """the card tests (`_on_card`'s reasons) the verifier may overrule: not "faint" (under
     `min_contrast` a cross is a shadow or a crease; the network sees contrast-stretched crops and
     cannot tell) and not "letter" (a letter of a word; a rescued letter was the false X the tuning
     frames showed, and the X of "XK" in round vision36), nor a letter inside a line of text. "beside" (a letter-test
-    refusal with no letter of the mark's word beside it: `letter_other_ink`, `letter_card`) may be named"""
+    refusal with no letter of the mark's word beside it: `letter_other_ink`, `letter_card`) is named since round
+    vision36c"""
     split: str = "grey,loose,edge"
     """separate a mark from a finger it touches ("" turns it off): a big component in which the shape
     tests find no mark, dark on a light box, made of two clearly different grey levels (ink, and a
