@@ -145,6 +145,10 @@ class DetectorConfig:
     """... likewise "beside" where none of those shapes is printed on the mark's own card (the paper round it is
     not the light region the mark's band touches: another card, a page or a face beyond the card's edge); with
     `letter_other_ink` too, a letter must be both: "XK" in one ink on one card stays a word (rounds vision36b, 36c)"""
+    letter_card_paper: float = 0.0
+    """for `letter_card`, the mark's card is only the light region within this share of (paper - ink) of the paper's
+    grey, not everything lighter than half-way (0: off): a lighter or darker page or wall that joins the card at
+    its edge is then not the card (round vision36d)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
@@ -1159,7 +1163,14 @@ def _on_card(
         if (cfg.letter_other_ink > 0 or cfg.letter_card) and may_rescue and "beside" in cfg.card_rescue_from:
             # is any of them a letter of the mark's word: in its ink, on its card? If not, "beside"
             other_ink = max(8.0, cfg.letter_other_ink * (paper - ink)) if cfg.letter_other_ink > 0 else same_ink
-            mine = _card(g_roi, filled, band, cut)[1] if cfg.letter_card else None
+            mine = None
+            if cfg.letter_card:
+                if cfg.letter_card_paper > 0:  # the card: the light regions of about the paper's grey
+                    tol = cfg.letter_card_paper * (paper - ink)
+                    near = cv2.inRange(g_roi, max(0.0, paper - tol), min(255.0, paper + tol))
+                    mine = _card(g_roi, filled, band, cut, near)[1]
+                else:
+                    mine = _card(g_roi, filled, band, cut)[1]
             if not _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, other_ink, mine):
                 return "beside"
         return "letter"
@@ -1224,10 +1235,15 @@ def _clear_margin(
     return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
 
 
-def _card(g_roi: np.ndarray, filled: np.ndarray, band: np.ndarray, cut: float) -> tuple[np.ndarray, np.ndarray]:
+def _card(
+    g_roi: np.ndarray, filled: np.ndarray, band: np.ndarray, cut: float, paper_like: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The paper in the mark's `band` (lighter than half-way from ink to paper, `cut`: for whole grey levels,
-    > t is > floor(t)), and the card: every light region outside the mark (`filled`) that touches it."""
+    > t is > floor(t); and within `paper_like`, a mask, if given), and the card: every such light region outside
+    the mark (`filled`) that touches it."""
     light = cv2.threshold(g_roi, math.floor(cut), 255, cv2.THRESH_BINARY)[1]
+    if paper_like is not None:
+        light = cv2.bitwise_and(light, paper_like)
     light = cv2.bitwise_and(light, cv2.bitwise_not(filled))
     band_paper = cv2.bitwise_and(light, band)
     n, labels = _labels(light)

@@ -659,6 +659,27 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     assert MarkDetector(no_options).detect(apart) == []
 
 
+def test_a_letter_on_a_page_of_another_grey_that_joins_the_card_is_beside_with_letter_card_paper() -> None:
+    """Round vision36d: with `letter_card_paper`, the mark's card is only the light region of about its paper's grey,
+    so a K on a lighter or darker page that joins the card at its edge is not on the card ("beside"); "XK" on one
+    card stays a word."""
+    rescue = tuple(dict.fromkeys((*DetectorConfig().card_rescue_from, "beside")))
+    plain = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=rescue)
+    paper = dataclasses.replace(plain, letter_card_paper=0.25)
+    for card, page in ((235, 175), (200, 255)):  # a darker page; a lighter one
+        img = _x_and_a_letter_on_two_cards(page)
+        img[90:391, 120:395] = card
+        cv2.line(img, (260, 180), (380, 300), (30, 30, 30), 18, cv2.LINE_AA)
+        cv2.line(img, (380, 180), (260, 300), (30, 30, 30), 18, cv2.LINE_AA)
+        img[90:391, 395:561] = page  # the K's side is a page of another grey, joined to the card
+        cv2.putText(img, "K", (405, 300), cv2.FONT_HERSHEY_SIMPLEX, 4.2, (30, 30, 30), 14, cv2.LINE_AA)
+        assert MarkDetector(plain).detect(img) == [], page  # one light region: the K is on the card
+        assert [d.shape for d in MarkDetector(paper).detect(img)] == [Shape.X], page
+    word = _x_beside_a_letter((30, 30, 30), (30, 30, 30))
+    assert MarkDetector(paper).detect(word) == []
+    assert MarkDetector(dataclasses.replace(paper, letter_other_ink=0.25)).detect(word) == []
+
+
 def _o_and_a_letter_on_two_cards() -> np.ndarray:
     """An O on one card and a K of its ink on the next card, a dark gap between the cards."""
     img = _x_and_a_letter_on_two_cards(110)
