@@ -711,14 +711,16 @@ class MarkDetector:
         alone (`DetectorConfig.card_rescue`): a danger mark refused by one of the card tests in
         `card_rescue_from`, and not a letter in a line of text (a word is clutter whatever the network
         thinks of one of its letters)."""
-        cfg = self.config
         return (
-            cfg.card_rescue > 0
+            self._rescues(shape)
             and self._why == "card"
-            and self._card_refusal in cfg.card_rescue_from
-            and shape in (Shape.X, Shape.TRIANGLE)
+            and self._card_refusal in self.config.card_rescue_from
             and not self._text_line(level, i)
         )
+
+    def _rescues(self, shape: Shape) -> bool:
+        """Whether the rescue is on and may keep a mark of `shape`: a danger mark, never an O."""
+        return self.config.card_rescue > 0 and shape in (Shape.X, Shape.TRIANGLE)
 
     def _text_line(self, level: _Level, i: int) -> bool:
         """Component `i` is a letter in a line of text (on the levels the test runs on: `text_max_f`)."""
@@ -900,8 +902,7 @@ class MarkDetector:
         ink = cv2.mean(g_roi, mask=comp)[0]
         extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(blob.outer)), 1.0))
         dist = _distance(filled, (x - x0, y - y0, w, h), _reach(cfg, extent))
-        may_rescue = cfg.card_rescue > 0 and shape in (Shape.X, Shape.TRIANGLE)
-        paper = _on_card(g_roi, filled, ink, extent, dist, cfg, may_rescue)
+        paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape))
         if isinstance(paper, str):
             self._card_refusal = paper
             self._vetoes.append(_up((x, y, w, h), level.f))

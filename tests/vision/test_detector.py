@@ -623,6 +623,11 @@ def test_an_x_in_a_word_of_its_own_ink_is_still_a_letter(
     assert same_ink.detect(_x_beside_a_letter(ink, ink)) == []
 
 
+# the card tests the rescue may overrule, without and with "beside" (the letter options' tests state their settings)
+NO_BESIDE = tuple(r for r in DetectorConfig().card_rescue_from if r != "beside")
+WITH_BESIDE = (*NO_BESIDE, "beside")
+
+
 def _x_and_a_letter_on_two_cards(gap: int) -> np.ndarray:
     """An X on one card and a K of its ink on the next card, the two cards `gap` grey between them (235: one card)."""
     img = np.full((480, 640, 3), 110, np.uint8)
@@ -638,11 +643,9 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     """Round vision36b's options: with `letter_other_ink` or `letter_card`, a letter-test refusal where no shape
     beside the mark is in its ink, or on its card, is "beside", which the rescue may overrule when named in
     `card_rescue_from`; an X in a word of its own ink on its own card ("XK") stays a letter."""
-    no_beside = tuple(r for r in DetectorConfig().card_rescue_from if r != "beside")
-    rescue = (*no_beside, "beside")
-    by_ink = DetectorConfig(letter_card=False, letter_other_ink=0.25, card_rescue_from=rescue)
-    by_card = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=rescue)
-    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=rescue)
+    by_ink = DetectorConfig(letter_card=False, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
+    by_card = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=WITH_BESIDE)
+    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
     pale_beside_black = _x_beside_a_letter((150, 150, 150), (20, 20, 20))
     word = _x_beside_a_letter((30, 30, 30), (30, 30, 30))
     assert [d.shape for d in MarkDetector(by_ink).detect(pale_beside_black)] == [Shape.X]
@@ -654,8 +657,8 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     assert [d.shape for d in MarkDetector(by_card).detect(apart)] == [Shape.X]
     assert MarkDetector(by_card).detect(together) == [] and MarkDetector(by_ink).detect(apart) == []
     # "beside" is overruled only where `card_rescue_from` names it; without the options there is no "beside"
-    assert MarkDetector(dataclasses.replace(by_card, card_rescue_from=no_beside)).detect(apart) == []
-    no_options = DetectorConfig(letter_card=False, letter_other_ink=0.0, card_rescue_from=rescue)
+    assert MarkDetector(dataclasses.replace(by_card, card_rescue_from=NO_BESIDE)).detect(apart) == []
+    no_options = DetectorConfig(letter_card=False, letter_other_ink=0.0, card_rescue_from=WITH_BESIDE)
     assert MarkDetector(no_options).detect(apart) == []
 
 
@@ -663,8 +666,7 @@ def test_a_letter_on_a_page_of_another_grey_that_joins_the_card_is_beside_with_l
     """Round vision36d: with `letter_card_paper`, the mark's card is only the light region of about its paper's grey,
     so a K on a lighter or darker page that joins the card at its edge is not on the card ("beside"); "XK" on one
     card stays a word."""
-    rescue = tuple(dict.fromkeys((*DetectorConfig().card_rescue_from, "beside")))
-    plain = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=rescue)
+    plain = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=WITH_BESIDE)
     paper = dataclasses.replace(plain, letter_card_paper=0.25)
     for card, page in ((235, 175), (200, 255)):  # a darker page; a lighter one
         img = _x_and_a_letter_on_two_cards(page)
@@ -702,12 +704,11 @@ def test_the_second_look_for_beside_is_only_where_the_rescue_could_keep_the_mark
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(detector_module, "_letter_beside", counted)
-    no_beside = tuple(r for r in DetectorConfig().card_rescue_from if r != "beside")
-    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=(*no_beside, "beside"))
+    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
     cases = [
         (both, _x_and_a_letter_on_two_cards(110), [Shape.X], True),
         (both, _o_and_a_letter_on_two_cards(), [], False),
-        (dataclasses.replace(both, card_rescue_from=no_beside), _x_and_a_letter_on_two_cards(110), [], False),
+        (dataclasses.replace(both, card_rescue_from=NO_BESIDE), _x_and_a_letter_on_two_cards(110), [], False),
     ]
     for config, img, shapes, second_look in cases:
         MarkDetector(dataclasses.replace(config, letter_card=False, letter_other_ink=0.0)).detect(img)
