@@ -1125,7 +1125,7 @@ def _on_card(
     extent: float,
     dist: np.ndarray,
     cfg: DetectorConfig,
-    may_rescue: bool = True,
+    may_rescue: bool,
 ) -> float | str:
     """The card test: is the mark (filled outline `filled`, mean grey `ink`, `extent`, every pixel's
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
@@ -1164,14 +1164,11 @@ def _on_card(
         if (cfg.letter_other_ink > 0 or cfg.letter_card) and may_rescue and "beside" in cfg.card_rescue_from:
             # is any of them a letter of the mark's word: in its ink, on its card? If not, "beside"
             other_ink = max(8.0, cfg.letter_other_ink * (paper - ink)) if cfg.letter_other_ink > 0 else same_ink
-            mine = None
-            if cfg.letter_card:
-                if cfg.letter_card_paper > 0:  # the card: the light regions of about the paper's grey
-                    tol = cfg.letter_card_paper * (paper - ink)
-                    near = cv2.inRange(g_roi, max(0.0, paper - tol), min(255.0, paper + tol))
-                    mine = _card(g_roi, filled, band, cut, near)[1]
-                else:
-                    mine = _card(g_roi, filled, band, cut)[1]
+            near = None  # with `letter_card_paper`, the card is only the light regions of about the paper's grey
+            if cfg.letter_card_paper > 0:
+                tol = cfg.letter_card_paper * (paper - ink)
+                near = cv2.inRange(g_roi, max(0.0, paper - tol), min(255.0, paper + tol))
+            mine = _card(g_roi, filled, band, cut, near)[1] if cfg.letter_card else None
             if not _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, other_ink, mine):
                 return "beside"
         return "letter"

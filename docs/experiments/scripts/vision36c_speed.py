@@ -5,7 +5,7 @@ rotated frame by frame, and each detector's CPU time is summed over the pass; ea
 control's frames per CPU-second over the base's, and the medians of those per-pass ratios are printed. Interleaving
 frame by frame takes out the machine's drift, which moved one 5-pass measurement of the base against itself (whole
 passes in turn) to 0.773 (round vision36b).
-    PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision36c_speed.py SEED [FRAMES] [PASSES] SETTINGS"""
+    PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision36c_speed.py SEED FRAMES PASSES SETTINGS"""
 
 import statistics
 import sys
