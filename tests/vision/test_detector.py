@@ -644,8 +644,10 @@ def test_a_letter_of_another_ink_or_card_is_beside_the_mark_and_may_be_overruled
     beside the mark is in its ink, or on its card, is "beside", which the rescue may overrule when named in
     `card_rescue_from`; an X in a word of its own ink on its own card ("XK") stays a letter."""
     by_ink = DetectorConfig(letter_card=False, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
-    by_card = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=WITH_BESIDE)
-    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
+    by_card = DetectorConfig(
+        letter_card=True, letter_other_ink=0.0, letter_card_paper=0.0, card_rescue_from=WITH_BESIDE
+    )
+    both = dataclasses.replace(by_card, letter_other_ink=0.25)
     pale_beside_black = _x_beside_a_letter((150, 150, 150), (20, 20, 20))
     word = _x_beside_a_letter((30, 30, 30), (30, 30, 30))
     assert [d.shape for d in MarkDetector(by_ink).detect(pale_beside_black)] == [Shape.X]
@@ -666,7 +668,7 @@ def test_a_letter_on_a_page_of_another_grey_that_joins_the_card_is_beside_with_l
     """Round vision36d: with `letter_card_paper`, the mark's card is only the light region of about its paper's grey,
     so a K on a lighter or darker page that joins the card at its edge is not on the card ("beside"); "XK" on one
     card stays a word."""
-    plain = DetectorConfig(letter_card=True, letter_other_ink=0.0, card_rescue_from=WITH_BESIDE)
+    plain = DetectorConfig(letter_card=True, letter_other_ink=0.0, letter_card_paper=0.0, card_rescue_from=WITH_BESIDE)
     paper = dataclasses.replace(plain, letter_card_paper=0.25)
     for card, page in ((235, 175), (200, 255)):  # a darker page; a lighter one
         img = _x_and_a_letter_on_two_cards(page)
@@ -704,7 +706,9 @@ def test_the_second_look_for_beside_is_only_where_the_rescue_could_keep_the_mark
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(detector_module, "_letter_beside", counted)
-    both = DetectorConfig(letter_card=True, letter_other_ink=0.25, card_rescue_from=WITH_BESIDE)
+    both = DetectorConfig(
+        letter_card=True, letter_other_ink=0.25, letter_card_paper=0.0, card_rescue_from=WITH_BESIDE
+    )
     cases = [
         (both, _x_and_a_letter_on_two_cards(110), [Shape.X], True),
         (both, _o_and_a_letter_on_two_cards(), [], False),
