@@ -1,17 +1,19 @@
 """Round vision36d's rule table: base and variant, per group of runs (vision36_runs.sh's files {base,var}_SPLIT_SEED
-[_hand].json), missed and false X / O / TRIANGLE, missed X + TRIANGLE and false-mark frames, summed over the group.
-    python3 docs/experiments/scripts/vision36d_rule_table.py OUT"""
+[_hand].json), missed and false X / O / TRIANGLE, missed X + TRIANGLE and false-mark frames, summed over the group;
+the seeds are round vision36d's unless given (round vision36e: 7095,7096 2777,6373 439,443).
+    python3 docs/experiments/scripts/vision36d_rule_table.py OUT [TUNING HELDOUT BLIND]"""
 
 import json
 import sys
 from pathlib import Path
 
 out = Path(sys.argv[1])
+tuning, heldout, blind = (sys.argv[2:5] if len(sys.argv) > 2 else ["7089,7090", "3917,5119", "421,433"])
 groups = {
-    "S1 tuning exact": ["tuning_7089", "tuning_7090"],
-    "S1 tuning hand": ["tuning_7089_hand", "tuning_7090_hand"],
-    "held-out": ["heldout_3917", "heldout_5119"],
-    "blind": ["blind_421", "blind_433"],
+    "S1 tuning exact": [f"tuning_{s}" for s in tuning.split(",")],
+    "S1 tuning hand": [f"tuning_{s}_hand" for s in tuning.split(",")],
+    "held-out": [f"heldout_{s}" for s in heldout.split(",")],
+    "blind": [f"blind_{s}" for s in blind.split(",")],
 }
 for g, tags in groups.items():
     for c in ("base", "var"):
