@@ -185,11 +185,6 @@ class DetectorConfig:
     frames showed, and the X of "XK" in round vision36), nor a letter inside a line of text. "beside" (a letter-test
     refusal with no letter of the mark's word beside it: `letter_other_ink`, `letter_card`) is named since round
     vision36c"""
-    confidence_rescue: bool = False
-    """the rescue (`card_rescue`) may also keep an X or TRIANGLE that passed every card test but whose shape
-    confidence is under `min_confidence` (round vision37's probe): the shape tests grade how well the outline fits
-    the ideal shape, which a mark drawn by hand, blurred or seen at a slant may fit loosely, while the verifier reads
-    the patch itself"""
     split: str = "grey,loose,edge"
     """separate a mark from a finger it touches ("" turns it off): a big component in which the shape
     tests find no mark, dark on a light box, made of two clearly different grey levels (ink, and a
@@ -715,13 +710,14 @@ class MarkDetector:
     def _rescuable(self, shape: Shape, level: _Level, i: int) -> bool:
         """Whether component `i`, just refused by `_finish`, may still be kept on the verifier's word
         alone (`DetectorConfig.card_rescue`): a danger mark refused by one of the card tests in
-        `card_rescue_from` (or, with `confidence_rescue`, by its shape confidence alone), and not a letter in a
-        line of text (a word is clutter whatever the network thinks of one of its letters)."""
-        cfg = self.config
-        refused = (self._why == "card" and self._card_refusal in cfg.card_rescue_from) or (
-            self._why == "confidence" and cfg.confidence_rescue
+        `card_rescue_from`, and not a letter in a line of text (a word is clutter whatever the network
+        thinks of one of its letters)."""
+        return (
+            self._rescues(shape)
+            and self._why == "card"
+            and self._card_refusal in self.config.card_rescue_from
+            and not self._text_line(level, i)
         )
-        return self._rescues(shape) and refused and not self._text_line(level, i)
 
     def _rescues(self, shape: Shape) -> bool:
         """Whether the rescue is on and may keep a mark of `shape`: a danger mark, never an O."""

@@ -250,19 +250,6 @@ def test_a_faint_cross_or_a_letter_in_a_word_is_not_rescued(detector: MarkDetect
     assert MarkDetector(dataclasses.replace(lenient, text_turned=True)).detect(word) == []
 
 
-def test_a_danger_mark_under_the_shape_confidence_is_kept_on_the_verifiers_word_with_confidence_rescue() -> None:
-    """Round vision37's option: with `confidence_rescue`, an X or triangle that passed the card tests but not
-    `min_confidence` (here unreachable, so every shape falls short; no proposals) is kept if the verifier is sure;
-    never an O, nor a letter of a word."""
-    strict = DetectorConfig(min_confidence=1.01, propose=0)  # no proposals: the components alone
-    rescued = dataclasses.replace(strict, confidence_rescue=True)
-    for draw, shape in (("cross", Shape.X), ("filled_triangle", Shape.TRIANGLE)):
-        assert MarkDetector(strict).detect(_card(draw)) == [], draw
-        assert [d.shape for d in MarkDetector(rescued).detect(_card(draw))] == [shape], draw
-    assert MarkDetector(rescued).detect(_card("ring")) == []
-    assert MarkDetector(rescued).detect(_card("word")) == []
-
-
 def test_a_bad_configuration_is_refused_at_construction() -> None:
     with pytest.raises(ValueError, match="unknown card tests"):
         MarkDetector(DetectorConfig(card_rescue_from=("band", "colour")))
