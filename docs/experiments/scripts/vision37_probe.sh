@@ -1,7 +1,7 @@
 #!/bin/bash
 # round vision37's tuning probe (no rule yet): the verifier's rescue may also keep an X or triangle refused by its
 # shape confidence alone (confidence_rescue); configs x tuning seeds 7091-7094, two at a time, in a worktree of the
-# code ($W). Table: vision37_probe_table.py $OUT base,CR 7091,7092 7093,7094
+# code ($W). Table: vision36d_probe_table.py $OUT base,CR 7091,7092 7093,7094
 W=${W:-/tmp/s64/wtp}; export W PYTHONPATH=$W  # the worktree's code, not the editable install's
 export OUT=${OUT:-/tmp/s64/v37/probe}; mkdir -p $OUT
 jobs_list=()
