@@ -174,7 +174,7 @@ def test_a_loose_triangle_drawn_by_hand_is_named_by_the_second_network(seed: int
         dets = MarkDetector(config).detect(img)
         return any(d.shape is Shape.TRIANGLE and box_overlap(d.box, label.box) >= 0.5 for d in dets)  # type: ignore[attr-defined]
 
-    # the letter test's card as wide as before round vision36d (letter_card_paper 0): with it narrower, the
+    # the letter test's card as wide as before round vision36e (letter_card_paper 0): with it narrower, the
     # verifier's rescue keeps [2-16] by another path (its letter-test refusal "beside"); this is about the second
     # network alone
     plain = DetectorConfig(letter_card_paper=0.0)
