@@ -96,13 +96,6 @@ class DetectorConfig:
     about 17 % slower (the vision README, round vision16). An eighth instead of a sixth found as many,
     but there a letter beside the mark is too coarse a blob for the word test."""
     offset: float = 12.0  # ink is at least this much darker than its local mean (grey levels)
-    soft_levels: tuple[int, ...] = ()
-    """the pyramid levels (downscale factors) binarised a second time with the lower `soft_offset` (empty: off):
-    a small ring or cross smeared by motion blur keeps dark only the strokes that run along the blur, and at
-    `offset` falls apart into those pieces ("no component" in `bench/vision_stages.py`: the largest loss of O);
-    at a lower offset its smeared strokes join them. Only the components that no component of the first
-    binarisation already covered (box IoU over 0.5) are judged, like any other"""
-    soft_offset: float = 6.0
     min_size: int = 12  # smallest mark width/height in pixels at a scale
     full_res_max: int = 0
     """components bigger than this at full resolution are left to the coarser levels (0: no limit),
@@ -379,10 +372,6 @@ class _Pending:
     part: bool = False  # a loose part `_split` cut off a bigger component: never named O
 
 
-_EMPTY_TUPLE_KINDS: dict[str, type] = {"soft_levels": int}
-"""The item type of the settings whose default is an empty tuple (`parse_settings` cannot read it off the default)."""
-
-
 def changed_settings(config: DetectorConfig) -> str:
     """The settings of `config` that differ from the defaults, as `parse_settings` reads them ("" for none)."""
     defaults = DetectorConfig()
@@ -440,7 +429,7 @@ def parse_settings(items: str | Iterable[str]) -> DetectorConfig:
                     raise ValueError(value)
                 changed[key] = flag
             elif isinstance(old, tuple):
-                kind = type(old[0]) if old else _EMPTY_TUPLE_KINDS[key]
+                kind = type(old[0]) if old else str
                 changed[key] = tuple(kind(v) for v in value.split(",") if v)
             else:
                 changed[key] = type(old)(value)
@@ -471,7 +460,6 @@ class MarkDetector:
         self._max_size = 0  # the largest component judged at the current level (0: any)
         self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
         self._levels: list[_Level] = []  # this frame's pyramid levels, for the proposals' text test
-        self._first = np.zeros((0, 5), dtype=np.int32)  # the boxes the current level's first binarisation judged
         self._vetoes: list[Box] = []
         """this frame's components the context tests refused, in input pixels: no proposal over them is
         kept (the card tests judged them; only the verifier's rescue may overrule them)"""
@@ -562,10 +550,6 @@ class MarkDetector:
             found += yield from self._detect_scale(
                 g, block, text_check=f <= self.config.text_max_f, pending=pending
             )
-            if f in self.config.soft_levels:
-                found += yield from self._detect_scale(
-                    g, block, text_check=f <= self.config.text_max_f, pending=pending, soft=True
-                )
             if early and pending:
                 yield Step.TICK
                 found += self._verify(pending)
@@ -753,14 +737,13 @@ class MarkDetector:
 
     # ------------------------------------------------------------------ one pyramid level
     def _detect_scale(
-        self, g: np.ndarray, block: int, text_check: bool, pending: list[_Pending], soft: bool = False
+        self, g: np.ndarray, block: int, text_check: bool, pending: list[_Pending]
     ) -> Generator[Step, None, list[Detection]]:
         """The detections of one level the verifier need not see (it is off), in this level's pixels
-        scaled to the input's; the candidates it must judge are added to `pending`. `soft`: the level's
-        second binarisation (`DetectorConfig.soft_levels`), judging only what the first did not cover."""
+        scaled to the input's; the candidates it must judge are added to `pending`."""
         cfg = self.config
         binary = cv2.adaptiveThreshold(
-            g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV, block, cfg.soft_offset if soft else cfg.offset
+            g, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY_INV, block, cfg.offset
         )
         n, labels, stats = _components(binary)
         if n <= 1:
@@ -789,11 +772,6 @@ class MarkDetector:
         # ... except a mark joined to a finger that runs on out of the frame (a hand holding the card):
         # that component is only ever split (`DetectorConfig.split`, "edge")
         cut = fits & ~in_frame & (long_side >= cfg.split_min) if self._splits_edge() else np.zeros_like(keep)
-        if soft:
-            candidates = np.array([i for i in candidates.tolist() if not self._covered(stats[i])], dtype=int)
-            cut = np.zeros_like(keep)
-        else:
-            self._first = stats[np.r_[candidates, np.flatnonzero(cut)]]
         judged_here = np.r_[candidates, np.flatnonzero(cut)]
         trace = self._trace
         if trace is not None:
@@ -826,17 +804,6 @@ class MarkDetector:
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, self._f)))
         return out
-
-    def _covered(self, box: np.ndarray) -> bool:
-        """Whether a component of the level's first binarisation judged a box like `box` (IoU over 0.5)."""
-        x, y, w, h = (int(v) for v in box[:4])
-        for fx, fy, fw, fh in self._first[:, :4].tolist():
-            ix = max(0, min(x + w, fx + fw) - max(x, fx))
-            iy = max(0, min(y + h, fy + fh) - max(y, fy))
-            inter = ix * iy
-            if inter > 0.5 * (w * h + fw * fh - inter):
-                return True
-        return False
 
     def _trace_prefilter(self, stats: np.ndarray, keep: np.ndarray, passed: np.ndarray, side: int) -> None:
         """Record the components the vectorised pre-filters dropped (only those big enough to be a
