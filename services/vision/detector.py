@@ -217,13 +217,6 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
     proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
-    propose_ring: float = 0.0
-    """a proposed TRIANGLE the verifier gives less than its `propose_thresholds` but at least `propose_ring_floor`
-    is kept all the same if a ring this share of its size wide round its box is clear paper (`_clear_ring`; 0:
-    off): a proposal has no component for the card tests, so this is its context test. An arrow's head (its shaft
-    leaves the box), a roof on a wall, a triangle among clutter or beside a finger are refused by it"""
-    propose_ring_floor: float = 0.7
-    propose_ring_ink: float = 0.02  # the ring's share of pixels darker than half-way from ink to paper, at most
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -281,10 +274,9 @@ class DetectorConfig:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
         if len(self.propose_thresholds) != 3:
             raise ValueError(f"propose_thresholds: {self.propose_thresholds}: three, for X, O and TRIANGLE")
-        names = ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid")
-        for name in (*names, "propose_ring", "propose_ring_floor", "propose_ring_ink"):
+        for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"{name}: {getattr(self, name)}: from 0 (off) to 1")
+                raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
 
 
 @dataclass
@@ -594,12 +586,7 @@ class MarkDetector:
         out = []
         for p, row in zip(props, probs, strict=True):
             k = CLASSES.index(p.shape)
-            if row[k] >= cfg.propose_thresholds[k] or (
-                p.shape is Shape.TRIANGLE
-                and cfg.propose_ring > 0
-                and row[k] >= cfg.propose_ring_floor
-                and _clear_ring(gray, p.box, cfg)
-            ):
+            if row[k] >= cfg.propose_thresholds[k]:
                 out.append(Detection(p.shape, float(row[k]), p.box))
         return out
 
@@ -1211,34 +1198,6 @@ def _on_card(
         if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return "ink"
     return float(mean[0][0])
-
-
-def _clear_ring(gray: np.ndarray, box: Box, cfg: DetectorConfig) -> bool:
-    """Whether a proposal's `box` sits on plain paper: the ring `propose_ring` x its size wide just outside it
-    (past a pad of `border` x its size, the blurred edge) lies wholly in the frame, is at least `min_contrast`
-    lighter than the darkest tenth of the box, at most `propose_ring_ink` of it is darker than half-way between
-    them, and it is plain (`max_margin_texture`)."""
-    x, y, w, h = box
-    size = max(w, h)
-    pad = max(1, round(cfg.border * size))
-    r = max(3, round(cfg.propose_ring * size))
-    x0, y0, x1, y1 = x - pad - r, y - pad - r, x + w + pad + r, y + h + pad + r
-    if x0 < 0 or y0 < 0 or x1 > gray.shape[1] or y1 > gray.shape[0] or w < 2 or h < 2:
-        return False
-    roi = gray[y0:y1, x0:x1]
-    ring = np.full(roi.shape, 255, np.uint8)
-    ring[r : r + h + 2 * pad, r : r + w + 2 * pad] = 0
-    inner = gray[y : y + h, x : x + w]
-    ink = _percentile(inner, 10)
-    n = cv2.countNonZero(ring)
-    paper = _masked_median(roi, ring, n)
-    if paper - ink < cfg.min_contrast:
-        return False
-    dark = cv2.countNonZero(cv2.bitwise_and(cv2.inRange(roi, 0, ink + 0.5 * (paper - ink)), ring))
-    if dark > cfg.propose_ring_ink * n:
-        return False
-    _, std = cv2.meanStdDev(roi, mask=ring)
-    return float(std[0][0]) <= cfg.max_margin_texture * (paper - ink)
 
 
 def _ranked(g: np.ndarray, mask: np.ndarray | None, ranks: list[int]) -> tuple[float, float]:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 
@@ -221,29 +220,3 @@ def test_a_negative_blind_share_is_refused_before_any_render(tmp_path: Path) -> 
     result = CliRunner().invoke(app, ["--out", str(tmp_path / "p.onnx"), "--blind", "-0.5"])
     assert result.exit_code == 2 and "--blind -0.5: a share of at least 0" in result.output
     assert not (tmp_path / "p.onnx").exists()
-
-
-def _filled_triangle_frame(shaft: bool = False, paper: int = 235, wall: int = 235) -> np.ndarray:
-    """A filled triangle on a light card (box (290, 200, 60, 52)), optionally an arrow's shaft leaving it."""
-    img = np.full((480, 640), wall, np.uint8)
-    img[150:300, 240:400] = paper
-    pts = np.array([[290, 252], [350, 252], [320, 200]], np.int32)
-    cv2.fillPoly(img, [pts], 40)
-    if shaft:
-        cv2.rectangle(img, (312, 252), (328, 300), 40, -1)
-    return img
-
-
-def test_a_proposal_s_ring_is_clear_paper_only_round_a_mark_alone_on_its_card() -> None:
-    from services.vision.detector import DetectorConfig, _clear_ring
-
-    cfg = DetectorConfig(propose_ring=0.15)
-    box = (290, 200, 61, 53)
-    assert _clear_ring(_filled_triangle_frame(), box, cfg)
-    assert not _clear_ring(_filled_triangle_frame(shaft=True), box, cfg)  # an arrow's head: its shaft leaves the box
-    assert not _clear_ring(_filled_triangle_frame(paper=60, wall=60), box, cfg)  # a dark surface: too faint to be print
-    assert not _clear_ring(_filled_triangle_frame(), (2, 200, 61, 53), cfg)  # the ring runs out of the frame
-    noisy = _filled_triangle_frame()
-    noisy[::2, ::2] = 120  # a textured surface, not a plain card
-    noisy[200:253, 290:351] = _filled_triangle_frame()[200:253, 290:351]
-    assert not _clear_ring(noisy, box, cfg)
