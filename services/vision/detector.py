@@ -217,13 +217,6 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
     proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
-    propose_doubted: float = 0.0
-    """a proposed TRIANGLE the verifier gives less than its `propose_thresholds` but at least this (0: off) is kept
-    all the same where it lies over a doubted triangle (box overlap at least 0.5): a component the shape tests read
-    as a TRIANGLE, which passed the card tests and every other context test, and which the verifier (and the second
-    network, `hand_triangle`) refused. Two weaker words that agree: the shape and context tests, which a proposal
-    lacks, and the verifier's on the proposal's own crop, cut at a coarser level. The verifier refuses many filled
-    triangles drawn on cards (`bench/vision_stages.py`: 14-26 % of them on the tuning generator)"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -281,8 +274,7 @@ class DetectorConfig:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
         if len(self.propose_thresholds) != 3:
             raise ValueError(f"propose_thresholds: {self.propose_thresholds}: three, for X, O and TRIANGLE")
-        names = ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid", "propose_doubted")
-        for name in names:
+        for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
 
@@ -468,8 +460,6 @@ class MarkDetector:
         self._max_size = 0  # the largest component judged at the current level (0: any)
         self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
         self._levels: list[_Level] = []  # this frame's pyramid levels, for the proposals' text test
-        self._doubted: list[Box] = []
-        """this frame's triangles that passed every test but the verifier's, in input pixels (`propose_doubted`)"""
         self._vetoes: list[Box] = []
         """this frame's components the context tests refused, in input pixels: no proposal over them is
         kept (the card tests judged them; only the verifier's rescue may overrule them)"""
@@ -537,7 +527,7 @@ class MarkDetector:
         (then `Step.FINE` before the finest level: none was found in the others)."""
         found: list[Detection] = []
         pending: list[_Pending] = []
-        self._greys, self._vetoes, self._levels, self._doubted = {}, [], [], []
+        self._greys, self._vetoes, self._levels = {}, [], []
         levels = self.config.levels
         early = self.config.danger_first and self.verifier is not None
         if early:
@@ -596,18 +586,9 @@ class MarkDetector:
         out = []
         for p, row in zip(props, probs, strict=True):
             k = CLASSES.index(p.shape)
-            if row[k] >= cfg.propose_thresholds[k] or self._confirms_doubted(p.shape, p.box, float(row[k])):
+            if row[k] >= cfg.propose_thresholds[k]:
                 out.append(Detection(p.shape, float(row[k]), p.box))
         return out
-
-    def _confirms_doubted(self, shape: Shape, box: Box, prob: float) -> bool:
-        """Whether a proposal the verifier gives `prob` of `shape` lies over a doubted triangle (`propose_doubted`)."""
-        floor = self.config.propose_doubted
-        return (
-            shape is Shape.TRIANGLE
-            and 0 < floor <= prob
-            and any(box_overlap(box, doubted) >= 0.5 for doubted in self._doubted)
-        )
 
     def proposal_crops(self, gray: np.ndarray, box: Box) -> np.ndarray:
         """The verifier's crops of a proposal's `box` in the frame just detected (or harvested), cut at
@@ -654,8 +635,6 @@ class MarkDetector:
                 claimed, stage = p.shape, "verifier"
                 if self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
-                elif p.shape is Shape.TRIANGLE:
-                    self._doubted.append(_up(p.box, p.level.f))
             else:
                 claimed, prob, ok = self.verifier.name(row)
                 stage = "verifier"
