@@ -183,6 +183,7 @@ def main(
         "lens": lens,
         "calibrated": calibrated,
         "keep_matrix": keep_matrix,
+        "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "resolution": "640x480",
         "opencv": cv2.__version__,
         "threads": cv2.getNumThreads(),
@@ -329,6 +330,7 @@ def _tables(r: dict[str, Any]) -> str:
             f"split {r['split']}, {r['frames']} frames, seed {r['seed']}, {r['resolution']}, "
             f"OpenCV {r['opencv']}, {r['threads']} thread"
         ),
+        f"detector settings: {' '.join(r['settings']) or 'the defaults'}",
         *(
             [f"NOT the READMEs' frames for this seed: fonts missing (apt-get install fonts-dejavu-core "
              f"fonts-dejavu-extra): {', '.join(r['missing_fonts'])}"]
