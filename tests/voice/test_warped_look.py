@@ -57,16 +57,45 @@ def test_the_copies_are_the_utterance_at_the_other_speeds() -> None:
 
 
 @pytest.mark.parametrize(("command", "recipe"), NEAR, ids=[c.value for c, _ in NEAR])
-def test_a_near_miss_is_heard_at_other_speeds_and_published_unsure(
+def test_a_near_miss_is_heard_again_and_only_ever_as_its_own_command_unsure(
         off: SpotterEngine, on: SpotterEngine, command: Command, recipe: dataset.Recipe) -> None:
     pcm = dataset.render(recipe)
     assert pcm is not None
     alone = off.recognise(pcm)
     assert alone.command is None and "warped" not in alone.detail
     rec = on.recognise(pcm)
-    assert rec.command is command and rec.text == command.value, rec
-    assert 0.5 <= rec.confidence <= WarpedLook().cap
-    assert rec.detail["reason"].startswith("heard at other speeds") and command.value in rec.detail["warped"]
+    assert "warped" in rec.detail  # near enough to the head's accept to be heard again
+    assert rec.command in (None, command), rec
+    if rec.command is command:
+        assert rec.text == command.value and 0.5 <= rec.confidence <= WarpedLook().cap
+        assert rec.detail["reason"].startswith("heard at other speeds") and command.value in rec.detail["warped"]
+
+
+def test_the_look_turns_most_of_the_near_misses_into_their_command(on: SpotterEngine) -> None:
+    """The clips sit near the head's accept, so the CPU's arithmetic moves them: all three were turned where they
+    were chosen (AVX-512), two of three on an AVX2 machine (stop 65, "no": 0.705 at other speeds, under its accept)."""
+    turned = [c for c, recipe in NEAR if on.recognise(dataset.render(recipe) or b"").command is c]
+    assert len(turned) >= 2, turned
+
+
+def test_what_the_copies_accept_is_published_capped_and_what_they_do_not_is_not(
+        on: SpotterEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The publishing itself, whatever the arithmetic: the three hearings' combination (`_warped`) decides."""
+    command, recipe = NEAR[1]
+    pcm = dataset.render(recipe)
+    assert pcm is not None
+    k = on.head.classes.index(command.value)
+    for share, heard in ((1.2, True), (0.8, False)):
+        probs = np.full(len(on.head.classes), 0.0)
+        probs[k] = min(1.0, share * on.head.accept[k])
+        probs[-1] = 1.0 - probs[k]  # the rest is "other"
+        monkeypatch.setattr(on, "_warped", lambda look, pcm, feats, p=probs: p)
+        rec = on.recognise(pcm)
+        if heard:
+            assert rec.command is command and 0.5 <= rec.confidence <= WarpedLook().cap
+            assert rec.detail["reason"].startswith("heard at other speeds")
+        else:
+            assert rec.command is None and not rec.detail["reason"].startswith("heard at other speeds")
 
 
 def test_what_the_head_accepts_or_is_far_from_is_not_looked_at_again(off: SpotterEngine, on: SpotterEngine) -> None:
