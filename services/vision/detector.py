@@ -1165,11 +1165,13 @@ def _on_card(
         if (cfg.letter_other_ink > 0 or cfg.letter_card) and may_rescue and "beside" in cfg.card_rescue_from:
             # is any of them a letter of the mark's word: in its ink, on its card? If not, "beside"
             other_ink = max(8.0, cfg.letter_other_ink * (paper - ink)) if cfg.letter_other_ink > 0 else same_ink
-            near = None  # with `letter_card_paper`, the card is only the light regions of about the paper's grey
-            if cfg.letter_card and cfg.letter_card_paper > 0:
-                tol = cfg.letter_card_paper * (paper - ink)
-                near = cv2.inRange(g_roi, max(0.0, paper - tol), min(255.0, paper + tol))
-            mine = _card(g_roi, filled, band, cut, near)[1] if cfg.letter_card else None
+            mine = None
+            if cfg.letter_card:
+                near = None  # with `letter_card_paper`, the card is only the light regions of about the paper's grey
+                if cfg.letter_card_paper > 0:
+                    tol = cfg.letter_card_paper * (paper - ink)
+                    near = cv2.inRange(g_roi, max(0.0, paper - tol), min(255.0, paper + tol))
+                mine = _card(g_roi, filled, band, cut, near)[1]
             if not _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, other_ink, mine):
                 return "beside"
         return "letter"
