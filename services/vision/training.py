@@ -223,6 +223,13 @@ def split_chunks(parts: list[Part], n_blind: int) -> tuple[list[Part], list[Part
     return tuning[:-n_val] + blinds, tuning[-n_val:]
 
 
+def claimed_kept(part: tuple[np.ndarray, ...], shapes: tuple[Shape, ...]) -> tuple[np.ndarray, ...]:
+    """The rows of a harvested chunk whose candidate the shape tests claimed as one of `shapes` and the detector's
+    tests kept: what a network asked only about such candidates is shown (`--claimed-kept`; round vision40)."""
+    rows = np.isin(part[1], [SHAPES.index(s) for s in shapes]) & part[3]
+    return tuple(a[rows] for a in part)
+
+
 def harvest_all(
     frames: int,
     seed: int,
@@ -512,6 +519,15 @@ def main(
             "training only (rounds vision29-29b; the bench's blind split then no longer judges the model blind)"
         ),
     ] = 0.0,
+    claimed_kept_shapes: Annotated[
+        str,
+        typer.Option(
+            "--claimed-kept",
+            help="learn only from candidates claimed as one of these shapes (comma-separated) that the detector's "
+            "tests kept, as the second network is asked only about claimed triangles (round vision40: TRIANGLE; "
+            "the report too); default: every candidate",
+        ),
+    ] = "",
     threshold_x: Annotated[float, typer.Option(help="probability a claimed X needs")] = 0.25,
     threshold_o: Annotated[float, typer.Option(help="probability a claimed O needs")] = 0.8,
     threshold_triangle: Annotated[float, typer.Option(help="probability a claimed TRIANGLE needs")] = 0.8,
@@ -533,13 +549,21 @@ def main(
         raise typer.BadParameter(str(exc), param_hint="--hand-drawn-shapes") from None
     if blind < 0:
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0")
+    try:
+        only = parse_shapes(claimed_kept_shapes) if claimed_kept_shapes else ()
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--claimed-kept") from None
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
                         hand_drawn_shapes, everyday, blind)
     train, val = split_chunks(parts, blind_chunks(frames, blind))  # the report stays on held-back tuning chunks
+    if only:
+        train, val = [claimed_kept(p, only) for p in train], [claimed_kept(p, only) for p in val]
     x = np.concatenate([p[0] for p in train])
     c = np.concatenate([p[1] for p in train])
     y = np.concatenate([p[2] for p in train])
-    missing = sorted(set(range(len(CLASSES))) - set(np.unique(y).tolist()))
+    # a network shown only claimed shapes needs only their classes and none (a claimed triangle is seldom an X)
+    needed = {CLASSES.index(s) for s in (*only, None)} if only else set(range(len(CLASSES)))
+    missing = sorted(needed - set(np.unique(y).tolist()))
     if missing:
         raise SystemExit(f"no training candidates of class {missing}: harvest more frames")
     typer.echo(f"harvested {len(y)} training candidates in {time.monotonic() - t0:.0f} s", err=True)
