@@ -46,6 +46,7 @@ import math
 import re
 from collections.abc import Generator, Iterable
 from dataclasses import dataclass, fields, replace
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -241,6 +242,10 @@ class DetectorConfig:
     of its convex hull: round vision35's new false triangles on tuning frames were solid dark shapes off a card,
     clutter the second network took for filled triangles (round vision35b); 1 asks about every one, as round
     vision35 did"""
+    hand_triangle_model: str = ""
+    """the second network's ONNX file ("": the committed `verifier_triangles.onnx`), for judging a retrained one
+    with the benches' `--set` (`python -m services.vision.training --out ...`; round vision40); a file that is no
+    verifier for this code's inputs is refused when the detector is made"""
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -277,6 +282,11 @@ class DetectorConfig:
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
+        if self.hand_triangle_model and not Path(self.hand_triangle_model).is_file():
+            raise ValueError(
+                f"hand_triangle_model: {self.hand_triangle_model!r}: no such file (give the second network's ONNX "
+                "file, made by python -m services.vision.training, or '' for the committed one)"
+            )
 
 
 @dataclass
@@ -449,7 +459,8 @@ class MarkDetector:
         self.verifier = verifier if self.config.verify else None
         self.proposer = Proposer.load() if self.config.propose > 0 and self.verifier is not None else None
         asked = max(self.config.hand_triangle, self.config.hand_triangle_loose) > 0 and self.verifier is not None
-        self.triangles = Verifier.load(TRIANGLES_PATH) if asked else None
+        model = Path(self.config.hand_triangle_model) if self.config.hand_triangle_model else TRIANGLES_PATH
+        self.triangles = Verifier.load(model) if asked else None
         """the second network `hand_triangle` (and `hand_triangle_loose`) asks, or None"""
         self._seen: list[Candidate] | None = None  # collecting candidates (training), or None
         self._trace: list[Traced] | None = None  # recording every component's last stage, or None

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from pathlib import Path
 from types import SimpleNamespace
 
 import cv2
@@ -15,7 +16,7 @@ import pytest
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector, _blob, box_overlap, parse_settings
 from services.vision.synthetic import SceneGenerator, Variation
-from services.vision.verifier import INPUT_FORMAT, TRIANGLES_PATH, Verifier, claim, crops
+from services.vision.verifier import INPUT_FORMAT, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
 
 ON = 0.8  # the threshold round vision34 chose on tuning frames, the default since (docs/experiments/rules)
 
@@ -80,6 +81,19 @@ def test_on_by_default_off_loads_nothing_and_a_bad_threshold_is_refused() -> Non
     assert parse_settings(f"hand_triangle={ON}").hand_triangle == ON
     with pytest.raises(ValueError, match=r"hand_triangle: 1.5: a probability"):
         parse_settings("hand_triangle=1.5")
+
+
+def test_another_second_network_is_loaded_from_its_file_and_a_missing_one_is_refused(tmp_path: Path) -> None:
+    """`hand_triangle_model` (round vision40): the second network from another file, as the benches' `--set` judge a
+    retrained one; a file that does not exist is refused with the settings, one that is no model when the detector
+    is made."""
+    other = MarkDetector(parse_settings(f"hand_triangle_model={MODEL_PATH}")).triangles  # the verifier, asked
+    assert other is not None and other.session._model_path == str(MODEL_PATH)
+    with pytest.raises(ValueError, match=r"hand_triangle_model: .*no such file"):
+        parse_settings(f"hand_triangle_model={tmp_path / 'missing.onnx'}")
+    (tmp_path / "junk.onnx").write_bytes(b"not a model")
+    with pytest.raises(ValueError, match=r"junk.onnx: not a verifier model"):
+        MarkDetector(parse_settings(f"hand_triangle_model={tmp_path / 'junk.onnx'}"))
 
 
 def test_the_committed_second_network_takes_the_verifiers_inputs() -> None:

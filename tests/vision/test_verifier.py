@@ -13,7 +13,7 @@ import typer
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
-from services.vision.verifier import CLASSES, MODEL_PATH, PATCH, Verifier, claim, crops
+from services.vision.verifier import CLASSES, MODEL_PATH, PATCH, SHAPES, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
 
@@ -353,6 +353,30 @@ def test_a_negative_blind_share_is_refused_before_any_harvest(tmp_path: Path) ->
     result = CliRunner().invoke(app, ["--out", str(tmp_path / "m.onnx"), "--blind", "-0.5"])
     assert result.exit_code == 2 and "--blind -0.5: a share of at least 0" in result.output
     assert not (tmp_path / "m.onnx").exists()
+
+
+def test_claimed_kept_rows_are_the_claimed_shapes_the_detector_kept() -> None:
+    """`training --claimed-kept` (round vision40): a network shown only what the second network is asked about, the
+    candidates claimed as those shapes that the detector's tests kept, every array cut alike."""
+    from services.vision.training import claimed_kept, harvest
+
+    part = harvest(7, 40)
+    got = claimed_kept(part, (Shape.TRIANGLE,))
+    rows = (part[1] == SHAPES.index(Shape.TRIANGLE)) & part[3]
+    assert 0 < rows.sum() < len(part[1])
+    assert all(np.array_equal(a, b[rows]) for a, b in zip(got, part, strict=True))
+    assert set(got[1].tolist()) == {SHAPES.index(Shape.TRIANGLE)} and got[3].all()
+    both = claimed_kept(part, (Shape.X, Shape.TRIANGLE))
+    assert len(both[1]) > len(got[1]) and set(both[1].tolist()) <= {0, 2}
+
+    from typer.testing import CliRunner
+
+    from services.vision import training
+
+    app = typer.Typer()
+    app.command()(training.main)
+    result = CliRunner().invoke(app, ["--out", str(Path("/nonexistent") / "m.onnx"), "--claimed-kept", "SQUARE"])
+    assert result.exit_code == 2 and "SQUARE" in result.output  # refused before any harvest
 
 
 def test_printed_words_keep_clear_of_the_boxes_to_avoid() -> None:
