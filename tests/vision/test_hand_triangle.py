@@ -16,7 +16,7 @@ import pytest
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector, _blob, box_overlap, parse_settings
 from services.vision.synthetic import SceneGenerator, Variation
-from services.vision.verifier import INPUT_FORMAT, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
+from services.vision.verifier import INPUT_FORMAT, MODEL_PATH, PATCH, TRIANGLES_PATH, Verifier, claim, crops
 
 ON = 0.8  # the threshold round vision34 chose on tuning frames, the default since (docs/experiments/rules)
 
@@ -88,7 +88,12 @@ def test_another_second_network_is_loaded_from_its_file_and_a_missing_one_is_ref
     retrained one; a file that does not exist is refused with the settings, one that is no model when the detector
     is made."""
     other = MarkDetector(parse_settings(f"hand_triangle_model={MODEL_PATH}")).triangles  # the verifier, asked
-    assert other is not None and other.session._model_path == str(MODEL_PATH)
+    assert other is not None
+    rows = np.random.default_rng(3).integers(0, 256, (8, 3, PATCH, PATCH), dtype=np.uint8)
+    asked = np.stack([claim(Shape.TRIANGLE)] * len(rows))
+    got = other.probabilities(rows, asked)
+    assert np.array_equal(got, Verifier.load(MODEL_PATH).probabilities(rows, asked))
+    assert not np.allclose(got, Verifier.load(TRIANGLES_PATH).probabilities(rows, asked))
     with pytest.raises(ValueError, match=r"hand_triangle_model: .*no such file"):
         parse_settings(f"hand_triangle_model={tmp_path / 'missing.onnx'}")
     (tmp_path / "junk.onnx").write_bytes(b"not a model")
