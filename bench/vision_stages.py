@@ -13,8 +13,10 @@ claimed shape must also be the true one, else the mark counts as lost at the sha
     size/fill      dropped by the vectorised pre-filter (size, aspect, fill ratio, frame edge)
     frame ink      too much ink in the thin frame around its box
     shape          the contour shape tests saw no mark, or another shape
+    unnamed        a loose candidate (the shape tests claimed no shape) that the verifier found most like
+                   the true shape but did not name at its stricter thresholds (most like another: "shape")
     card .. hole   the card tests, the O's clear margin, a ring's or triangle's hole
-    confidence, text line, verifier
+    confidence, text line, verifier (the verifier refused a shape the shape tests claimed)
     kept           found (the bench's recall can still differ: its box rule is looser)
     proposed       lost at one of the stages above, then found by the learned proposer (`proposer.py`:
                    a proposal the verifier confirmed; `--propose 0` leaves it out, as before round vision19)

@@ -310,6 +310,7 @@ STAGES: tuple[str, ...] = (
     "size/fill",  # the vectorised pre-filter: size, aspect, fill ratio, frame edge
     "frame ink",  # too much ink in the thin frame around its box
     "shape",  # the contour shape tests found no mark, or another shape
+    "unnamed",  # a loose candidate (the shape tests claimed nothing) the verifier did not name at its stricter bar
     "card",  # the card tests (band, contrast, card texture, other ink, a letter beside it)
     "O margin",  # the O's wide clear margin
     "hole",  # a ring's or triangle's hole is not paper
@@ -648,7 +649,7 @@ class MarkDetector:
                     det, stage = p.det, "kept"
             else:
                 claimed, prob, ok = self.verifier.name(row)
-                stage = "verifier"
+                stage = "unnamed"
                 if kept is not None:  # named by the second network alone: the card tests must pass
                     claimed, prob = Shape.TRIANGLE, kept
                     assert p.blob is not None and p.own is not None
