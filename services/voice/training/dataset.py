@@ -23,6 +23,7 @@ import numpy as np
 from services.runtime import get_logger
 from services.voice.audio import SAMPLE_RATE, to_pcm
 from services.voice.sources import trim_to_speech
+from services.voice.spotter import whisper
 from services.voice.spotter.embedders import SPEECH_EMBEDDING, UtteranceEmbedder, embedder_for
 from services.voice.spotter.features import FRAMES, MAX_SPEECH_S, Embedder, speech_seconds
 from services.voice.synth import OOV_TUNE, cache_dir, noise
@@ -376,11 +377,18 @@ def _key(items: list[Recipe]) -> str:
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
+WHISPER_NAMES = (whisper.NAME, whisper.FINE_NAME)
+
+
 def _cache_path(kind: str, items: list[Recipe], embedding: str = SPEECH_EMBEDDING) -> Path:
     """Where the `kind` ("features" or "mels") of these recipes are cached (another embedding's features:
-    `features-<embedding>`)."""
+    `features-<embedding>`; Whisper's run in float32, where the CPU's int8 is not exact: `features-<embedding>-float32`,
+    other numbers than int8's, `spotter.whisper`)."""
     if embedding != SPEECH_EMBEDDING:
         kind = f"{kind}-{embedding}"
+        arithmetic = whisper.compute_type() if embedding in WHISPER_NAMES else "int8"
+        if arithmetic != "int8":
+            kind = f"{kind}-{arithmetic}"
     return cache_dir() / f"spotter-{kind}-{_key(items)}.npz"
 
 
