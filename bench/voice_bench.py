@@ -59,6 +59,7 @@ from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
 from services.voice.engine import Engine, make_engine
 from services.voice.segmenter import Segmenter, SegmenterConfig
+from services.voice.spotter import whisper
 from services.voice.training import corpus, dataset, tts
 
 KNOWLEDGE = ROOT / "services/reasoner/agent/knowledge.soar"
@@ -467,6 +468,10 @@ def main() -> int:
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     print(f"reasoner policy: {policy}", flush=True)
+    arithmetic = {"compute": whisper.compute_type(), "int8_exact": whisper.exact_int8()}
+    print(f"Whisper (the default head's embedding) in {arithmetic['compute']}; this CPU's int8 sums "
+          + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed heads were fitted")
+          + " (services/voice/README.md, stop 67)", flush=True)
     items = heldout_items(args.seed, args.workers)
     rows: list[dict[str, object]] = []
     for name in args.engines.split(","):
@@ -478,6 +483,8 @@ def main() -> int:
             row = s.row()
             if s.family == "ALL":
                 row.update(extra)
+                if spotter:
+                    row["whisper"] = arithmetic  # the figures depend on it (stop 67)
                 row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA],
                                                        config=SegmenterConfig(vad=args.vad, early_quiet_s=args.early_look,
                                                                               clear_quiet_s=args.clear_window))

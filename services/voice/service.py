@@ -294,7 +294,7 @@ def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine 
             if head is not None:
                 gate, phrase = getattr(engine, "gate", None), getattr(engine, "phrase_stop", None)
                 ctx.update_detail(spotter_embedding=head.embedding,
-                                  # int8 or float32: Whisper's arithmetic, chosen by the CPU (`spotter.whisper`)
+                                  # int8 or float32: Whisper's arithmetic (`HRI_VOICE_WHISPER_COMPUTE`, `spotter.whisper`)
                                   spotter_compute=getattr(getattr(engine, "embedder", None), "compute_type", "float32"),
                                   spotter_walk_gate=gate.head.embedding if gate is not None else "none",
                                   spotter_agree_min=getattr(engine, "agree_min", 0.0),

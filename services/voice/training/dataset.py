@@ -382,7 +382,7 @@ WHISPER_NAMES = (whisper.NAME, whisper.FINE_NAME)
 
 def _cache_path(kind: str, items: list[Recipe], embedding: str = SPEECH_EMBEDDING) -> Path:
     """Where the `kind` ("features" or "mels") of these recipes are cached (another embedding's features:
-    `features-<embedding>`; Whisper's run in float32, where the CPU's int8 is not exact: `features-<embedding>-float32`,
+    `features-<embedding>`; Whisper's in float32, `HRI_VOICE_WHISPER_COMPUTE=float32`: `features-<embedding>-float32`,
     other numbers than int8's, `spotter.whisper`)."""
     if embedding != SPEECH_EMBEDDING:
         kind = f"{kind}-{embedding}"
