@@ -470,7 +470,7 @@ def main() -> int:
     print(f"reasoner policy: {policy}", flush=True)
     arithmetic = {"compute": whisper.compute_type(), "int8_exact": whisper.exact_int8()}
     print(f"Whisper (the default head's embedding) in {arithmetic['compute']}; this CPU's int8 sums "
-          + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed heads were fitted")
+          + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed default head was fitted")
           + " (services/voice/README.md, stop 67)", flush=True)
     items = heldout_items(args.seed, args.workers)
     rows: list[dict[str, object]] = []

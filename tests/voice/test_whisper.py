@@ -186,7 +186,7 @@ def test_the_100ms_embedding_is_fitted_with_the_default_heads_recipe() -> None:
 
 
 def test_the_arithmetic_is_int8_unless_asked_and_the_cpu_kind_is_known(tmp_path: Path) -> None:
-    """int8 (what the committed heads were fitted on) unless `HRI_VOICE_WHISPER_COMPUTE` says float32; a bad value
+    """int8 (what the committed default head was fitted on) unless `HRI_VOICE_WHISPER_COMPUTE` says float32; a bad value
     names the variable. Whether this CPU's int8 sums exactly (VNNI, or no x86 CPU) is read from its flags."""
     assert whisper.compute_type(env={}) == "int8"
     assert whisper.compute_type(env={whisper.COMPUTE_ENV: " float32 "}) == "float32"

@@ -21,9 +21,9 @@ voice21; the 200 ms embedding is the mean of its pairs of frames).
 CTranslate2 runs the int8 model's matrix products with oneDNN's u8 x s8 GEMM. On an x86 CPU with VNNI (AVX-512 VNNI or
 AVX-VNNI) those sums are exact in 32 bits; on one without (AVX2 only), oneDNN adds pairs of byte products in 16 bits,
 which saturate (oneDNN's "Nuances of int8 computations"), and the encoder's output moves (stop 67: 7.8 % of its RMS
-against float32 for a spoken word). The committed heads were fitted on the saturating arithmetic: stop 66's refit on
+against float32 for a spoken word). The committed default head was fitted on the saturating arithmetic: stop 66's refit on
 an AVX2 machine, from features all computed there, gave the committed first layer exactly. So on an AVX2 machine int8
-is what the heads were calibrated on (seed 3307's held-out commands 0.722, other words 8.0 %), and a CPU with VNNI or
+is what the head was calibrated on (seed 3307's held-out commands 0.722, other words 8.0 %), and a CPU with VNNI or
 float32 hears a little more of both (float32 there: 0.744 and 8.7 %, as round 34's machine measured in int8).
 `exact_int8` says which kind this CPU is. float32 is the same on every CPU up to float rounding, and costs about 1.5
 times the encoder's time on an AVX2 CPU; `train` under it caches its features apart.
