@@ -57,7 +57,7 @@ sys.path.insert(0, str(ROOT))
 from schemas.messages import Command
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
-from services.voice.engine import Engine, make_engine
+from services.voice.engine import Engine, make_engine, one_blas_thread
 from services.voice.segmenter import Segmenter, SegmenterConfig
 from services.voice.spotter import whisper
 from services.voice.training import corpus, dataset, tts
@@ -467,7 +467,7 @@ def main() -> int:
                     help="the unseen voice --enrol enrols, a held-out voice (e.g. piper:en_US-joe-medium, a neural one)")
     args = ap.parse_args()
     policy = Policy.from_knowledge()
-    print(f"reasoner policy: {policy}", flush=True)
+    print(f"reasoner policy: {policy}; BLAS threads {one_blas_thread()}, as in the voice service", flush=True)
     arithmetic = {"compute": whisper.compute_type(), "int8_exact": whisper.exact_int8()}
     print(f"Whisper (the default head's embedding) in {arithmetic['compute']}; this CPU's int8 sums "
           + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed default head was fitted")

@@ -44,6 +44,17 @@ class EngineError(RuntimeError):
     """An engine that cannot start (missing model, bad configuration)."""
 
 
+def one_blas_thread() -> int:
+    """Pin this process's BLAS (numpy's OpenBLAS) to one thread, and return the most threads any BLAS now uses. The
+    spotter multiplies one utterance's small matrices at a time: on stop 67's quiet AVX2 machine a second thread gave
+    the same wall time (real-time factor 0.088) for twice the CPU, and under load it was slower, while the robot's
+    other services need that core."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    threadpool_limits(limits=1, user_api="blas")  # for the whole process, not only a `with` block
+    return max((int(i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas"), default=1)
+
+
 ENGINES = ("spotter", "pocketsphinx", "vosk")
 DEFAULT_ENGINE = "spotter"
 

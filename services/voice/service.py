@@ -27,6 +27,7 @@ from services.voice.engine import (
     Recognition,
     check_engine_name,
     make_engine,
+    one_blas_thread,
 )
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
@@ -191,7 +192,7 @@ class _Stats:
 def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
     segmenter = settings.segmenter()
-    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad,
+    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=one_blas_thread(),
                       early_look_s=segmenter.early_quiet_s,
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that

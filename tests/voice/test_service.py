@@ -77,7 +77,8 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert "enrolled head unusable" in h.detail["head_warning"]
     assert h.detail["spotter_embedding"] == "whisper-tiny.en"  # the committed default head's
     assert h.detail["spotter_walk_gate"] == "speech-embedding"  # its walk gate: the shipped speech-embedding head
-    assert h.detail["spotter_compute"] == compute_type()  # Whisper's arithmetic, int8 or float32 by the CPU
+    assert h.detail["spotter_compute"] == compute_type()  # Whisper's arithmetic: int8 unless asked
+    assert h.detail["blas_threads"] == 1  # numpy's BLAS on one thread in the voice process (stop 67)
     assert h.detail["spotter_agree_min"] == 0.0  # the agreement veto: off by default
     assert h.detail["spotter_decoder"] is False  # the decoder's rescue: off by default
     assert h.detail["spotter_stop_in_phrase"] is DEFAULT_STOP_IN_PHRASE  # "stop" within a phrase: the default
