@@ -46,9 +46,9 @@ class EngineError(RuntimeError):
 
 def one_blas_thread() -> int:
     """Pin this process's BLAS (numpy's OpenBLAS) to one thread, and return the most threads any BLAS now uses. The
-    spotter multiplies one utterance's small matrices at a time: on stop 67's quiet AVX2 machine a second thread gave
-    the same wall time (real-time factor 0.088) for twice the CPU, and under load it was slower, while the robot's
-    other services need that core."""
+    spotter multiplies one utterance's small matrices at a time: on stop 67's AVX2 machine one thread, with a test suite
+    on both cores, decoded at a real-time factor of 0.088-0.097, two on the quiet machine at 0.088 for twice the CPU,
+    and two under that load at 0.148; the robot's other services need the second core."""
     from threadpoolctl import threadpool_info, threadpool_limits
 
     threadpool_limits(limits=1, user_api="blas")  # for the whole process, not only a `with` block

@@ -192,7 +192,8 @@ class _Stats:
 def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
     segmenter = settings.segmenter()
-    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=one_blas_thread(),
+    blas_threads = one_blas_thread()  # the whole process, before any engine multiplies a matrix
+    ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=blas_threads,
                       early_look_s=segmenter.early_quiet_s,
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
