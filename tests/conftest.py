@@ -16,6 +16,7 @@ import pytest
 import zenoh
 
 from schemas.keys import Keys
+from services.cli import probe
 from services.cli.router import free_port, wait_listening
 from services.runtime import ServiceContext, client_config
 
@@ -133,8 +134,4 @@ def start_service(
 
 def alive_services(ctx: ServiceContext) -> set[str]:
     """Names of the services whose liveliness tokens are on the bus now."""
-    return {
-        ctx.keys.service_of_alive(str(r.ok.key_expr))
-        for r in ctx.session.liveliness().get(ctx.keys.alive_all, timeout=2.0)
-        if r.ok is not None
-    }
+    return probe.alive_services(ctx.session, ctx.keys)

@@ -56,14 +56,22 @@ def client_session(robot: str | None, connect: str | None,
 
 
 # ---------------------------------------------------------------------------------------- status
+def alive_services(session: zenoh.Session, keys: Keys, timeout: float = 2.0, service: str | None = None) -> set[str]:
+    """The services (or only `service`) whose liveliness tokens are on the robot's bus now."""
+    return {
+        keys.service_of_alive(str(reply.ok.key_expr))
+        for reply in session.liveliness().get(keys.alive(service) if service else keys.alive_all, timeout=timeout)
+        if reply.ok is not None
+    }
+
+
 def gather_status(session: zenoh.Session, keys: Keys, timeout: float = 2.0,
                   service: str | None = None) -> dict[str, dict[str, object]]:
     """Liveliness and health of every service seen on the bus (and the five expected ones), or of one."""
     names = [service] if service else SERVICES
     rows: dict[str, dict[str, object]] = {name: {"alive": False, "health": None} for name in names}
-    for reply in session.liveliness().get(keys.alive(service) if service else keys.alive_all, timeout=timeout):
-        if reply.ok is not None:
-            rows.setdefault(keys.service_of_alive(str(reply.ok.key_expr)), {"health": None})["alive"] = True
+    for name in alive_services(session, keys, timeout, service):
+        rows.setdefault(name, {"health": None})["alive"] = True
     for reply in session.get(keys.health(service) if service else keys.health_all, timeout=timeout):
         if reply.ok is None:
             continue

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from schemas.keys import SERVICES
 from schemas.messages import (
     Decision,
     Health,
@@ -17,6 +18,7 @@ from schemas.messages import (
     Verdict,
     VoiceCommand,
 )
+from services.cli.probe import alive_services
 from services.cli.recorder import SENT_ENGINE, Recorder
 from services.cli.scenario import Scenario, Step
 from services.cli.utterance import DEFAULT_VOICE, speak_into
@@ -56,7 +58,9 @@ class ScenarioRunner:
 
     # ------------------------------------------------------------------ readiness
     def wait_ready(self, timeout: float = 90.0) -> list[str]:
-        """Wait for a working servo bus with a known posture, and camera frames.
+        """Wait for a working servo bus with a known posture, camera frames, all five services on the bus (a word
+        spoken before the voice service listens, or a refusal before the speech service is up, would be lost) and a
+        ready reasoner.
 
         Returns what is still missing after `timeout` (empty when ready).
         """
@@ -69,6 +73,10 @@ class ScenarioRunner:
         # Vision is the only subscriber of the scene key: until that subscription reaches this session
         # a `show` step would be dropped, even though marks already flow.
         self.rec.wait(lambda: bus_ready() and self.rec.latest_marks is not None and self._scene.matched, timeout)
+        alive = alive_services(self.ctx.session, self.ctx.keys, timeout=1.0)
+        while set(SERVICES) - alive and time.monotonic() < deadline:
+            time.sleep(0.2)
+            alive = alive_services(self.ctx.session, self.ctx.keys, timeout=1.0)
         reasoner_ready = False
         while not reasoner_ready and time.monotonic() < deadline:
             reasoner_ready = self._reasoner_ready()
@@ -81,6 +89,8 @@ class ScenarioRunner:
             missing.append("vision frames")
         elif not self._scene.matched:
             missing.append("vision listening for scene commands")
+        if absent := sorted(set(SERVICES) - alive):
+            missing.append(f"on the bus: {', '.join(absent)}")
         if not reasoner_ready:
             missing.append("a reasoner ready for input")
         return missing
