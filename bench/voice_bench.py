@@ -39,6 +39,7 @@ import argparse
 import hashlib
 import json
 import multiprocessing
+import os
 import pickle
 import random
 import re
@@ -213,7 +214,9 @@ def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bo
     else:
         with multiprocessing.get_context("spawn").Pool(workers) as pool:
             items = [i for i in pool.map(_render, jobs, chunksize=16) if i is not None]
-        cache.write_bytes(pickle.dumps(items))
+        tmp = cache.with_suffix(f".{os.getpid()}.tmp")  # whole or not at all: another run may read it meanwhile
+        tmp.write_bytes(pickle.dumps(items))
+        tmp.replace(cache)
     print(f"held-out clips: {len(items)} of {len(jobs)} rendered", flush=True)
     return items
 

@@ -13,6 +13,7 @@ import functools
 import hashlib
 import json
 import multiprocessing
+import os
 import random
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -402,7 +403,7 @@ def _cached(kind: str, items: list[Recipe], workers: int, progress: bool,
 
 
 def _save(path: Path, **arrays: np.ndarray) -> None:
-    tmp = path.with_suffix(".tmp.npz")
+    tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")  # two processes (pytest's workers) may fill the cache at once
     np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]
     tmp.replace(path)
 
