@@ -153,8 +153,12 @@ NEIGHBOUR_SEED = 7
 NEIGHBOUR_FRACTIONS = (("train", 0.55), ("tune", 0.15), ("heldout", 0.30))
 
 
+_NO_STRESS = str.maketrans("", "", "0123456789")
+
+
 def _phones(pron: str) -> tuple[str, ...]:
-    return tuple(re.sub(r"\d", "", p) for p in pron.split())
+    """A CMUdict pronunciation's phonemes, stress digits removed (called for every dictionary word: kept cheap)."""
+    return tuple(pron.translate(_NO_STRESS).split())
 
 
 def one_edit(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
