@@ -31,3 +31,17 @@ def test_one_service_health_check(router_endpoint: str, robot_id: str, bus: Serv
     missing = status(router_endpoint, robot_id, "--service", "vision")
     assert missing.returncode == 1
     assert status(router_endpoint, robot_id).returncode == 1  # not all five are up
+
+
+def test_a_scenario_waits_for_every_service_and_names_those_not_on_the_bus(
+        bus: ServiceContext, tmp_path: Path, start_service: Callable[..., subprocess.Popen[bytes]]) -> None:
+    """`hri demo` and the system tests start only when all five are up: a word spoken before the voice service
+    listens, or a refusal before the speech service is up, would be lost."""
+    from services.cli.recorder import Recorder
+    from services.cli.runner import ScenarioRunner
+
+    start_service("speech", env={"HRI_SPEECH_OUT": str(tmp_path / "speech")})
+    wait_for(lambda: bus.query_health("speech", 1.0), 30)
+    runner = ScenarioRunner(bus, Recorder(bus), tmp_path / "spool")
+    missing = runner.wait_ready(timeout=3.0)
+    assert "on the bus: motion, reasoner, vision, voice" in missing, missing
