@@ -383,12 +383,16 @@ WHISPER_NAMES = (whisper.NAME, whisper.FINE_NAME)
 
 def _cache_path(kind: str, items: list[Recipe], embedding: str = SPEECH_EMBEDDING) -> Path:
     """Where the `kind` ("features" or "mels") of these recipes are cached (another embedding's features:
-    `features-<embedding>`; Whisper's in float32, `HRI_VOICE_WHISPER_COMPUTE=float32`: `features-<embedding>-float32`,
-    other numbers than int8's, `spotter.whisper`)."""
+    `features-<embedding>`). Whisper's features are named by the arithmetic that made them, which gives other numbers
+    (`spotter.whisper`): `-float32` (`HRI_VOICE_WHISPER_COMPUTE=float32`), `-int8-exact` (int8 on a CPU with VNNI) or
+    `-int8-saturating` (int8 on an x86 CPU without), so a cache folder shared by machines of both kinds
+    (`HRI_VOICE_CACHE`) never hands one kind's features to the other."""
     if embedding != SPEECH_EMBEDDING:
         kind = f"{kind}-{embedding}"
-        arithmetic = whisper.compute_type() if embedding in WHISPER_NAMES else "int8"
-        if arithmetic != "int8":
+        if embedding in WHISPER_NAMES:
+            arithmetic = whisper.compute_type()
+            if arithmetic == "int8":
+                arithmetic = "int8-exact" if whisper.exact_int8() else "int8-saturating"
             kind = f"{kind}-{arithmetic}"
     return cache_dir() / f"spotter-{kind}-{_key(items)}.npz"
 
