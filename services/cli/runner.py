@@ -90,7 +90,7 @@ class ScenarioRunner:
         elif not self._scene.matched:
             missing.append("vision listening for scene commands")
         if absent := sorted(set(SERVICES) - alive):
-            missing.append(f"on the bus: {', '.join(absent)}")
+            missing.append(f"{', '.join(absent)} on the bus")
         if not reasoner_ready:
             missing.append("a reasoner ready for input")
         return missing

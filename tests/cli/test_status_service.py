@@ -44,4 +44,4 @@ def test_a_scenario_waits_for_every_service_and_names_those_not_on_the_bus(
     wait_for(lambda: bus.query_health("speech", 1.0), 30)
     runner = ScenarioRunner(bus, Recorder(bus), tmp_path / "spool")
     missing = runner.wait_ready(timeout=3.0)
-    assert "on the bus: motion, reasoner, vision, voice" in missing, missing
+    assert "motion, reasoner, vision, voice on the bus" in missing, missing
