@@ -115,30 +115,45 @@ def _cmudict() -> dict[str, list[str]]:
     return prons
 
 
-def homophones() -> dict[str, set[str]]:
-    """Every dictionary word pronounced like a command (plus spellings of the command itself)."""
+# The three word sets below each scan the whole dictionary (135,000 pronunciations, about half a second), and building
+# one training split asks for them several times: each is made once per process and handed out as a fresh copy.
+@lru_cache(maxsize=1)
+def _homophones() -> dict[str, frozenset[str]]:
     prons = _cmudict()
     extra = {"why": {"y", "wye", "whye"}, "no": {"know", "noh", "knoe"}, "go": {"goh"}}
-    out: dict[str, set[str]] = {}
+    out: dict[str, frozenset[str]] = {}
     for word in VOCABULARY:
         own = set(prons.get(word, []))
-        out[word] = {w for w, ps in prons.items() if own.intersection(ps)} | extra.get(word, set()) | {word}
+        out[word] = frozenset({w for w, ps in prons.items() if own.intersection(ps)} | extra.get(word, set()) | {word})
     return out
 
 
-def forbidden_negatives() -> set[str]:
-    bad = set().union(*homophones().values())
+def homophones() -> dict[str, set[str]]:
+    """Every dictionary word pronounced like a command (plus spellings of the command itself)."""
+    return {word: set(words) for word, words in _homophones().items()}
+
+
+@lru_cache(maxsize=1)
+def _forbidden_negatives() -> frozenset[str]:
+    bad = set().union(*_homophones().values())
     for word in VOCABULARY:  # plurals and other forms of the commands themselves are ambiguous
         bad |= {word + "s", word + "es", word + "ped", word + "ping", word + "'s"}
-    return bad
+    return frozenset(bad)
+
+
+def forbidden_negatives() -> set[str]:
+    return set(_forbidden_negatives())
+
+
+@lru_cache(maxsize=1)
+def _plain_words() -> tuple[str, ...]:
+    bad = _forbidden_negatives() | set(OOV_HELDOUT) | set(OOV_TUNE)
+    return tuple(sorted(w for w in _cmudict() if w.isalpha() and w.isascii() and 2 <= len(w) <= 8 and w not in bad))
 
 
 def common_words(n: int, seed: int) -> list[str]:
     """`n` plain dictionary words (2-8 letters), none a homophone of a command or a held-out word."""
-    prons = _cmudict()
-    bad = forbidden_negatives() | set(OOV_HELDOUT) | set(OOV_TUNE)
-    pool = sorted(w for w in prons if w.isalpha() and w.isascii() and 2 <= len(w) <= 8 and w not in bad)
-    return random.Random(seed).sample(pool, n)
+    return random.Random(seed).sample(_plain_words(), n)
 
 
 def negatives_train(n_common: int, seed: int) -> list[str]:
