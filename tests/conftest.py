@@ -7,10 +7,12 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from queue import Queue
 
 import pytest
 import zenoh
@@ -130,6 +132,14 @@ def start_service(
             proc.wait(10)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+def read_lines(proc: subprocess.Popen[str]) -> tuple[Queue[str], threading.Thread]:
+    """`proc`'s output lines as they come, read by a daemon thread (join it after the process ends)."""
+    lines: Queue[str] = Queue()
+    reader = threading.Thread(target=lambda: [lines.put(line) for line in proc.stdout or ()], daemon=True)
+    reader.start()
+    return lines, reader
 
 
 def alive_services(ctx: ServiceContext) -> set[str]:

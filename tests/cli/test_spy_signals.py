@@ -7,13 +7,12 @@ import os
 import signal
 import subprocess
 import sys
-import threading
-from queue import Empty, Queue
+from queue import Empty
 
 import pytest
 
 from services.runtime import ServiceContext
-from tests.conftest import ROOT
+from tests.conftest import ROOT, read_lines
 
 
 def _ignore_sigint() -> None:
@@ -29,9 +28,7 @@ def test_spy_stops_on_signal(sig: signal.Signals, router_endpoint: str, robot_id
         cwd=ROOT, env={**env, "COLUMNS": "200"}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
         text=True, preexec_fn=_ignore_sigint,
     )
-    lines: Queue[str] = Queue()
-    reader = threading.Thread(target=lambda: [lines.put(line) for line in spy.stdout or ()], daemon=True)
-    reader.start()
+    lines, reader = read_lines(spy)
     try:
         # The spy is subscribed once it reports the test's own liveliness token (history=True).
         first = lines.get(timeout=30)

@@ -19,7 +19,7 @@ from schemas import Action, MotionGoal, Posture, VoiceCommand
 from schemas.access import RATE_LIMITS
 from schemas.keys import SERVICES
 from services.runtime import Credentials, client_config, encode
-from tests.conftest import ROOT
+from tests.conftest import ROOT, read_lines
 from tests.system.conftest import Robot
 
 pytestmark = pytest.mark.system
@@ -102,14 +102,21 @@ def test_status_and_spy_work_as_the_observer(robot: Robot) -> None:
         stderr=subprocess.STDOUT,
         text=True,
     )
+    lines, reader = read_lines(spy)
     try:
-        time.sleep(3.0)
+        # The spy has subscribed once it reports a liveliness token (it asks for their history after subscribing): a
+        # fixed wait was not always enough for a process starting on a busy machine, and the decision came first.
+        early = [lines.get(timeout=30)]
+        while "+ alive" not in early[-1]:
+            early.append(lines.get(timeout=30))
         robot.play([{"send": "yes", "expect": {"verdict": "obey"}}])
         time.sleep(0.5)
     finally:
         spy.send_signal(signal.SIGINT)
-        seen, _ = spy.communicate(timeout=15)
-    assert "+ alive" in seen and "motion/state" in seen and "reasoner/decision" in seen, seen[-2000:]
+        spy.wait(timeout=15)
+    reader.join(5)
+    seen = "".join(early) + "".join(lines.queue)
+    assert "motion/state" in seen and "reasoner/decision" in seen, seen[-2000:]
 
     # The observer may not send: `hri send` as the observer is dropped by the router.
     t0 = time.monotonic()
