@@ -134,10 +134,11 @@ def start_service(
             proc.kill()
 
 
-def read_lines(proc: subprocess.Popen[str]) -> tuple[Queue[str], threading.Thread]:
+def read_lines(proc: subprocess.Popen[str], stream: str = "stdout") -> tuple[Queue[str], threading.Thread]:
     """`proc`'s output lines as they come, read by a daemon thread (join it after the process ends)."""
     lines: Queue[str] = Queue()
-    reader = threading.Thread(target=lambda: [lines.put(line) for line in proc.stdout or ()], daemon=True)
+    pipe = getattr(proc, stream)
+    reader = threading.Thread(target=lambda: [lines.put(line) for line in pipe or ()], daemon=True)
     reader.start()
     return lines, reader
 

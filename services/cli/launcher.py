@@ -27,6 +27,7 @@ from schemas.keys import SERVICES
 from services.cli.router import OPEN_WARNING, Router, loopback_endpoint
 from services.runtime import PARENT_ENV, RouterSecurity, get_logger
 from services.runtime.config import CREDENTIALS_ENV
+from services.runtime.signals import stop_on_signals
 
 LineSink = Callable[[str, str], None]
 """Receives (service name, one line of its output)."""
@@ -226,13 +227,7 @@ def _print_line(name: str, line: str) -> None:
 
 def run_until_signalled(launcher: Launcher, ready: Callable[[], None] | None = None) -> int:
     """Start `launcher`, wait for SIGTERM or Ctrl-C, stop everything. Returns the exit code."""
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: object) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    stop = stop_on_signals()
     try:
         launcher.start()
         if ready:

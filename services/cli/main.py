@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import textwrap
-import threading
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
@@ -36,6 +35,7 @@ from services.cli.utterance import DEFAULT_VOICE
 from services.runtime import ConfigError, ServiceContext, SessionRefused, configure_logging, default_keys_dir
 from services.runtime.cli import ConnectOption, RobotOption
 from services.runtime.logs import settings_error as log_settings_error
+from services.runtime.signals import stop_on_signals
 
 # rich_markup_mode=None: help text is printed as written ("[default: op2]" is not read as Rich markup)
 app = typer.Typer(add_completion=False, no_args_is_help=True, help=__doc__, rich_markup_mode=None)
@@ -162,7 +162,7 @@ def spy(
     connect: ConnectOption = None,
 ) -> None:
     """Live, readable view of the traffic (and services coming and going) until Ctrl-C or SIGTERM."""
-    stop = _stop_on_signals()
+    stop = stop_on_signals()
     with bus(robot, connect) as (session, keys):
         probe.spy(session, keyexpr or keys.all, keys.prefix, console, stop)
 
@@ -424,22 +424,9 @@ def view(
     raise typer.Exit(code)
 
 
-def _stop_on_signals() -> threading.Event:
-    """An event that Ctrl-C (SIGINT) or SIGTERM sets, so the caller leaves its loop and closes its
-    session. Installed explicitly: a process started in the background of a script inherits SIGINT
-    ignored, and Python then raises no KeyboardInterrupt; SIGTERM would otherwise end the process
-    without closing anything."""
-    import signal
-
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    return stop
-
-
 def _wait_for_signal() -> int:
     """Block until Ctrl-C or SIGTERM."""
-    stop = _stop_on_signals()
+    stop = stop_on_signals()
     while not stop.wait(0.5):
         pass
     return 0

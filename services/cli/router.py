@@ -9,17 +9,15 @@ benchmarks use; it says so in its log. `--config FILE` runs a full Zenoh configu
 
 from __future__ import annotations
 
-import signal
 import socket
-import threading
 import time
 from pathlib import Path
-from types import FrameType
 
 import typer
 import zenoh
 
 from services.runtime import ConfigError, RouterSecurity, get_logger, router_config
+from services.runtime.signals import stop_on_signals
 
 DEFAULT_PORT = 7447
 
@@ -84,13 +82,7 @@ def main(
     """Run a Zenoh router until SIGTERM or Ctrl-C."""
     log = get_logger("router")
     endpoints = listen or [loopback_endpoint(port)]
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    stop = stop_on_signals()
     security = RouterSecurity(keys_dir, robot=robot, operator_writes=not no_operator_writes) if keys_dir else None
     try:
         router = Router(endpoints, security, zenoh.Config.from_file(str(config)) if config else None)

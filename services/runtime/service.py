@@ -17,7 +17,6 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from types import FrameType
 from typing import Any, Generic, TypeVar
 
 import zenoh
@@ -29,6 +28,7 @@ from services.runtime import logs
 from services.runtime.codec import DecodeError, decode, encode, encoding_for
 from services.runtime.config import BusSettings, ConfigError
 from services.runtime.logs import get_logger
+from services.runtime.signals import relay_stop_signals
 
 M = TypeVar("M", bound=BaseModel)
 H = TypeVar("H", bound=Header)
@@ -386,23 +386,25 @@ class ServiceContext:
             self.session.close()
 
 
-def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh.Session:
+def open_session(settings: BusSettings, log: Any, *, attempts: int = 0,
+                 stop: threading.Event | None = None) -> zenoh.Session:
     """Open a session. zenoh clients fail at once when no router answers, or when the router
     refuses their credentials; retry, logging why each time (a robot waits for its router to come up).
 
-    `attempts=0` retries until stopped by a signal.
+    `attempts=0` retries until `stop` is set, which raises `SessionStopped` within about half a second.
     """
+    stop = stop or threading.Event()
     delay, n = 0.2, 0
     while True:
         n += 1
         settings = settings.refreshed()
         try:
-            return _open(settings.zenoh_config())
-        except ConfigError:
+            return _open(settings.zenoh_config(), stop)
+        except (ConfigError, SessionStopped):
             raise
         except Exception as exc:
             why, refused = why_not_open(settings)
-            open_bus = _open_anonymously(settings, log) if refused else None
+            open_bus = _open_anonymously(settings, log, stop) if refused else None
             if open_bus is not None:
                 return open_bus
             if attempts and n >= attempts:  # a person waits: say why in one line
@@ -411,43 +413,63 @@ def open_session(settings: BusSettings, log: Any, *, attempts: int = 0) -> zenoh
                 event = ("the router refused this session, retrying" if refused
                          else "no zenoh router yet, retrying")
                 log.warning(event, why=why, retry_in_s=delay)
-            time.sleep(delay)
+            if stop.wait(delay):
+                raise SessionStopped from None
             delay = min(delay * 2, 3.0)
 
 
-def _open(config: zenoh.Config) -> zenoh.Session:
+def _open(config: zenoh.Config, stop: threading.Event) -> zenoh.Session:
     """`zenoh.open` in a helper thread. It blocks in native code for as long as a router that
-    accepts the connection takes to answer (seconds, for a stuck handshake); meanwhile the main
-    thread keeps running Python, so a SIGTERM or Ctrl-C still stops the process at once."""
+    accepts the connection takes to answer (seconds, for a stuck handshake); meanwhile this thread
+    watches `stop`, so a SIGTERM or Ctrl-C still stops the process at once. A session that opens
+    after that is closed by the helper: nobody will use it."""
     result: list[zenoh.Session | BaseException] = []
+    handover = threading.Lock()
+    gave_up: list[bool] = []
 
     def target() -> None:
         try:
-            result.append(zenoh.open(config))
+            outcome: zenoh.Session | BaseException = zenoh.open(config)
         except BaseException as exc:  # handed to the caller's thread
-            result.append(exc)
+            outcome = exc
+        with handover:
+            if gave_up and isinstance(outcome, zenoh.Session):
+                outcome.close()
+            result.append(outcome)
 
     opener = threading.Thread(target=target, name="zenoh-open", daemon=True)
     opener.start()
     while opener.is_alive():
+        if stop.is_set():
+            with handover:
+                gave_up.append(True)
+                if result and isinstance(result[0], zenoh.Session):
+                    result[0].close()
+            raise SessionStopped
         opener.join(0.05)
     if isinstance(result[0], BaseException):
         raise result[0]
     return result[0]
 
 
-def _open_anonymously(settings: BusSettings, log: Any) -> zenoh.Session | None:
+def _open_anonymously(settings: BusSettings, log: Any, stop: threading.Event) -> zenoh.Session | None:
     """A router without authentication refuses clients that offer credentials. Such a router is
     open to anyone anyway, so join it without them (saying so) rather than not at all."""
     if settings.credentials is None or settings.config_file is not None:
         return None
     try:
-        session = _open(replace(settings, credentials=None, identity=None).zenoh_config())
+        session = _open(replace(settings, credentials=None, identity=None).zenoh_config(), stop)
+    except SessionStopped:
+        raise
     except Exception:
         return None
     log.warning("the router asks no credentials: joined an OPEN bus", endpoints=",".join(settings.connect),
                 identity=settings.who)
     return session
+
+
+class SessionStopped(Exception):
+    """The process was asked to stop while its session was still opening."""
 
 
 class SessionRefused(RuntimeError):
@@ -509,22 +531,20 @@ def run_service(
     stop_requested = threading.Event()
     ctx_box: list[ServiceContext] = []
 
-    def on_signal(signum: int, _frame: FrameType | None) -> None:
+    def on_signal(sig: signal.Signals) -> None:  # in the relay's thread, never inside the handler
         if stop_requested.is_set():  # second Ctrl-C: the user means it
-            log.warning("second signal, exiting now", signal=signal.Signals(signum).name)
-            os._exit(128 + signum)
+            threading.Timer(0.5, os._exit, (128 + sig,)).start()  # even if the log cannot take the line
+            log.warning("second signal, exiting now", signal=sig.name)
+            os._exit(128 + sig)
         stop_requested.set()
-        log.info("stopping", signal=signal.Signals(signum).name)
+        log.info("stopping", signal=sig.name)
         for ctx in ctx_box:
             ctx.stop()
-        if not ctx_box:
-            raise KeyboardInterrupt  # still opening the session
 
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    relay_stop_signals(on_signal)
     try:
-        session = open_session(settings, log)
-    except KeyboardInterrupt:
+        session = open_session(settings, log, stop=stop_requested)
+    except SessionStopped:
         log.info("stopped before the session opened")
         return 0
     except ConfigError as exc:
@@ -540,8 +560,6 @@ def run_service(
         ctx.log.info("started", pid=os.getpid(), endpoints=",".join(settings.connect), identity=settings.who,
                      config_file=str(settings.config_file) if settings.config_file else None)
         body(ctx)
-        return 0
-    except KeyboardInterrupt:
         return 0
     except Exception:
         log.exception("service failed")

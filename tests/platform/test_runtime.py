@@ -16,7 +16,7 @@ import zenoh
 from schemas import Health, HealthStatus, Keys, MarkObservation, VoiceCommand
 from services.cli.router import free_port
 from services.runtime import BusSettings, ConfigError, ServiceContext, client_config
-from tests.conftest import ROOT, alive_services, service_env, wait_for
+from tests.conftest import ROOT, alive_services, read_lines, service_env, wait_for
 
 
 @pytest.fixture
@@ -155,16 +155,84 @@ def test_service_stops_cleanly_on_signal(start_service, bus: ServiceContext, sig
     wait_for(lambda: "speech" not in alive_services(bus), timeout=5)
 
 
+BUSY_LOGGER = """
+import sys
+from services.runtime import run_service
+
+def body(ctx):
+    while not ctx.stopping.is_set():
+        ctx.log.info("busy", pad="x" * 200)
+
+sys.exit(run_service("speech", body))
+"""
+
+
+def test_a_service_writing_a_log_line_when_signalled_still_stops(router_endpoint: str, robot_id: str) -> None:
+    """Its log goes to a pipe the test stops reading, so the service is blocked writing a line, holding the
+    log's lock, when SIGTERM comes. A handler that logged there waited on that lock forever, and so did each
+    later signal (seen with a service signalled as it logged a retry)."""
+    proc = subprocess.Popen([sys.executable, "-c", BUSY_LOGGER], cwd=ROOT, env=service_env(router_endpoint, robot_id),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    assert proc.stderr is not None
+    try:
+        while b"busy" not in proc.stderr.readline():  # its body runs
+            assert proc.poll() is None
+        time.sleep(1.0)  # the pipe fills within milliseconds
+        proc.send_signal(signal.SIGTERM)
+        time.sleep(0.5)  # the handler has run
+        _, tail = proc.communicate(timeout=10)  # drains the pipe; the process must exit
+    finally:
+        proc.kill()
+    assert proc.returncode == 0
+    assert b"stopping" in tail and tail.rstrip().endswith(b"service=speech") and b"stopped" in tail.splitlines()[-1]
+
+
+STUBBORN = """
+import sys, time
+from services.runtime import run_service
+
+def body(ctx):
+    ctx.log.info("serving")
+    while True:  # never looks at ctx.stopping
+        time.sleep(0.05)
+
+sys.exit(run_service("speech", body))
+"""
+
+
+def test_a_second_signal_ends_a_service_that_does_not_stop(router_endpoint: str, robot_id: str) -> None:
+    proc = subprocess.Popen([sys.executable, "-c", STUBBORN], cwd=ROOT, env=service_env(router_endpoint, robot_id),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        lines, reader = read_lines(proc, stream="stderr")
+        while "serving" not in lines.get(timeout=30):
+            pass
+        proc.send_signal(signal.SIGINT)
+        while "stopping" not in lines.get(timeout=10):
+            pass
+        assert proc.poll() is None  # the body goes on
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(10) == 128 + signal.SIGINT
+        reader.join(5)
+        assert "second signal, exiting now" in "".join(lines.queue)
+    finally:
+        proc.kill()
+
+
 def test_service_without_a_router_retries_and_still_stops(robot_id: str) -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"  # nobody listens here
     proc = subprocess.Popen([sys.executable, "-m", "services.speech"], cwd=ROOT,
                             env=service_env(endpoint, robot_id), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT)
-    time.sleep(2.5)
+                            stderr=subprocess.STDOUT, text=True)
+    lines, reader = read_lines(proc)
+    early = [lines.get(timeout=30)]  # signalled as it logs its first retry, which once hung it (above)
+    while "no zenoh router yet" not in early[-1]:
+        early.append(lines.get(timeout=30))
     proc.send_signal(signal.SIGTERM)
-    out, _ = proc.communicate(timeout=10)
+    proc.wait(timeout=10)
+    reader.join(5)
     assert proc.returncode == 0
-    assert b"no zenoh router yet" in out and endpoint.encode() in out
+    assert endpoint in early[-1]
 
 
 def test_a_service_stuck_opening_its_session_still_stops_on_sigterm(robot_id: str) -> None:

@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import sys
 import threading
-from types import FrameType
 from typing import Annotated
 
 import typer
 
 from services.motion.simbus.bus import SimBus
 from services.motion.simbus.control import apply_command
+from services.runtime.signals import stop_on_signals
 
 app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
@@ -35,13 +34,7 @@ def main(
     control: Annotated[bool, typer.Option(help="Read fault-injection commands from stdin")] = False,
 ) -> None:
     """Serve the simulated bus until stopped."""
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    stop = stop_on_signals()
     bus = SimBus(powered=powered, wire_time=wire_time).start()
     try:
         sys.stdout.write(bus.path + "\n")
