@@ -35,6 +35,7 @@ from schemas.access import ACCESS, IDENTITIES, Kind
 from schemas.keys import SERVICES
 from services.runtime.config import (
     DEFAULT_CONNECT,
+    ROUTER_TRANSPORT,
     ConfigError,
     Credentials,
     RouterSecurity,
@@ -261,6 +262,7 @@ def router_config_file(security: RouterSecurity, listen: list[str], folder: str)
         "mode": "router",
         "listen/endpoints": listen,
         "scouting/multicast/enabled": False,
+        **ROUTER_TRANSPORT,
         **router_security_settings(security, listen, folder=folder),
     }
     return json.dumps(nest(flat), indent=2) + "\n"

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import IO
 
 from schemas.keys import SERVICES
+from services.cli.backlog import Backlog
 from services.cli.router import OPEN_WARNING, Router, loopback_endpoint
 from services.runtime import PARENT_ENV, RouterSecurity, get_logger
 from services.runtime.config import CREDENTIALS_ENV
@@ -33,6 +34,7 @@ LineSink = Callable[[str, str], None]
 """Receives (service name, one line of its output)."""
 
 STOP_GRACE_S = 4.0
+LINE_BACKLOG = 10_000  # the children's lines waiting for a slow output, at most (then dropped, counted)
 BACKOFF_START_S = 0.5
 BACKOFF_MAX_S = 10.0
 STABLE_AFTER_S = 30.0
@@ -77,6 +79,7 @@ class Launcher:
         self._embedded = connect is None
         self._router: Router | None = None
         self._sink = sink or _print_line
+        self._lines: Backlog[tuple[str, str]] | None = None
         self._restart = restart
         self._stopping = threading.Event()
         self._lock = threading.Lock()
@@ -111,6 +114,7 @@ class Launcher:
                 self.log.warning(OPEN_WARNING)
         else:
             self.log.info("joining existing router", endpoint=self.endpoint)
+        self._lines = self._backlog()
         for child in self.children.values():
             self._spawn(child)
         self._supervisor = threading.Thread(target=self._supervise, name="supervisor", daemon=True)
@@ -136,6 +140,9 @@ class Launcher:
         for child in self.children.values():
             if child.reader is not None:
                 child.reader.join(1.0)
+        if self._lines is not None:
+            self._lines.close()
+            self._lines = None
         if self._router is not None:
             self._router.close()
             self._router = None
@@ -176,11 +183,21 @@ class Launcher:
         child.reader.start()
         self.log.info("started", child=child.name, pid=proc.pid)
 
+    def _backlog(self) -> Backlog[tuple[str, str]]:
+        """The children's lines on their way to the sink: reading them never waits for it (`backlog.py`)."""
+        sink = self._sink
+
+        def dropped(n: int) -> None:
+            sink("launcher", f"{n} line(s) of the services' output dropped: it was not being read")
+
+        return Backlog(lambda item: sink(*item), dropped, capacity=LINE_BACKLOG, name="log-lines")
+
     def _pump(self, name: str, stream: IO[bytes] | None) -> None:
-        if stream is None:
+        lines = self._lines
+        if stream is None or lines is None:
             return
         for raw in iter(stream.readline, b""):
-            self._sink(name, raw.decode("utf-8", "replace").rstrip("\n"))
+            lines.put((name, raw.decode("utf-8", "replace").rstrip("\n")))
         stream.close()
 
     def _supervise(self) -> None:

@@ -17,6 +17,7 @@ from rich.table import Table
 from schemas.access import OBSERVER
 from schemas.keys import SERVICES, Keys
 from schemas.messages import Header, Health, HealthStatus
+from services.cli.backlog import Backlog
 from services.runtime import (
     BusSettings,
     DecodeError,
@@ -118,13 +119,27 @@ def format_sample(sample: zenoh.Sample, prefix: str) -> str:
     return f"{stamp} {short:<22} {schema:<32} {body}"
 
 
+SPY_BACKLOG = 10_000  # lines waiting for a paused terminal, at most (then dropped, counted)
+
+
 def spy(session: zenoh.Session, keyexpr: str, prefix: str, console: Console, stop: threading.Event) -> None:
+    """Print the traffic until `stop`. Zenoh's callbacks only format and hand over: a paused terminal must not stop
+    this client from reading the bus (`backlog.py`)."""
+
+    def show(line: str) -> None:
+        console.print(line, markup=False, highlight=False, soft_wrap=True)
+
+    def dropped(n: int) -> None:
+        show(f"... {n} line(s) not shown: the output was paused")
+
+    shown: Backlog[str] = Backlog(show, dropped, capacity=SPY_BACKLOG, name="spy-output")
+
     def on_sample(sample: zenoh.Sample) -> None:
-        console.print(format_sample(sample, prefix), markup=False, highlight=False, soft_wrap=True)
+        shown.put(format_sample(sample, prefix))
 
     def on_alive(sample: zenoh.Sample) -> None:
         sign = "+ alive" if sample.kind == zenoh.SampleKind.PUT else "- gone "
-        console.print(f"{datetime.now():%H:%M:%S.%f}"[:-3] + f" {sign} {sample.key_expr}", highlight=False)
+        shown.put(f"{datetime.now():%H:%M:%S.%f}"[:-3] + f" {sign} {sample.key_expr}")
 
     sub = session.declare_subscriber(keyexpr, on_sample)
     live = session.liveliness().declare_subscriber(f"{prefix}/alive/**", on_alive, history=True)
@@ -134,6 +149,7 @@ def spy(session: zenoh.Session, keyexpr: str, prefix: str, console: Console, sto
     finally:
         sub.undeclare()
         live.undeclare()
+        shown.close()
 
 
 # ---------------------------------------------------------------------------------------- send

@@ -260,6 +260,18 @@ def check_listen(listen: list[str], security: RouterSecurity | None) -> None:
                               "(mutual TLS with the deployment's CA) or run open on purpose (--open)")
 
 
+STUCK_LINK_CLOSE_S = 0.25
+"""How long the router waits for room on a link to a client that does not read before it closes that link,
+when a message that must not be dropped (a motion goal, a voice command: congestion control "block") is for that
+client too. While it waits, it forwards nothing else from the publisher: with Zenoh's default, 5 s, one stuck
+subscriber (an `hri spy` whose terminal is paused) held the robot's goals back for 5 s (measured; README,
+"A client that stops reading")."""
+
+ROUTER_TRANSPORT: dict[str, object] = {
+    "transport/link/tx/queue/congestion_control/block/wait_before_close": round(STUCK_LINK_CLOSE_S * 1e6),  # in µs
+}
+
+
 def router_config(listen: list[str], security: RouterSecurity | None = None) -> zenoh.Config:
     """A zenoh-python router listening only where told (the defaults listen on all interfaces);
     with `security`, every client must authenticate, and the access rules, input rate limits and
@@ -269,6 +281,8 @@ def router_config(listen: list[str], security: RouterSecurity | None = None) -> 
     conf.insert_json5("listen/endpoints", json.dumps(listen))
     conf.insert_json5("connect/endpoints", "[]")
     conf.insert_json5("scouting/multicast/enabled", "false")
+    for key, value in ROUTER_TRANSPORT.items():
+        conf.insert_json5(key, json.dumps(value))
     if security is None:
         return conf
     check_listen(listen, security)

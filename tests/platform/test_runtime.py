@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import itertools
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import cast
@@ -141,6 +143,39 @@ def test_settings_from_environment(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
     monkeypatch.setenv("HRI_ROBOT", "a/b")
     with pytest.raises(ConfigError, match="HRI_ROBOT"):
         BusSettings.from_env()
+
+
+def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_briefly(router_endpoint: str,
+                                                                                  keys: Keys) -> None:
+    """Motion goals block rather than drop. A client that stops reading everything (an `hri spy` whose terminal
+    is paused) has its link filled by other traffic (here large messages that may drop); the router then waits
+    for room before it forwards a goal to anyone, with Zenoh's default for up to 5 s (about 5.0 s here), and only
+    then closes that link. Ours waits 0.25 s."""
+    motion, stuck, publisher = (zenoh.open(client_config([router_endpoint])) for _ in range(3))
+    release = threading.Event()
+    late: list[float] = []
+    sent = 0
+    try:
+        motion.declare_subscriber(keys.motion_goal, lambda s: late.append(time.monotonic() - float(s.payload.to_bytes())))
+        stuck.declare_subscriber(keys.all, lambda _s: release.wait())
+        goals = publisher.declare_publisher(keys.motion_goal, congestion_control=zenoh.CongestionControl.BLOCK)
+        images = publisher.declare_publisher(f"{keys.prefix}/test/image", congestion_control=zenoh.CongestionControl.DROP)
+        image = b"x" * 65536
+        end = time.monotonic() + 3.0
+        for i in itertools.count():
+            if time.monotonic() > end:
+                break
+            images.put(image)
+            if i % 10 == 0:
+                goals.put(f"{time.monotonic():.6f}")
+                sent += 1
+            time.sleep(0.002)
+        wait_for(lambda: len(late) == sent, timeout=10)
+    finally:
+        release.set()
+        for session in (motion, stuck, publisher):
+            session.close()
+    assert max(late) < 1.5, f"a goal waited {max(late):.2f} s for a client that did not read"
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])

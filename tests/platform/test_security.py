@@ -425,6 +425,7 @@ def test_router_config_file_is_a_zenoh_configuration_with_the_rules(keys_dir: Pa
     assert conf["mode"] == "router" and conf["listen"]["endpoints"] == ["tls/0.0.0.0:7447"]
     assert conf["transport"]["auth"]["usrpwd"]["dictionary_file"] == "/etc/hri/router/dictionary"
     assert conf["transport"]["link"]["tls"]["enable_mtls"] is True
+    assert conf["transport"]["link"]["tx"]["queue"]["congestion_control"]["block"]["wait_before_close"] == 250_000
     assert conf["access_control"] == access_control("r9", tls=True)
     assert conf["downsampling"] == downsampling("r9")
     assert conf["qos"]["network"] == qos_overwrites("r9")
