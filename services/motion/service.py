@@ -1,7 +1,8 @@
 """The motion service: MotionGoal in, MotionState out, the OP2 (real or simulated) in between.
 
 Zenoh wiring and safety watchdogs around the control loop (services/motion/loop.py):
-- goals older than `goal_max_age_s` are dropped and logged;
+- goals older than `goal_max_age_s` are dropped and logged, except a stop, which is carried out late rather
+  than never (stopping is the safe direction, and a clock that jumped must not cancel it);
 - walking stops when the reasoner's liveliness token goes (at once: the gait then ends at its
   next half-cycle boundary) or when the walk goal is not renewed within `renew_timeout_s`;
 - MotionState on every change and at least every `state_period_s`.
@@ -12,7 +13,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from schemas.messages import HealthStatus, MotionGoal, MotionState
+from schemas.messages import Action, HealthStatus, MotionGoal, MotionState
 from services.motion.config import MotionSettings
 from services.motion.executor import GoalRequest, Snapshot
 from services.motion.loop import ControlLoop
@@ -28,7 +29,7 @@ def serve(ctx: ServiceContext, settings: MotionSettings | None = None) -> None:
     state_pub = ctx.publisher(ctx.keys.motion_state, MotionState)
     sim = SimProcess(ctx.log) if settings.sim else None
     last_publish = [0.0]
-    stale = [0]
+    stale, late_stops = [0], [0]
 
     def publish(snap: Snapshot, bus_ok: bool) -> None:
         last_publish[0] = time.monotonic()
@@ -67,7 +68,15 @@ def serve(ctx: ServiceContext, settings: MotionSettings | None = None) -> None:
     def on_goal(goal: MotionGoal) -> None:
         received = time.time()
         age = received - goal.stamp
-        if age > settings.goal_max_age_s:
+        if age > settings.goal_max_age_s and goal.action == Action.STOP:
+            # A stop is never dropped for its stamp: carried out late it is harmless (the reasoner's later goals come
+            # after it); dropped, it would leave the walk to the renewal watchdog. Stamps look late when the clocks of
+            # the reasoner's and the robot's machines disagree, or when the robot's clock steps at its first NTP sync.
+            late_stops[0] += 1
+            ctx.update_detail(late_stops=late_stops[0])
+            ctx.log.warning("late stop goal carried out", goal_id=goal.goal_id, age_s=round(age, 3),
+                            max_age_s=settings.goal_max_age_s)
+        elif age > settings.goal_max_age_s:
             stale[0] += 1
             ctx.update_detail(stale_goals=stale[0])
             ctx.log.warning(

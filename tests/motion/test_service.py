@@ -139,6 +139,15 @@ def test_walk_stops_without_renewal_and_bad_payloads_are_harmless(
     states.wait(lambda s: s.posture == Posture.STANDING, 2)
     h = bus.query_health("motion")
     assert h is not None and h.rejected == 4 and h.detail["goals"]["watchdog_stops"] == 1
+    # a stop whose stamp looks stale (the clocks disagree) is carried out, not dropped: no watchdog needed
+    send(bus, Action.WALK_FORWARD, "go2")
+    states.wait(lambda s: s.posture == Posture.WALKING, 2)
+    send(bus, Action.STOP, "halt", age=5.0)
+    states.wait(lambda s: s.goal_id == "halt" and s.action == Action.STOP, 2)
+    states.wait(lambda s: s.posture == Posture.STANDING, 2)
+    h = bus.query_health("motion")
+    assert h is not None and h.detail["late_stops"] == 1 and h.detail["goals"]["watchdog_stops"] == 1
+    assert "stale_goals" not in h.detail
     assert proc.poll() is None
     assert stop(proc) == 0
 
