@@ -7,7 +7,6 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 from typing import cast
@@ -145,19 +144,31 @@ def test_settings_from_environment(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
         BusSettings.from_env()
 
 
+STUCK_SUBSCRIBER = """
+import sys, threading, zenoh
+from services.runtime import client_config
+
+session = zenoh.open(client_config([sys.argv[1]]))
+session.declare_subscriber(sys.argv[2], lambda _sample: threading.Event().wait())  # a terminal paused for good
+print("reading no more", flush=True)
+sys.stdin.read()
+"""
+
+
 def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_briefly(router_endpoint: str,
                                                                                   keys: Keys) -> None:
     """Motion goals block rather than drop. A client that stops reading everything (an `hri spy` whose terminal
-    is paused) has its link filled by other traffic (here large messages that may drop); the router then waits
-    for room before it forwards a goal to anyone, with Zenoh's default for up to 5 s (about 5.0 s here), and only
-    then closes that link. Ours waits 0.25 s."""
-    motion, stuck, publisher = (zenoh.open(client_config([router_endpoint])) for _ in range(3))
-    release = threading.Event()
+    is paused; here a process of its own) has its link filled by other traffic (large messages that may drop);
+    the router then waits for room before it forwards a goal to anyone, with Zenoh's default for up to 5 s (about
+    5.0 s here), and only then closes that link. Ours waits 0.25 s."""
+    stuck = subprocess.Popen([sys.executable, "-c", STUCK_SUBSCRIBER, router_endpoint, keys.all], cwd=ROOT,
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    motion, publisher = (zenoh.open(client_config([router_endpoint])) for _ in range(2))
     late: list[float] = []
     sent = 0
     try:
+        assert stuck.stdout is not None and "reading no more" in stuck.stdout.readline()
         motion.declare_subscriber(keys.motion_goal, lambda s: late.append(time.monotonic() - float(s.payload.to_bytes())))
-        stuck.declare_subscriber(keys.all, lambda _s: release.wait())
         goals = publisher.declare_publisher(keys.motion_goal, congestion_control=zenoh.CongestionControl.BLOCK)
         images = publisher.declare_publisher(f"{keys.prefix}/test/image", congestion_control=zenoh.CongestionControl.DROP)
         image = b"x" * 65536
@@ -172,9 +183,10 @@ def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_brief
             time.sleep(0.002)
         wait_for(lambda: len(late) == sent, timeout=10)
     finally:
-        release.set()
-        for session in (motion, stuck, publisher):
-            session.close()
+        stuck.kill()
+        stuck.wait()
+        motion.close()
+        publisher.close()
     assert max(late) < 1.5, f"a goal waited {max(late):.2f} s for a client that did not read"
 
 
