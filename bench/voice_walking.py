@@ -103,6 +103,29 @@ Noise = Callable[[float, np.random.Generator], np.ndarray]
 
 def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: SegmenterConfig, policy: Policy, seed: int,
               noise: Noise) -> dict[str, object]:
+    """Each clip `LEAD_S` into `noise` at `snr` dB (None: a faint hiss), then `TAIL_S` more: `run_streams`' row."""
+
+    def build(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        at = int(LEAD_S * SAMPLE_RATE)
+        seconds = LEAD_S + speech.size / SAMPLE_RATE + TAIL_S
+        if snr is None:  # quiet, as voice_bench's stream latency: a faint hiss
+            x = np.zeros(int(seconds * SAMPLE_RATE)) + rng.normal(0, QUIET_HISS_RMS, int(seconds * SAMPLE_RATE))
+            x[at : at + speech.size] += speech
+            return x
+        return mix(speech, noise(seconds, rng), snr, at)
+
+    return {"snr_db": "quiet" if snr is None else snr, **run_streams(engine, clips, build, config, policy, seed)}
+
+
+QUIET_HISS_RMS = 3e-4
+"""A quiet room through the microphone: a faint hiss (about -70 dBFS)."""
+
+
+def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, np.random.Generator], np.ndarray],
+                config: SegmenterConfig, policy: Policy, seed: int) -> dict[str, object]:
+    """Each clip's speech (float, ±1) made into a stream by `build` (the speech `LEAD_S` in), clipped to full scale
+    as a sound card does, and fed to the segmenter and the engine (`stream`): commands heard, other words taken,
+    false walks, segments, end of speech -> segment."""
     rng = np.random.default_rng(seed)
     heard = Counter()
     total = Counter()
@@ -115,14 +138,7 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
     walked_on: Counter[str] = Counter()
     for it in clips:
         speech = np.frombuffer(it.pcm, "<i2") / 32768.0
-        at = int(LEAD_S * SAMPLE_RATE)
-        seconds = LEAD_S + speech.size / SAMPLE_RATE + TAIL_S
-        if snr is None:  # quiet, as voice_bench's stream latency: a faint hiss
-            x = np.zeros(int(seconds * SAMPLE_RATE)) + rng.normal(0, 3e-4, int(seconds * SAMPLE_RATE))
-            x[at : at + speech.size] += speech
-        else:
-            x = mix(speech, noise(seconds, rng), snr, at)
-        x = np.clip(x, -1.0, 1.0)
+        x = np.clip(build(speech, rng), -1.0, 1.0)
         word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
         segs = stream(engine, x, config)
         lengths += [end - start for _, start, end, _, _ in segs]
@@ -150,7 +166,6 @@ def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: Segm
     lat = np.array(latency) * 1000 if latency else np.zeros(1)
     return {
         "vad": config.vad,
-        "snr_db": "quiet" if snr is None else snr,
         "command_accuracy": round(sum(heard.values()) / max(1, commands), 3),
         "stop": f"{heard['stop']}/{total['stop']}",
         "by_command": {w: round(heard[w] / max(1, total[w]), 2) for w in WORDS},

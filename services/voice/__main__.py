@@ -94,6 +94,12 @@ ClearWindowOption = Annotated[
                  help="live stream (Silero): seconds of quiet that end an utterance when the speech is at least 30 dB "
                       "over the noise floor, or 'off' [default: 0.09; elsewhere the end window is 0.15]"),
 ]
+GainOption = Annotated[
+    str | None,
+    typer.Option("--gain", envvar="HRI_VOICE_GAIN",
+                 help="dB of gain on the source's audio before the VAD, 0 to 40: for a microphone whose speech peaks "
+                      "below -32 dBFS (the log's peak_dbfs; health input_peak_dbfs) [default: 0]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -112,14 +118,15 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
-         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None) -> None:
+         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, gain: GainOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
     settings = VoiceSettings(source=source or "mic", engine=engine, vosk_model=vosk_model, lexicon=lexicon,
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
-                             down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window)
+                             down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
+                             gain=gain)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -163,6 +170,48 @@ def transcribe(
         line["file"] = str(path)
         typer.echo(json.dumps(line, ensure_ascii=False))
     raise typer.Exit(1 if failed else 0)
+
+
+@app.command()
+def level(
+    source: SourceOption = None,
+    seconds: Annotated[float, typer.Option(help="how long to listen to a microphone (a file or stdin: to its end)")] = 10.0,
+    gain: GainOption = None,
+    vad: VadOption = "silero",
+) -> None:
+    """Check the microphone's level: say a few commands from where you will stand. Prints each utterance the VAD
+    finds with its peak (dBFS), then what to change: HRI_VOICE_GAIN, or the microphone's own gain."""
+    import time
+
+    from services.voice.level import Level, LevelError, Meter, gain_from, verdict
+    from services.voice.sources import SourceError, SourceSpec, utterances
+
+    try:
+        gain_db = gain_from(gain)
+        spec = SourceSpec.parse(source or "mic")
+    except (LevelError, SourceError) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    meter = Meter(window_s=max(seconds, 1.0) if spec.kind == "mic" else 3600.0)
+    end = time.monotonic() + seconds
+    found: list[Level] = []
+    if spec.kind == "mic":
+        typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
+    try:
+        for utt in utterances(spec, lambda: time.monotonic() > end if spec.kind == "mic" else False,
+                              segmenter=VoiceSettings(vad=vad).segmenter(), gain_db=gain_db, meter=meter):
+            lv = Level.of(utt.pcm)
+            found.append(lv)
+            note = " (clipped)" if lv.is_clipped else " (quiet)" if lv.is_quiet else ""
+            typer.echo(f"  {utt.origin}: {utt.seconds:.2f} s, peak {lv.peak_dbfs:.1f} dBFS{note}")
+    except (SourceError, AudioError) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(1) from None
+    d = meter.detail()
+    if "input_peak_dbfs" in d:
+        typer.echo(f"stream: loudest {d['input_peak_dbfs']} dBFS, floor {d['input_floor_dbfs']} dBFS; "
+                   f"{len(found)} utterance(s)" + (f"; gain {gain_db:g} dB" if gain_db else ""))
+    typer.echo(verdict(meter, found, gain_db))
 
 
 @app.command()

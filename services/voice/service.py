@@ -29,11 +29,14 @@ from services.voice.engine import (
     make_engine,
     one_blas_thread,
 )
+from services.voice.level import LevelError, Meter, gain_from
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 from services.voice.vad import VadError, silero_model_path
 
 NAME = "voice"
+ADVICE_EVERY_S = 60.0
+"""The input level's advice (too quiet, clipped) is logged at most this often for each kind."""
 
 
 @dataclass(frozen=True)
@@ -71,6 +74,8 @@ class VoiceSettings:
     clear_window: str | None = None
     """`HRI_VOICE_CLEAR_WINDOW`: seconds of quiet that end an utterance in a clear stream
     (`SegmenterConfig.clear_quiet_s`), or `off`; None: the default."""
+    gain: str | None = None
+    """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -92,6 +97,7 @@ class VoiceSettings:
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
+            gain=os.environ.get("HRI_VOICE_GAIN") or None,
         )
 
     def segmenter(self) -> SegmenterConfig:
@@ -127,6 +133,10 @@ def check_settings(settings: VoiceSettings) -> None:
     if settings.vad not in VADS:
         raise EngineError(f"HRI_VOICE_VAD={settings.vad!r}: one of {', '.join(VADS)}")
     settings.segmenter()
+    try:
+        gain_from(settings.gain)
+    except LevelError as exc:
+        raise EngineError(str(exc)) from None
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
         try:
             silero_model_path()
@@ -194,6 +204,7 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     segmenter = settings.segmenter()
     blas_threads = one_blas_thread()  # the whole process, before any engine multiplies a matrix
     ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=blas_threads,
+                      gain_db=gain_from(settings.gain),
                       early_look_s=segmenter.early_quiet_s,
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
@@ -212,6 +223,10 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     # is one message per utterance and must not vanish on a busy link; listening waits meanwhile.
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     stats = _Stats()
+    gain_db = gain_from(settings.gain)
+    # the input's level (health, every 2 s of a live stream), and advice when speech is too quiet or clips
+    meter = Meter(report=lambda detail: ctx.update_detail(**detail))
+    advised: dict[str, float] = {}
 
     def on_bad_file(path: Path, exc: AudioError) -> None:
         stats.bad_audio += 1
@@ -243,6 +258,12 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
             stats.decode_s += rec.decode_s
         stats.utterances += 1
         stats.audio_s += rec.audio_s
+        level = meter.utterance(utt.pcm)
+        advice = level.advice(gain_db)
+        kind = "clipped" if level.is_clipped else "quiet"
+        if advice is not None and time.monotonic() - advised.get(kind, -ADVICE_EVERY_S) >= ADVICE_EVERY_S:
+            advised[kind] = time.monotonic()  # once a minute at most: a user who cannot change it now is not flooded
+            ctx.log.warning("input level", origin=utt.origin, advice=advice)
         if rec.command is None:
             stats.rejected += 1
         else:
@@ -252,16 +273,17 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
                      text=msg.text, confidence=msg.confidence, decode_ms=round(rec.decode_s * 1000, 1),
                      latency_ms=round((time.time() - utt.stamp) * 1000, 1), early=utt.recognition is not None,
                      snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
-                     **rec.detail)
+                     peak_dbfs=round(level.peak_dbfs, 1), **rec.detail)
         # the stream's last speech-to-noise estimate: whether the room counts as clear (`clear_window_s`)
-        ctx.update_detail(**stats.as_detail(), **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
+        ctx.update_detail(**stats.as_detail(), **meter.detail(),
+                          **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
 
     delay, last_error = settings.retry_s, ""
     while not ctx.stopping.is_set():
         try:
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
-                                  segmenter=settings.segmenter(), recognise=early_look):
+                                  segmenter=settings.segmenter(), recognise=early_look, gain_db=gain_db, meter=meter):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)

@@ -31,6 +31,7 @@ from typing import BinaryIO, Literal
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
 from services.voice.engine import Recognition
+from services.voice.level import Meter, amplified, amplify
 from services.voice.segmenter import Segmenter, SegmenterConfig
 
 ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir>, stdin"
@@ -132,9 +133,10 @@ def trim_to_speech(pcm: bytes, config: SegmenterConfig | None = None) -> bytes:
     return pcm[start:end] if end - start >= 0.1 * rate else pcm
 
 
-def file_utterances(path: Path, *, max_whole_s: float = 5.0) -> Iterator[Utterance]:
-    """A short WAV is one utterance (trimmed to its speech); a longer one is a recording cut by the VAD."""
-    pcm = read_wav(path)
+def file_utterances(path: Path, *, max_whole_s: float = 5.0, gain_db: float = 0.0) -> Iterator[Utterance]:
+    """A short WAV is one utterance (trimmed to its speech); a longer one is a recording cut by the VAD. `gain_db`:
+    the input gain (`level.amplify`)."""
+    pcm = amplify(read_wav(path), gain_db)
     if duration_s(pcm) <= max_whole_s:
         yield Utterance(trim_to_speech(pcm), path.name)
         return
@@ -204,14 +206,14 @@ class SpoolWatcher:
 
 def watch_utterances(
     folder: Path, stop: Stop, *, poll_s: float = 0.05, consume: Literal["keep", "delete"] = "keep",
-    on_error: Callable[[Path, AudioError], None] | None = None,
+    on_error: Callable[[Path, AudioError], None] | None = None, gain_db: float = 0.0,
 ) -> Iterator[Utterance]:
     watcher = SpoolWatcher(folder, consume)
     while not stop():
         for path in watcher.ready():
             found = time.time()
             try:
-                for utt in file_utterances(path):
+                for utt in file_utterances(path, gain_db=gain_db):
                     yield Utterance(utt.pcm, utt.origin, found)
             except AudioError as exc:
                 if on_error is not None:
@@ -281,29 +283,34 @@ def utterances(
     spec: SourceSpec, stop: Stop, *, stdin: BinaryIO | None = None,
     on_error: Callable[[Path, AudioError], None] | None = None,
     segmenter: SegmenterConfig | None = None, recognise: Recognise | None = None,
+    gain_db: float = 0.0, meter: Meter | None = None,
 ) -> Iterator[Utterance]:
     """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open.
     `recognise` turns on the segmenter's early look for live streams (microphone, stdin); files and spools
-    are not latency-bound and are decoded whole."""
-    if spec.kind == "mic":
-        yield from stream_utterances(mic_chunks(spec.target, stop), str(spec), segmenter, recognise)
-    elif spec.kind == "stdin":
-        yield from stream_utterances(stdin_chunks(stdin or sys.stdin.buffer, stop), "stdin", segmenter, recognise)
+    are not latency-bound and are decoded whole. `gain_db`: the input gain (`level.amplify`), before the VAD;
+    `meter`: fed a live stream's chunks after the gain (`level.Meter`)."""
+    if spec.kind in ("mic", "stdin"):
+        chunks = (mic_chunks(spec.target, stop) if spec.kind == "mic"
+                  else stdin_chunks(stdin or sys.stdin.buffer, stop))
+        chunks = amplified(chunks, gain_db)
+        if meter is not None:
+            chunks = meter.metered(chunks)
+        yield from stream_utterances(chunks, str(spec), segmenter, recognise)
     elif spec.kind == "file":
         path = Path(spec.target)
         if not path.is_file():
             raise SourceError(f"{path}: no such WAV file (sources: {ALTERNATIVES})")
-        yield from file_utterances(path)
+        yield from file_utterances(path, gain_db=gain_db)
     elif spec.kind == "folder":
         for path in folder_files(Path(spec.target)):
             if stop():
                 return
             try:
-                yield from file_utterances(path)
+                yield from file_utterances(path, gain_db=gain_db)
             except AudioError as exc:
                 if on_error is None:
                     raise
                 on_error(path, exc)
     else:
-        yield from watch_utterances(Path(spec.target), stop, on_error=on_error)
+        yield from watch_utterances(Path(spec.target), stop, on_error=on_error, gain_db=gain_db)
 
