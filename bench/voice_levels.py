@@ -38,7 +38,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, heldout_items  # noqa: E402,F401 (Item: the cache)
+from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, early_look_arg, heldout_items  # noqa: E402,F401
 from bench.voice_walking import LEAD_S, TAIL_S, pick, run_streams  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
@@ -110,13 +110,16 @@ def main() -> int:
                     help="dB of gain on what the sound card gave (clipped there), speech and hiss alike (HRI_VOICE_GAIN)")
     ap.add_argument("--per-family", type=int, default=14, help="clean commands and as many other words per family")
     ap.add_argument("--paths", default="stream,file", help="stream (VAD, then the engine), file (the engine alone)")
+    ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
+                    help="the peak the VAD hears the stream's loudest frame lifted to, dBFS, or off "
+                         "(SegmenterConfig.vad_lift_dbfs; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig()
+    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift)
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -129,7 +132,7 @@ def main() -> int:
                 row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
-            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, **row})
+            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")
@@ -137,7 +140,7 @@ def main() -> int:
         label = f"{r['peak_dbfs']:+.0f} dBFS" + (" (clipped)" if r["peak_dbfs"] > 0 else "")
         print(f"{label:14} {r['path']:6} {r['command_accuracy']:7.3f} {r['stop']:>7} {r['oov_accepted']:7.3f} "
               f"{r['false_walks']:11d} {r.get('no_segment_over_word', '-')!s:>6}")
-    print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB; {rows[0]['n']['commands'] if rows else 0} commands and "
+    print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB, VAD lift {args.vad_lift or 'off'}; {rows[0]['n']['commands'] if rows else 0} commands and "
           f"{rows[0]['n']['oov'] if rows else 0} other words per row; held-out seed {args.seed})")
     if args.json:
         args.json.write_text(json.dumps({"floor_dbfs": args.floor, "gain_db": args.gain, "seed": args.seed, "rows": rows}, indent=1))

@@ -65,6 +65,12 @@ class SegmenterConfig:
     clear_snr_db: float = 30.0
     """Silero, with `clear_quiet_s`: the estimated speech-to-noise ratio (dB) from which the stream counts as clear.
     On tuning data, the lowest at which almost no word mixed 25 dB or less over its noise took the short window."""
+    vad_lift_dbfs: float | None = None
+    """Silero: the VAD hears the stream with gain that brings its loudest frame of the last `vad_peak_s` (this frame
+    included) up to this peak level (dBFS), at most `vad_max_gain_db`, never below 0 dB; only the VAD: the utterance's
+    audio is as it came. None: no gain (round voice37)."""
+    vad_max_gain_db: float = 24.0
+    vad_peak_s: float = 10.0
     noise_floor_s: float = 1.0
     """How much of the most recent audio outside utterances the noise floor is the median of."""
     early_quiet_s: float | None = None
@@ -129,6 +135,9 @@ class Segmenter:
         self._early_frames = self._frames_before_end(self.config.early_quiet_s) if self.recognise is not None else 0
         self._clear_frames = self._frames_before_end(self.config.clear_quiet_s)  # ends a clear utterance; 0: none
         self._floor: deque[float] = deque(maxlen=max(1, round(self.config.noise_floor_s * SAMPLE_RATE / FRAME_SAMPLES)))
+        self._peaks: deque[int] | None = None  # the VAD's lift: each frame's peak over `vad_peak_s`
+        if self.config.vad_lift_dbfs is not None and self.config.vad == "silero":
+            self._peaks = deque(maxlen=max(1, round(self.config.vad_peak_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._speech_power = 0.0  # sum of the current utterance's speech frames' mean square
         self._speech_frames = 0
         self._pending = b""
@@ -164,6 +173,8 @@ class Segmenter:
             self._remember(frame)
             self._consumed += self._frame
             was_speech = self._ep.in_speech
+            if self._peaks is not None:
+                self._ep.gain = self._vad_gain(frame)
             speech = self._ep.process(frame)
             self._measure(frame, was_speech)
             seg = self._after(speech)
@@ -225,6 +236,16 @@ class Segmenter:
             self._speech_frames += 1
         elif not self._ep.in_speech and not was_speech:
             self._floor.append(power)
+
+    def _vad_gain(self, frame: bytes) -> float:
+        """The VAD's lift for this frame (linear): the gain that brings the loudest frame of the last `vad_peak_s`
+        to `vad_lift_dbfs`, from 0 to `vad_max_gain_db` dB. A loud frame lowers it at once; it rises again only
+        when that frame has left the window, so a person heard at a trained level is heard as before."""
+        assert self._peaks is not None and self.config.vad_lift_dbfs is not None
+        self._peaks.append(int(np.max(np.abs(np.frombuffer(frame, dtype="<i2").astype(np.int32)))))
+        loudest = max(max(self._peaks), 1) / 32768.0
+        lift = self.config.vad_lift_dbfs - 20.0 * math.log10(loudest)
+        return float(10 ** (min(max(lift, 0.0), self.config.vad_max_gain_db) / 20))
 
     def _snr_db(self) -> float | None:
         if not self._floor or not self._speech_frames:

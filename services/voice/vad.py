@@ -65,8 +65,11 @@ class SileroVad:
         self._h = np.zeros((2, 1, 64), dtype=np.float32)
         self._c = np.zeros((2, 1, 64), dtype=np.float32)
 
-    def __call__(self, frame: bytes) -> float:
+    def __call__(self, frame: bytes, gain: float = 1.0) -> float:
+        """The frame's speech probability; `gain` (linear) scales what the model hears, clipped at full scale."""
         x = (np.frombuffer(frame, dtype="<i2") / 32768.0).astype(np.float32)[None]
+        if gain != 1.0:
+            x = np.clip(x * np.float32(gain), -1.0, 1.0)
         out, self._h, self._c = self._session.run(None, {"input": x, "h": self._h, "c": self._c, "sr": self._sr})
         return float(out[0][0])
 
@@ -90,12 +93,15 @@ class SileroEndpointer:
         self.speech_start = 0.0
         self._frames = 0  # frames processed
         self._onset: list[bytes] = []  # frames at or above the threshold, before speech is declared
+        self.gain = 1.0
+        """What the model hears is the frame times this (the segmenter's `vad_lift_dbfs`); the audio handed over is
+        the frame as it came."""
         self._quiet: list[bytes] = []  # frames below the lower threshold inside speech, held back
 
     def process(self, frame: bytes) -> bytes | None:
         if len(frame) != self.frame_bytes:
             raise ValueError(f"frames of {self.frame_bytes} bytes, not {len(frame)}")
-        p = self._vad(frame)
+        p = self._vad(frame, self.gain)
         self._frames += 1
         if not self.in_speech:
             self._onset = [*self._onset, frame] if p >= self.threshold else []

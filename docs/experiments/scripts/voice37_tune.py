@@ -1,0 +1,84 @@
+"""Round voice37, tuning data only: Silero hears a quiet live stream lifted to a level (`SegmenterConfig.vad_lift_dbfs`).
+
+`bench/voice_levels.py`'s stream path on tuning clips instead of held-out ones: round voice36's cache of the `tune` and
+`neighbours-tune` splits (train seed 12), 40 commands of each word and 200 other words drawn with a fixed seed, each
+scaled to a peak level and placed in a quiet room's hiss (-70 dBFS), fed to the service's segmenter and the default
+engine. Each `SegmenterConfig.vad_lift_dbfs` (none: today's) at each level; then the hiss alone for 60 s
+(segments and commands heard in it).
+
+    .venv/bin/python docs/experiments/scripts/voice37_tune.py --floors none,-20 --json /tmp/s70/voice37_tune.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(ROOT))
+
+from bench.voice_bench import OTHER, Item, Policy  # noqa: E402
+from bench.voice_levels import at_level, in_room, levels  # noqa: E402
+from bench.voice_walking import run_streams, stream  # noqa: E402
+from services.voice.audio import SAMPLE_RATE  # noqa: E402
+from services.voice.engine import make_engine  # noqa: E402
+from services.voice.segmenter import SegmenterConfig  # noqa: E402
+
+
+def tune_items(cache: Path, per_command: int, others: int, seed: int) -> list[Item]:
+    clips = pickle.loads(cache.read_bytes())
+    rng = np.random.default_rng(seed)
+    out: list[Item] = []
+    for label in sorted({c[0] for c in clips}):
+        pool = [c for c in clips if c[0] == label]
+        take = rng.permutation(len(pool))[: per_command if label < OTHER else others]
+        out += [Item("tune", "", pool[i][0], pool[i][1], "tune", pool[i][2]) for i in sorted(take)]
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/s70/voice36_tune_clips.pickle"))
+    ap.add_argument("--floors", default="none,-20", help="SegmenterConfig.vad_lift_dbfs values (none: today's)")
+    ap.add_argument("--peaks", default="-50,-44,-38,-32,-26,-14,-3")
+    ap.add_argument("--per-command", type=int, default=40)
+    ap.add_argument("--others", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=37)
+    ap.add_argument("--hiss-s", type=float, default=60.0)
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    items = tune_items(args.cache, args.per_command, args.others, args.seed)
+    print(f"{sum(i.label < OTHER for i in items)} commands, {sum(i.label == OTHER for i in items)} other words", flush=True)
+    policy = Policy.from_knowledge()
+    engine = make_engine("spotter")
+    rows = []
+    for floor in args.floors.split(","):
+        config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor))
+        for peak in levels(args.peaks, ""):
+            def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
+                return in_room(at_level(speech, peak), -70.0, rng)
+
+            row = {"floor": floor, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
+            rows.append(row)
+            print(json.dumps({k: row[k] for k in ("floor", "peak_dbfs", "command_accuracy", "oov_accepted",
+                                                  "false_walks", "no_segment_over_word", "segments_per_clip",
+                                                  "end_of_speech_to_segment_ms_p50_p90")}), flush=True)
+        hiss = np.random.default_rng(args.seed).normal(0.0, 10 ** (-70 / 20), int(args.hiss_s * SAMPLE_RATE))
+        segs = stream(engine, hiss, config)
+        alone = {"floor": floor, "hiss_alone_s": args.hiss_s, "segments": len(segs),
+                 "commands": [s[3].value for s in segs if s[3] is not None and policy.takes(s[3], s[4])]}
+        rows.append(alone)
+        print(json.dumps(alone), flush=True)
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
