@@ -94,6 +94,12 @@ ClearWindowOption = Annotated[
                  help="live stream (Silero): seconds of quiet that end an utterance when the speech is at least 30 dB "
                       "over the noise floor, or 'off' [default: 0.09; elsewhere the end window is 0.15]"),
 ]
+VadLiftOption = Annotated[
+    str | None,
+    typer.Option("--vad-lift", envvar="HRI_VOICE_VAD_LIFT",
+                 help="live stream (Silero): the peak (dBFS) a quiet stream's loudest moment is lifted to for the VAD "
+                      "alone, up to 24 dB, so that a quiet voice is found; or 'off' [default: see the voice README]"),
+]
 GainOption = Annotated[
     str | None,
     typer.Option("--gain", envvar="HRI_VOICE_GAIN",
@@ -118,7 +124,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          walk_gate: WalkGateOption = None, agree_min: AgreeMinOption = None, decoder: DecoderOption = None,
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
-         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, gain: GainOption = None) -> None:
+         early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
+         gain: GainOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -126,7 +133,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
-                             gain=gain)
+                             vad_lift=vad_lift, gain=gain)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -178,6 +185,7 @@ def level(
     seconds: Annotated[float, typer.Option(help="how long to listen to a microphone (a file or stdin: to its end)")] = 10.0,
     gain: GainOption = None,
     vad: VadOption = "silero",
+    vad_lift: VadLiftOption = None,
 ) -> None:
     """Check the microphone's level: say a few commands from where you will stand. Prints each utterance the VAD
     finds with its peak (dBFS), then what to change: HRI_VOICE_GAIN, or the microphone's own gain."""
@@ -189,7 +197,9 @@ def level(
     try:
         gain_db = gain_from(gain)
         spec = SourceSpec.parse(source or "mic")
-    except (LevelError, SourceError) as exc:
+        settings = VoiceSettings(vad=vad, vad_lift=vad_lift)
+        settings.segmenter()
+    except (LevelError, SourceError, EngineError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
     meter = Meter(window_s=max(seconds, 1.0) if spec.kind == "mic" else 3600.0)
@@ -199,7 +209,7 @@ def level(
         typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
     try:
         for utt in utterances(spec, lambda: time.monotonic() > end if spec.kind == "mic" else False,
-                              segmenter=VoiceSettings(vad=vad).segmenter(), gain_db=gain_db, meter=meter):
+                              segmenter=settings.segmenter(), gain_db=gain_db, meter=meter):
             lv = Level.of(utt.pcm)
             found.append(lv)
             note = " (clipped)" if lv.is_clipped else " (quiet)" if lv.is_quiet else ""

@@ -74,6 +74,9 @@ class VoiceSettings:
     clear_window: str | None = None
     """`HRI_VOICE_CLEAR_WINDOW`: seconds of quiet that end an utterance in a clear stream
     (`SegmenterConfig.clear_quiet_s`), or `off`; None: the default."""
+    vad_lift: str | None = None
+    """`HRI_VOICE_VAD_LIFT`: the peak (dBFS) a quiet live stream is lifted to for the VAD alone
+    (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default."""
     gain: str | None = None
     """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
     retry_s: float = 2.0
@@ -97,6 +100,7 @@ class VoiceSettings:
             vad=os.environ.get("HRI_VOICE_VAD") or "silero",
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
+            vad_lift=os.environ.get("HRI_VOICE_VAD_LIFT") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
         )
 
@@ -107,7 +111,24 @@ class VoiceSettings:
         return replace(base, early_quiet_s=_shorter_quiet("HRI_VOICE_EARLY_LOOK", self.early_look, base.early_quiet_s,
                                                           base.quiet_s),
                        clear_quiet_s=_shorter_quiet("HRI_VOICE_CLEAR_WINDOW", self.clear_window, base.clear_quiet_s,
-                                                    base.quiet_s))
+                                                    base.quiet_s),
+                       vad_lift_dbfs=_lift(self.vad_lift, base.vad_lift_dbfs))
+
+
+def _lift(raw: str | None, default: float | None) -> float | None:
+    """`HRI_VOICE_VAD_LIFT` as a peak level from -40 to 0 dBFS; `off` -> None; None -> `default`."""
+    if raw is None:
+        return default
+    if raw.strip().lower() == "off":
+        return None
+    try:
+        level = float(raw)
+    except ValueError:
+        level = 1.0
+    if not -40.0 <= level <= 0.0:
+        raise EngineError(f"HRI_VOICE_VAD_LIFT={raw!r}: 'off' or the peak level (dBFS) a quiet stream is lifted to for "
+                          f"the VAD, from -40 to 0 (default {default})")
+    return level
 
 
 def _shorter_quiet(variable: str, raw: str | None, default: float | None, quiet_s: float) -> float | None:
@@ -206,7 +227,8 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=blas_threads,
                       gain_db=gain_from(settings.gain),
                       early_look_s=segmenter.early_quiet_s,
-                      clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None)
+                      clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None,
+                      vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
     listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
