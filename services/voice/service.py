@@ -12,8 +12,10 @@ A file or folder source that has been read to the end leaves the service idle (h
 
 from __future__ import annotations
 
+import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -108,43 +110,36 @@ class VoiceSettings:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
         seconds shorter than the end window."""
         base = SegmenterConfig(vad=self.vad)
-        return replace(base, early_quiet_s=_shorter_quiet("HRI_VOICE_EARLY_LOOK", self.early_look, base.early_quiet_s,
-                                                          base.quiet_s),
-                       clear_quiet_s=_shorter_quiet("HRI_VOICE_CLEAR_WINDOW", self.clear_window, base.clear_quiet_s,
-                                                    base.quiet_s),
-                       vad_lift_dbfs=_lift(self.vad_lift, base.vad_lift_dbfs))
+
+        def quiet_s(value: float) -> bool:
+            return 0.0 < value < base.quiet_s
+
+        shorter = f"seconds of quiet above 0 and below the end window ({base.quiet_s} s)"
+        return replace(base,
+                       early_quiet_s=_off_or(quiet_s, shorter, "HRI_VOICE_EARLY_LOOK", self.early_look,
+                                             base.early_quiet_s),
+                       clear_quiet_s=_off_or(quiet_s, shorter, "HRI_VOICE_CLEAR_WINDOW", self.clear_window,
+                                             base.clear_quiet_s),
+                       vad_lift_dbfs=_off_or(lambda v: -40.0 <= v <= 0.0, "the peak level (dBFS) a quiet stream is "
+                                             "lifted to for the VAD, from -40 to 0", "HRI_VOICE_VAD_LIFT",
+                                             self.vad_lift, base.vad_lift_dbfs))
 
 
-def _lift(raw: str | None, default: float | None) -> float | None:
-    """`HRI_VOICE_VAD_LIFT` as a peak level from -40 to 0 dBFS; `off` -> None; None -> `default`."""
+def _off_or(ok: Callable[[float], bool], what: str, variable: str, raw: str | None,
+            default: float | None) -> float | None:
+    """`raw` as a number for which `ok` holds (`EngineError` naming the variable and `what` otherwise); `off` -> None;
+    None -> `default`."""
     if raw is None:
         return default
     if raw.strip().lower() == "off":
         return None
     try:
-        level = float(raw)
+        value = float(raw)
     except ValueError:
-        level = 1.0
-    if not -40.0 <= level <= 0.0:
-        raise EngineError(f"HRI_VOICE_VAD_LIFT={raw!r}: 'off' or the peak level (dBFS) a quiet stream is lifted to for "
-                          f"the VAD, from -40 to 0 (default {default})")
-    return level
-
-
-def _shorter_quiet(variable: str, raw: str | None, default: float | None, quiet_s: float) -> float | None:
-    """`raw` as seconds of quiet shorter than the end window `quiet_s`; `off` -> None; None -> `default`."""
-    if raw is None:
-        return default
-    if raw.strip().lower() == "off":
-        return None
-    try:
-        seconds = float(raw)
-    except ValueError:
-        seconds = -1.0
-    if not 0.0 < seconds < quiet_s:
-        raise EngineError(f"{variable}={raw!r}: 'off' or seconds of quiet above 0 and below the end window "
-                          f"({quiet_s} s)")
-    return seconds
+        value = math.nan
+    if math.isnan(value) or not ok(value):
+        raise EngineError(f"{variable}={raw!r}: 'off' or {what}")
+    return value
 
 
 def check_settings(settings: VoiceSettings) -> None:
