@@ -98,7 +98,7 @@ VadLiftOption = Annotated[
     str | None,
     typer.Option("--vad-lift", envvar="HRI_VOICE_VAD_LIFT",
                  help="live stream (Silero): the peak (dBFS) a quiet stream's loudest moment is lifted to for the VAD "
-                      "alone, up to 24 dB, so that a quiet voice is found; or 'off' [default: see the voice README]"),
+                      "alone, up to 24 dB, so that a quiet voice is found; or 'off' [default: off; round voice37]"),
 ]
 GainOption = Annotated[
     str | None,
