@@ -182,7 +182,8 @@ def transcribe(
 @app.command()
 def level(
     source: SourceOption = None,
-    seconds: Annotated[float, typer.Option(help="how long to listen to a microphone (a file or stdin: to its end)")] = 10.0,
+    seconds: Annotated[float, typer.Option(
+        help="how long to listen to a microphone, stdin or a spool (a file or folder: to its end)")] = 10.0,
     gain: GainOption = None,
     vad: VadOption = "silero",
     vad_lift: VadLiftOption = None,
@@ -202,13 +203,14 @@ def level(
     except (LevelError, SourceError, EngineError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
-    meter = Meter(window_s=max(seconds, 1.0) if spec.kind == "mic" else 3600.0)
+    live = spec.kind in ("mic", "stdin", "watch")
+    meter = Meter(window_s=max(seconds, 1.0) if live else 3600.0)
     end = time.monotonic() + seconds
     found: list[Level] = []
     if spec.kind == "mic":
         typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
     try:
-        for utt in utterances(spec, lambda: time.monotonic() > end if spec.kind == "mic" else False,
+        for utt in utterances(spec, lambda: live and time.monotonic() > end,
                               segmenter=settings.segmenter(), gain_db=gain_db, meter=meter):
             lv = Level.of(utt.pcm)
             found.append(lv)

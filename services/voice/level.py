@@ -96,9 +96,8 @@ class Level:
                      "mended after the sound card")
             return f"the input clips ({self.clipped} samples at full scale): {lower}"
         if self.is_quiet:
-            more = math.ceil(QUIET_PEAK_DBFS + 12 - self.peak_dbfs)
-            return (f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD misses words: raise "
-                    f"the microphone's gain, or set HRI_VOICE_GAIN={gain_db + more:g}")
+            return (f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD misses words: "
+                    f"{_raise(self.peak_dbfs, gain_db)}")
         return None
 
 
@@ -176,6 +175,13 @@ def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0) -> str:
     if peak - floor < 12.0:
         return f"no speech found: nothing rose above the floor ({floor:.0f} dBFS; loudest {peak:.0f}). Is it the " \
                f"right microphone, and is it muted?"
-    more = math.ceil(QUIET_PEAK_DBFS + 12 - peak)
     return (f"no speech found; the loudest sound peaked at {peak:.0f} dBFS over a floor of {floor:.0f}. If that was "
-            f"you, it is too quiet for the VAD: raise the microphone's gain, or set HRI_VOICE_GAIN={gain_db + max(more, 0):g}")
+            f"you, it is too quiet for the VAD: {_raise(peak, gain_db)}")
+
+
+def _raise(peak_dbfs: float, gain_db: float) -> str:
+    """What brings speech peaking at `peak_dbfs` (with `gain_db` set) to `QUIET_PEAK_DBFS` + 12 dB (-20 dBFS)."""
+    want = gain_db + max(0, math.ceil(QUIET_PEAK_DBFS + 12 - peak_dbfs))
+    if want > MAX_GAIN_DB:
+        return f"raise the microphone's own gain, or bring it nearer (HRI_VOICE_GAIN={want:g} would be over its {MAX_GAIN_DB:g})"
+    return f"raise the microphone's gain, or set HRI_VOICE_GAIN={want:g}"

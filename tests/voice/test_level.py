@@ -174,3 +174,9 @@ def test_levels_bench_places_the_speech_at_its_level_in_the_room() -> None:
     assert round(20 * np.log10(np.sqrt(np.mean(x[:at] ** 2)))) == -70
     assert np.isclose(np.abs(x[at : at + speech.size]).max(), 0.1, atol=0.002)
     assert levels("-44,-26", "6") == [-44.0, -26.0, 6.0] and levels("-3", "") == [-3.0]
+
+
+def test_advice_never_names_a_gain_over_the_limit() -> None:
+    faint = Level.of(np.array([0, 20], "<i2").tobytes())  # -64 dBFS
+    assert "HRI_VOICE_GAIN=45 would be over its 40" in (faint.advice(0.0) or "")  # -20 - -64.3, rounded up
+    assert "raise the microphone's own gain" in (faint.advice(0.0) or "")

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import pickle
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -32,7 +31,12 @@ from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 
 def tune_items(cache: Path, per_command: int, others: int, seed: int) -> list[Item]:
-    clips = pickle.loads(cache.read_bytes())
+    """Round voice36's tune clips (rendered by its script into `cache` when missing), `per_command` of each command and
+    `others` other words."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from voice36_tune import clips as voice36_clips
+
+    clips = voice36_clips(12, 2, cache)
     rng = np.random.default_rng(seed)
     out: list[Item] = []
     for label in sorted({c[0] for c in clips}):
