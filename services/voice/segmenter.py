@@ -73,6 +73,9 @@ class SegmenterConfig:
     nothing at trained levels, but lost words in the walking robot's noise (20 dB: 0.74 -> 0.52)."""
     vad_max_gain_db: float = 24.0
     vad_peak_s: float = 10.0
+    vad_lift_floor_dbfs: float | None = None
+    """With `vad_lift_dbfs`: the lift never brings the noise floor (`noise_floor_s`) over this level (dBFS RMS), so a
+    noisy stream is not lifted (round voice37b, tuning only); None: no such bound."""
     noise_floor_s: float = 1.0
     """How much of the most recent audio outside utterances the noise floor is the median of."""
     early_quiet_s: float | None = None
@@ -247,6 +250,8 @@ class Segmenter:
         self._peaks.append(int(np.max(np.abs(np.frombuffer(frame, dtype="<i2").astype(np.int32)))))
         loudest = max(max(self._peaks), 1) / 32768.0
         lift = self.config.vad_lift_dbfs - 20.0 * math.log10(loudest)
+        if self.config.vad_lift_floor_dbfs is not None and self._floor:
+            lift = min(lift, self.config.vad_lift_floor_dbfs - 10.0 * math.log10(median(self._floor)))
         return float(10 ** (min(max(lift, 0.0), self.config.vad_max_gain_db) / 20))
 
     def _snr_db(self) -> float | None:

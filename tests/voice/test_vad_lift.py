@@ -86,3 +86,12 @@ def test_a_bad_vad_lift_exits_2_naming_the_variable() -> None:
     out = subprocess.run([sys.executable, "-m", "services.voice"], cwd=ROOT, capture_output=True, text=True,
                          check=False, timeout=60, env={**os.environ, "HRI_VOICE_VAD_LIFT": "loud", "HRI_VOICE_SOURCE": "stdin"})
     assert out.returncode == 2 and "HRI_VOICE_VAD_LIFT='loud'" in out.stderr
+
+
+def test_the_floor_bound_keeps_a_noisy_stream_unlifted() -> None:
+    """Round voice37b: with `vad_lift_floor_dbfs` the lift never brings the noise floor over that level."""
+    frame = np.full(480, 206, "<i2").tobytes()  # -44 dBFS: round 37's lift would be 24 dB
+    for floor_db, lift_db in ((-70.0, 15.0), (-40.0, 0.0)):
+        seg = Segmenter(replace(LIFT, vad_lift_floor_dbfs=-55.0))
+        seg._floor.append(10 ** (floor_db / 10))  # the noise floor, as mean square
+        assert round(20 * np.log10(seg._vad_gain(frame)), 1) == lift_db

@@ -22,9 +22,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 
+from bench.ego_noise import EgoNoiseModel  # noqa: E402
 from bench.voice_bench import OTHER, Item, Policy  # noqa: E402
 from bench.voice_levels import at_level, in_room, levels  # noqa: E402
-from bench.voice_walking import run_streams, stream  # noqa: E402
+from bench.voice_walking import noise_source, run_ratio, run_streams, stream  # noqa: E402
 from services.voice.audio import SAMPLE_RATE  # noqa: E402
 from services.voice.engine import make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
@@ -55,6 +56,8 @@ def main() -> int:
     ap.add_argument("--others", type=int, default=200)
     ap.add_argument("--seed", type=int, default=37)
     ap.add_argument("--hiss-s", type=float, default=60.0)
+    ap.add_argument("--lift-floor", type=float, help="SegmenterConfig.vad_lift_floor_dbfs (round voice37b)")
+    ap.add_argument("--walking", default="", help="also these speech-to-walking-noise ratios (dB), clips as rendered")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     items = tune_items(args.cache, args.per_command, args.others, args.seed)
@@ -63,12 +66,21 @@ def main() -> int:
     engine = make_engine("spotter")
     rows = []
     for floor in args.floors.split(","):
-        config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor))
+        config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor),
+                         vad_lift_floor_dbfs=args.lift_floor)
+        for snr in (float(v) for v in args.walking.split(",") if v):
+            row = {"floor": floor, "lift_floor": args.lift_floor, "walking_snr_db": snr,
+                   **run_ratio(engine, items, snr, config, policy, args.seed,
+                               lambda seconds, rng: noise_source(seconds, rng, None, EgoNoiseModel()))}
+            rows.append(row)
+            print(json.dumps({k: row[k] for k in ("floor", "lift_floor", "walking_snr_db", "command_accuracy",
+                                                  "oov_accepted", "false_walks", "no_segment_over_word",
+                                                  "end_of_speech_to_segment_ms_p50_p90")}), flush=True)
         for peak in levels(args.peaks, ""):
             def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
                 return in_room(at_level(speech, peak), -70.0, rng)
 
-            row = {"floor": floor, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
+            row = {"floor": floor, "lift_floor": args.lift_floor, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
             rows.append(row)
             print(json.dumps({k: row[k] for k in ("floor", "peak_dbfs", "command_accuracy", "oov_accepted",
                                                   "false_walks", "no_segment_over_word", "segments_per_clip",
