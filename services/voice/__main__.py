@@ -198,20 +198,19 @@ def level(
     try:
         gain_db = gain_from(gain)
         spec = SourceSpec.parse(source or "mic")
-        settings = VoiceSettings(vad=vad, vad_lift=vad_lift)
-        settings.segmenter()
+        segmenter = VoiceSettings(vad=vad, vad_lift=vad_lift).segmenter()
     except (LevelError, SourceError, EngineError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
     live = spec.kind in ("mic", "stdin", "watch")
-    meter = Meter(window_s=max(seconds, 1.0) if live else 3600.0)
+    meter = Meter(window_s=max(seconds, 1.0))  # fed by the streams only (mic, stdin), which listen for `seconds`
     end = time.monotonic() + seconds
     found: list[Level] = []
     if spec.kind == "mic":
         typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
     try:
         for utt in utterances(spec, lambda: live and time.monotonic() > end,
-                              segmenter=settings.segmenter(), gain_db=gain_db, meter=meter):
+                              segmenter=segmenter, gain_db=gain_db, meter=meter):
             lv = Level.of(utt.pcm)
             found.append(lv)
             note = " (clipped)" if lv.is_clipped else " (quiet)" if lv.is_quiet else ""
