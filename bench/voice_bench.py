@@ -401,7 +401,7 @@ def spotter_settings(args: argparse.Namespace, names: Iterable[str]) -> dict[str
 
 
 def early_look_arg(text: str) -> float | None:
-    """`--early-look`, `--clear-window`: seconds of quiet, or `off`."""
+    """A bench option that takes a number or `off` (None): `--early-look`, `--clear-window`, `--vad-lift`, `--vad-lift-floor`."""
     return None if text.strip().lower() == "off" else float(text)
 
 

@@ -113,13 +113,16 @@ def main() -> int:
     ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
                     help="the peak the VAD hears the stream's loudest frame lifted to, dBFS, or off "
                          "(SegmenterConfig.vad_lift_dbfs; default: the service's)")
+    ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
+                    help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
+                         "(SegmenterConfig.vad_lift_floor_dbfs; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift)
+    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift, vad_lift_floor_dbfs=args.vad_lift_floor)
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -132,7 +135,8 @@ def main() -> int:
                 row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
-            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift, **row})
+            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift,
+                         "vad_lift_floor_dbfs": args.vad_lift_floor, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")

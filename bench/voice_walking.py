@@ -221,6 +221,9 @@ def main() -> int:
                     help="the end window in a clear stream: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
                     help="Silero: the peak the VAD hears the loudest frame lifted to, dBFS, or off (default: the service's)")
+    ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
+                    help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
+                         "(default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -239,7 +242,8 @@ def main() -> int:
     for vad in args.vad.split(","):
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
                                  early_quiet_s=args.early_look,
-                                 clear_quiet_s=args.clear_window, vad_lift_dbfs=args.vad_lift)
+                                 clear_quiet_s=args.clear_window, vad_lift_dbfs=args.vad_lift,
+                                 vad_lift_floor_dbfs=args.vad_lift_floor)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise)
             rows.append(row)

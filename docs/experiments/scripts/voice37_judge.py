@@ -1,4 +1,4 @@
-"""Rule voice37's conditions on the four JSON files of its held-out runs.
+"""Rule voice37's conditions (and round voice37b's, the same) on the four JSON files of its held-out runs.
 
     python docs/experiments/scripts/voice37_judge.py A_CONTROL.json A_CANDIDATE.json B_CONTROL.json B_CANDIDATE.json
 
