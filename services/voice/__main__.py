@@ -189,7 +189,8 @@ def level(
     vad_lift: VadLiftOption = None,
 ) -> None:
     """Check the microphone's level: say a few commands from where you will stand. Prints each utterance the VAD
-    finds with its peak (dBFS), then what to change: HRI_VOICE_GAIN, or the microphone's own gain."""
+    finds with its peak (dBFS) and how far it is over the noise, then what to change: HRI_VOICE_GAIN, the
+    microphone's own gain, or its distance from the person."""
     import time
 
     from services.voice.level import Level, LevelError, Meter, gain_from, verdict
@@ -211,10 +212,11 @@ def level(
     try:
         for utt in utterances(spec, lambda: live and time.monotonic() > end,
                               segmenter=segmenter, gain_db=gain_db, meter=meter):
-            lv = Level.of(utt.pcm)
+            lv = Level.of(utt.pcm, utt.snr_db)
             found.append(lv)
-            note = " (clipped)" if lv.is_clipped else " (quiet)" if lv.is_quiet else ""
-            typer.echo(f"  {utt.origin}: {utt.seconds:.2f} s, peak {lv.peak_dbfs:.1f} dBFS{note}")
+            over = f", {lv.snr_db:.0f} dB over the noise" if lv.snr_db is not None else ""
+            note = f" ({lv.kind})" if lv.kind else ""
+            typer.echo(f"  {utt.origin}: {utt.seconds:.2f} s, peak {lv.peak_dbfs:.1f} dBFS{over}{note}")
     except (SourceError, AudioError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None

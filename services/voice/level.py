@@ -1,5 +1,5 @@
 """How loud the input is: a digital gain on what the source gives, and a meter that says when speech reaches the
-microphone too quietly for the VAD or so loudly that the sound card clips it.
+microphone too quietly for the VAD, too near the noise for the spotter, or so loudly that the sound card clips it.
 
 Measured with `bench/voice_levels.py` (held-out voices, a quiet room's hiss at -70 dBFS; voice README, "How loud the
 speech is"): every clip the spotter was trained on peaks between about -26 and -2 dBFS. From a peak of -32 dBFS down,
@@ -23,6 +23,13 @@ FULL_SCALE = 32767
 QUIET_PEAK_DBFS = -32.0
 """Speech peaking below this is quieter than any training clip by 6 dB, and the VAD starts to miss words (7 of 273
 held-out words at -32 dBFS, 70 at -38, 208 at -44)."""
+NOISY_SNR_DB = 20.0
+"""An utterance whose speech is less than this over the stream's noise floor (the segmenter's estimate,
+`Segment.snr_db`) counts as noisy. On tuning clips (voice README, round voice38) the spotter took 6 % of other words
+for commands at about 29 dB by this estimate (speech peaking at -26 dBFS in a quiet room's -70 dBFS hiss), 7.5 % at
+about 23 dB (-32 dBFS), 11 % at about 18 dB (-38) and 11.5 % at about 13 dB (-44), and heard fewer commands; a walking
+robot's noise at the walking bench's 20 dB is about 17 dB here. Gain does not mend it: it raises the noise with the
+speech. A microphone nearer the person does."""
 CLIPPED_SHARE = 0.001
 """An utterance with more than this share of its samples at full scale counts as clipped."""
 MAX_GAIN_DB = 40.0
@@ -74,11 +81,14 @@ class Level:
     clipped: int
     """Samples at full scale."""
     samples: int
+    snr_db: float | None = None
+    """The speech over the stream's noise floor (the segmenter's estimate; None for a file, which has no floor)."""
 
     @classmethod
-    def of(cls, pcm: bytes) -> Level:
+    def of(cls, pcm: bytes, snr_db: float | None = None) -> Level:
         x = np.abs(np.frombuffer(pcm, "<i2").astype(np.int32))
-        return cls(dbfs(float(x.max())) if x.size else -120.0, int(np.count_nonzero(x >= FULL_SCALE)), int(x.size))
+        return cls(dbfs(float(x.max())) if x.size else -120.0, int(np.count_nonzero(x >= FULL_SCALE)), int(x.size),
+                   snr_db)
 
     @property
     def is_clipped(self) -> bool:
@@ -88,6 +98,15 @@ class Level:
     def is_quiet(self) -> bool:
         return self.peak_dbfs < QUIET_PEAK_DBFS
 
+    @property
+    def is_noisy(self) -> bool:
+        return self.snr_db is not None and self.snr_db < NOISY_SNR_DB
+
+    @property
+    def kind(self) -> str | None:
+        """What is wrong with it, the worst first ("clipped", "quiet", "noisy"), or None."""
+        return "clipped" if self.is_clipped else "quiet" if self.is_quiet else "noisy" if self.is_noisy else None
+
     def advice(self, gain_db: float = 0.0) -> str | None:
         """What to change, or None when the level is fine."""
         if self.is_clipped:
@@ -95,10 +114,15 @@ class Level:
                      "lower the microphone's own gain (alsamixer, pactl set-source-volume): clipped audio cannot be "
                      "mended after the sound card")
             return f"the input clips ({self.clipped} samples at full scale): {lower}"
+        said = []
         if self.is_quiet:
-            return (f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD misses words: "
-                    f"{_raise(self.peak_dbfs, gain_db)}")
-        return None
+            said.append(f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD misses words: "
+                         f"{_raise(self.peak_dbfs, gain_db)}")
+        if self.is_noisy:
+            said.append(f"speech is only {self.snr_db:.0f} dB over the noise floor; below {NOISY_SNR_DB:.0f} the spotter "
+                        f"hears fewer commands and takes more other words for them: bring the microphone nearer the "
+                        f"person, or quiet the room (gain raises the noise with the speech)")
+        return "; and ".join(said) or None
 
 
 @dataclass
@@ -116,6 +140,7 @@ class Meter:
     utterances: int = 0
     quiet: int = 0
     clipped: int = 0
+    noisy: int = 0
     last: Level | None = None
     _fed: int = 0
 
@@ -139,17 +164,19 @@ class Meter:
             self.feed(chunk)
             yield chunk
 
-    def utterance(self, pcm: bytes) -> Level:
-        level = Level.of(pcm)
+    def utterance(self, pcm: bytes, snr_db: float | None = None) -> Level:
+        level = Level.of(pcm, snr_db)
         self.utterances += 1
         self.quiet += level.is_quiet
         self.clipped += level.is_clipped
+        self.noisy += level.is_noisy
         self.last = level
         return level
 
     def detail(self) -> dict[str, object]:
         """Health fields: the stream's peak and floor (dBFS) over the window, and the utterances' counts."""
-        out: dict[str, object] = {"quiet_utterances": self.quiet, "clipped_utterances": self.clipped}
+        out: dict[str, object] = {"quiet_utterances": self.quiet, "clipped_utterances": self.clipped,
+                                  "noisy_utterances": self.noisy}
         if self._peaks:
             out["input_peak_dbfs"] = round(dbfs(max(self._peaks)), 1)
             out["input_floor_dbfs"] = round(dbfs(float(np.percentile(self._rms, 10))), 1)
@@ -166,8 +193,9 @@ def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0) -> str:
         return clipped[0].advice(gain_db) or ""
     if levels:
         loudest = max(levels, key=lambda lv: lv.peak_dbfs)
+        over = f", {loudest.snr_db:.0f} dB over the noise" if loudest.snr_db is not None else ""
         return loudest.advice(gain_db) or (f"fine: speech peaks at {loudest.peak_dbfs:.0f} dBFS (the spotter was "
-                                           f"trained on -26 to -2)")
+                                           f"trained on -26 to -2){over}")
     detail = meter.detail()
     if "input_peak_dbfs" not in detail:
         return "no audio"

@@ -275,9 +275,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
             stats.decode_s += rec.decode_s
         stats.utterances += 1
         stats.audio_s += rec.audio_s
-        level = meter.utterance(utt.pcm)
-        advice = level.advice(gain_db)
-        kind = "clipped" if level.is_clipped else "quiet"
+        level = meter.utterance(utt.pcm, utt.snr_db)
+        advice, kind = level.advice(gain_db), level.kind or ""
         if advice is not None and time.monotonic() - advised.get(kind, -ADVICE_EVERY_S) >= ADVICE_EVERY_S:
             advised[kind] = time.monotonic()  # once a minute at most: a user who cannot change it now is not flooded
             ctx.log.warning("input level", origin=utt.origin, advice=advice)
