@@ -106,6 +106,18 @@ GainOption = Annotated[
                  help="dB of gain on the source's audio before the VAD, 0 to 40: for a microphone whose speech peaks "
                       "below -32 dBFS (the log's peak_dbfs; health input_peak_dbfs) [default: 0]"),
 ]
+MicRateOption = Annotated[
+    str | None,
+    typer.Option("--mic-rate", envvar="HRI_VOICE_MIC_RATE",
+                 help="open the microphone at this rate (Hz) and resample it to 16 kHz [default: 16000, or the "
+                      "device's own when it refuses that]"),
+]
+MicChannelsOption = Annotated[
+    str | None,
+    typer.Option("--mic-channels", envvar="HRI_VOICE_MIC_CHANNELS",
+                 help="open the microphone with this many channels, mixed down to one [default: 1, or 2 when it "
+                      "refuses that]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -125,7 +137,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
-         gain: GainOption = None) -> None:
+         gain: GainOption = None, mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -133,7 +145,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
-                             vad_lift=vad_lift, gain=gain)
+                             vad_lift=vad_lift, gain=gain, mic_rate=mic_rate, mic_channels=mic_channels)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -187,6 +199,8 @@ def level(
     gain: GainOption = None,
     vad: VadOption = "silero",
     vad_lift: VadLiftOption = None,
+    mic_rate: MicRateOption = None,
+    mic_channels: MicChannelsOption = None,
 ) -> None:
     """Check the microphone's level: say a few commands from where you will stand. Prints each utterance the VAD
     finds with its peak (dBFS) and how far it is over the noise, then what to change: HRI_VOICE_GAIN, the
@@ -199,7 +213,8 @@ def level(
     try:
         gain_db = gain_from(gain)
         spec = SourceSpec.parse(source or "mic")
-        segmenter = VoiceSettings(vad=vad, vad_lift=vad_lift).segmenter()
+        settings = VoiceSettings(vad=vad, vad_lift=vad_lift, mic_rate=mic_rate, mic_channels=mic_channels)
+        segmenter, mic = settings.segmenter(), settings.mic()
     except (LevelError, SourceError, EngineError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -211,7 +226,8 @@ def level(
         typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
     try:
         for utt in utterances(spec, lambda: live and time.monotonic() > end,
-                              segmenter=segmenter, gain_db=gain_db, meter=meter):
+                              segmenter=segmenter, gain_db=gain_db, meter=meter, mic=mic,
+                              mic_opened=lambda rate, ch: typer.echo(f"  (opened at {rate} Hz, {ch} channel(s))")):
             lv = Level.of(utt.pcm, utt.snr_db)
             found.append(lv)
             over = f", {lv.snr_db:.0f} dB over the noise" if lv.snr_db is not None else ""

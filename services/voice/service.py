@@ -21,7 +21,7 @@ from pathlib import Path
 
 from schemas.messages import HealthStatus, VoiceCommand
 from services.runtime import ServiceContext
-from services.voice.audio import AudioError
+from services.voice.audio import SAMPLE_RATE, AudioError
 from services.voice.engine import (
     DEFAULT_ENGINE,
     Engine,
@@ -32,6 +32,7 @@ from services.voice.engine import (
     one_blas_thread,
 )
 from services.voice.level import LevelError, Meter, gain_from
+from services.voice.mic import MicError, MicFormat
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 from services.voice.vad import VadError, silero_model_path
@@ -81,6 +82,10 @@ class VoiceSettings:
     (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default."""
     gain: str | None = None
     """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
+    mic_rate: str | None = None
+    """`HRI_VOICE_MIC_RATE`: the rate (Hz) to open a microphone at (`mic.MicFormat`); None: 16 kHz, or the device's."""
+    mic_channels: str | None = None
+    """`HRI_VOICE_MIC_CHANNELS`: the channels to open a microphone with, mixed down to one; None: 1, or else 2."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -104,7 +109,16 @@ class VoiceSettings:
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
             vad_lift=os.environ.get("HRI_VOICE_VAD_LIFT") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
+            mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
+            mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
         )
+
+    def mic(self) -> MicFormat:
+        """The format to open a microphone at; `EngineError` names a bad `HRI_VOICE_MIC_*` value."""
+        try:
+            return MicFormat.parse(self.mic_rate, self.mic_channels)
+        except MicError as exc:
+            raise EngineError(str(exc)) from None
 
     def segmenter(self) -> SegmenterConfig:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
@@ -149,6 +163,7 @@ def check_settings(settings: VoiceSettings) -> None:
     if settings.vad not in VADS:
         raise EngineError(f"HRI_VOICE_VAD={settings.vad!r}: one of {', '.join(VADS)}")
     settings.segmenter()
+    settings.mic()
     try:
         gain_from(settings.gain)
     except LevelError as exc:
@@ -244,6 +259,12 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     # the input's level (health, every 2 s of a live stream), and advice when speech is too quiet or clips
     meter = Meter(report=lambda detail: ctx.update_detail(**detail))
     advised: dict[str, float] = {}
+    mic = settings.mic()
+
+    def mic_opened(rate: int, channels: int) -> None:
+        ctx.update_detail(mic_rate_hz=rate, mic_channels=channels)
+        ctx.log.info("microphone opened", source=settings.source, rate_hz=rate, channels=channels,
+                     resampled=rate != SAMPLE_RATE or channels != 1)
 
     def on_bad_file(path: Path, exc: AudioError) -> None:
         stats.bad_audio += 1
@@ -299,7 +320,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         try:
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
-                                  segmenter=settings.segmenter(), recognise=early_look, gain_db=gain_db, meter=meter):
+                                  segmenter=settings.segmenter(), recognise=early_look, gain_db=gain_db, meter=meter,
+                                  mic=mic, mic_opened=mic_opened):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)

@@ -5,7 +5,8 @@ WAV files) are cut into utterances by the VAD `Segmenter`; a short WAV file is o
 
 Source specs (`HRI_VOICE_SOURCE`):
 
-- `mic` or `mic:<device>`: a sounddevice input (PortAudio), device by index or name.
+- `mic` or `mic:<device>`: a sounddevice input (PortAudio), device by index or name, at 16 kHz mono or else at
+  the device's own rate and channels, resampled (`mic.py`; `HRI_VOICE_MIC_RATE`, `HRI_VOICE_MIC_CHANNELS`).
 - `<file>.wav`: one WAV file; `<dir>`: every `*.wav` in it, by name.
 - `watch:<dir>`: a spool folder. WAVs already there are decoded first (oldest first), then each
   new one as it appears (polled every 50 ms). Names ending in `.tmp` are ignored: writers should
@@ -19,7 +20,6 @@ from __future__ import annotations
 
 import io
 import os
-import queue
 import select
 import sys
 import time
@@ -32,10 +32,8 @@ from typing import BinaryIO, Literal
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
 from services.voice.engine import Recognition
 from services.voice.level import Meter, amplified, amplify
+from services.voice.mic import ALTERNATIVES, CHUNK_S, MicError, MicFormat, mic_chunks
 from services.voice.segmenter import Segmenter, SegmenterConfig
-
-ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir>, stdin"
-CHUNK_S = 0.03
 
 
 class SourceError(RuntimeError):
@@ -244,53 +242,29 @@ def stdin_chunks(stream: BinaryIO, stop: Stop, poll_s: float = 0.2) -> Iterator[
         yield data
 
 
-def mic_chunks(device: str, stop: Stop) -> Iterator[bytes]:
-    """Raw PCM from a PortAudio input; `SourceError` names the problem and the alternatives."""
+def microphone(device: str, stop: Stop, asked: MicFormat | None = None,
+               opened: Callable[[int, int], None] | None = None) -> Iterator[bytes]:
+    """`mic.mic_chunks`, its errors as `SourceError`s."""
     try:
-        import sounddevice as sd  # lazily: needs the system PortAudio library
-    except (ImportError, OSError) as exc:
-        raise SourceError(f"microphone unavailable: {exc} (install PortAudio: apt-get install "
-                          f"libportaudio2; or use another source: {ALTERNATIVES})") from None
-    dev: int | str | None = int(device) if device.isdigit() else (device or None)
-    chunks: queue.Queue[bytes] = queue.Queue(maxsize=200)
-
-    def callback(indata: bytes, frames: int, t: object, status: object) -> None:
-        try:
-            chunks.put_nowait(bytes(indata))
-        except queue.Full:  # the decoder fell behind: drop the oldest audio rather than block PortAudio
-            pass
-
-    try:
-        stream = sd.RawInputStream(samplerate=SAMPLE_RATE, channels=1, dtype="int16", device=dev,
-                                   blocksize=int(CHUNK_S * SAMPLE_RATE), callback=callback)
-        stream.start()
-    except (sd.PortAudioError, ValueError) as exc:  # no such device, no input channels
-        raise SourceError(f"microphone {device or 'default'!r} cannot be opened: {exc} "
-                          f"(sources: {ALTERNATIVES})") from None
-    try:
-        while not stop():
-            try:
-                yield chunks.get(timeout=0.2)
-            except queue.Empty:
-                if not stream.active:
-                    raise SourceError(f"microphone {device or 'default'!r} stopped delivering audio") from None
-    finally:
-        stream.stop()
-        stream.close()
+        yield from mic_chunks(device, stop, asked, opened)
+    except MicError as exc:
+        raise SourceError(str(exc)) from None
 
 
 def utterances(
     spec: SourceSpec, stop: Stop, *, stdin: BinaryIO | None = None,
     on_error: Callable[[Path, AudioError], None] | None = None,
     segmenter: SegmenterConfig | None = None, recognise: Recognise | None = None,
-    gain_db: float = 0.0, meter: Meter | None = None,
+    gain_db: float = 0.0, meter: Meter | None = None, mic: MicFormat | None = None,
+    mic_opened: Callable[[int, int], None] | None = None,
 ) -> Iterator[Utterance]:
     """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open.
     `recognise` turns on the segmenter's early look for live streams (microphone, stdin); files and spools
     are not latency-bound and are decoded whole. `gain_db`: the input gain (`level.amplify`), before the VAD;
-    `meter`: fed a live stream's chunks after the gain (`level.Meter`)."""
+    `meter`: fed a live stream's chunks after the gain (`level.Meter`); `mic`: the format to open a microphone at
+    (default: 16 kHz mono, or what the device offers), and `mic_opened(rate, channels)` is told what it opened at."""
     if spec.kind in ("mic", "stdin"):
-        chunks = (mic_chunks(spec.target, stop) if spec.kind == "mic"
+        chunks = (microphone(spec.target, stop, mic, mic_opened) if spec.kind == "mic"
                   else stdin_chunks(stdin or sys.stdin.buffer, stop))
         chunks = amplified(chunks, gain_db)
         if meter is not None:
