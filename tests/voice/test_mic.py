@@ -31,7 +31,7 @@ from services.voice.audio import SAMPLE_RATE
 from services.voice.engine import EngineError
 from services.voice.mic import CHUNK_S, MicError, MicFormat, ToServiceRate, formats_to_try
 from services.voice.service import VoiceSettings, check_settings
-from tests.conftest import ROOT, service_env, wait_for
+from tests.conftest import ROOT, wait_for
 from tests.voice.streams import word_stream
 
 
@@ -204,31 +204,22 @@ def test_level_hears_a_microphone_through_portaudio(tmp_path: Path, asked: bool)
 
 @needs_portaudio
 @needs_espeak
-def test_service_hears_stop_from_a_48k_stereo_microphone(bus: ServiceContext, router_endpoint: str, robot_id: str,
-                                                         tmp_path: Path) -> None:
+def test_service_hears_stop_from_a_48k_stereo_microphone(bus: ServiceContext, start_service, tmp_path: Path) -> None:
     """The voice service on the microphone source, the device at 48 kHz with two channels: "stop" is published, health
     says what the device was opened at, and SIGTERM closes the microphone and the session (exit 0)."""
     heard: list[VoiceCommand] = []
     bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
     home = _alsa_home(tmp_path)
-    log_path = tmp_path / "voice.log"
-    with open(log_path, "wb") as log, Played(home, _stereo(word_stream("stop"), 48000), 48000):
-        proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdout=log,
-                                stderr=subprocess.STDOUT,
-                                env=service_env(router_endpoint, robot_id, HOME=str(home),
-                                                HRI_VOICE_SOURCE="mic:testmic", HRI_VOICE_MIC_RATE="48000",
-                                                HRI_VOICE_MIC_CHANNELS="2"))
-        try:
-            wait_for(lambda: any(h.command is not None for h in heard), timeout=60)
-            assert [h.command.value for h in heard if h.command is not None] == ["stop"]
-            health = wait_for(lambda: (h := bus.query_health("voice")) is not None and "mic_rate_hz" in h.detail
-                              and h, timeout=10)
-            assert health.status == HealthStatus.OK
-            assert health.detail["mic_rate_hz"] == 48000 and health.detail["mic_channels"] == 2
-            proc.send_signal(signal.SIGTERM)
-            assert proc.wait(15) == 0
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-    text = log_path.read_text()
+    with Played(home, _stereo(word_stream("stop"), 48000), 48000):
+        proc = start_service("voice", env={"HOME": str(home), "HRI_VOICE_SOURCE": "mic:testmic",
+                                           "HRI_VOICE_MIC_RATE": "48000", "HRI_VOICE_MIC_CHANNELS": "2"})
+        wait_for(lambda: any(h.command is not None for h in heard), timeout=60)
+        assert [h.command.value for h in heard if h.command is not None] == ["stop"]
+        health = wait_for(lambda: (h := bus.query_health("voice")) is not None and "mic_rate_hz" in h.detail and h,
+                          timeout=10)
+        assert health.status == HealthStatus.OK
+        assert health.detail["mic_rate_hz"] == 48000 and health.detail["mic_channels"] == 2
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+    text = Path(proc.log_path).read_text()  # type: ignore[attr-defined]
     assert "microphone opened" in text and "48000" in text
