@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import resample_poly
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -42,6 +44,7 @@ from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, early_look_arg, 
 from bench.voice_walking import LEAD_S, TAIL_S, pick, run_streams  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.mic import CHUNK_S, ToServiceRate  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 
@@ -98,6 +101,19 @@ def levels(peaks: str, overdrive: str) -> list[float]:
     return [float(p) for p in peaks.split(",") if p] + [float(d) for d in overdrive.split(",") if d]
 
 
+def through_mic(x: np.ndarray, rate: int | None) -> np.ndarray:
+    """`x` (16 kHz, float) as a microphone at `rate` Hz would hand it to the service: the sound sampled at that rate
+    (`resample_poly`; the sound itself stays band-limited to 8 kHz), 16-bit, then brought back to 16 kHz by the
+    service's own path (`mic.ToServiceRate`, soxr) in 30 ms blocks. None: as it is."""
+    if rate is None:
+        return x
+    g = math.gcd(rate, SAMPLE_RATE)
+    pcm = to_pcm(np.clip(resample_poly(x, rate // g, SAMPLE_RATE // g), -1.0, 1.0))
+    convert, block = ToServiceRate(rate, 1), int(CHUNK_S * rate) * 2
+    out = b"".join(c for k in range(0, len(pcm), block) for c in convert(pcm[k : k + block]))
+    return np.frombuffer(out, "<i2") / 32768.0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engine", default="spotter")
@@ -116,6 +132,8 @@ def main() -> int:
     ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
                     help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
                          "(SegmenterConfig.vad_lift_floor_dbfs; default: the service's)")
+    ap.add_argument("--mic-rate", type=int, help="the stream path through a microphone at this rate, resampled by the "
+                                                   "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -128,7 +146,8 @@ def main() -> int:
         for path in args.paths.split(","):
             if path == "stream":
                 def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
-                    return np.clip(in_room(at_level(speech, peak), args.floor, rng), -1.0, 1.0) * 10 ** (args.gain / 20)
+                    x = np.clip(in_room(at_level(speech, peak), args.floor, rng), -1.0, 1.0) * 10 ** (args.gain / 20)
+                    return through_mic(x, args.mic_rate)
 
                 row = run_streams(engine, clips, build, config, policy, args.seed)
             elif path == "file":
@@ -136,7 +155,7 @@ def main() -> int:
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
             rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift,
-                         "vad_lift_floor_dbfs": args.vad_lift_floor, **row})
+                         "vad_lift_floor_dbfs": args.vad_lift_floor, "mic_rate": args.mic_rate, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")

@@ -201,6 +201,14 @@ def test_levels_bench_places_the_speech_at_its_level_in_the_room() -> None:
     assert round(20 * np.log10(np.sqrt(np.mean(x[:at] ** 2)))) == -70
     assert np.isclose(np.abs(x[at : at + speech.size]).max(), 0.1, atol=0.002)
     assert levels("-44,-26", "6") == [-44.0, -26.0, 6.0] and levels("-3", "") == [-3.0]
+    # `--mic-rate`: sampled at 48 kHz and brought back by the service's resampler, a 1 kHz tone arrives as it was
+    from bench.voice_levels import through_mic
+
+    tone = 0.3 * np.sin(2 * np.pi * 1000 * np.arange(SAMPLE_RATE) / SAMPLE_RATE)
+    back = through_mic(tone, 48000)
+    assert through_mic(tone, None) is tone and SAMPLE_RATE - back.size <= 0.1 * SAMPLE_RATE
+    mid = slice(2000, 12000)
+    assert np.sqrt(np.mean((back[mid] - tone[mid]) ** 2)) < 0.01 * np.sqrt(np.mean(tone[mid] ** 2))
 
 
 def test_advice_never_names_a_gain_over_the_limit() -> None:
