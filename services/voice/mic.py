@@ -132,9 +132,14 @@ def mic_chunks(device: str, stop: Stop, asked: MicFormat | None = None,
         try:
             stream = sd.RawInputStream(samplerate=rate, channels=channels, dtype="int16", device=dev,
                                        blocksize=int(CHUNK_S * rate), callback=callback)
+        except (sd.PortAudioError, ValueError) as exc:  # no such device, no input channels, a format it lacks
+            refused.append(f"{rate} Hz x{channels}: {exc}")
+            continue
+        try:
             stream.start()
             break
-        except (sd.PortAudioError, ValueError) as exc:  # no such device, no input channels, a format it lacks
+        except sd.PortAudioError as exc:  # opened but would not start: closed before the next format is tried
+            stream.close()
             refused.append(f"{rate} Hz x{channels}: {exc}")
             stream = None
     if stream is None:
