@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench.ego_noise import EgoNoiseModel  # noqa: E402
 from bench.voice_bench import OTHER, Item, Policy  # noqa: E402
-from bench.voice_levels import at_level, in_room, levels  # noqa: E402
+from bench.voice_levels import at_level, in_room, levels, through_mic  # noqa: E402
 from bench.voice_walking import noise_source, run_ratio, run_streams, stream  # noqa: E402
 from services.voice.audio import SAMPLE_RATE  # noqa: E402
 from services.voice.engine import make_engine  # noqa: E402
@@ -58,6 +58,8 @@ def main() -> int:
     ap.add_argument("--hiss-s", type=float, default=60.0)
     ap.add_argument("--lift-floor", type=float, help="SegmenterConfig.vad_lift_floor_dbfs (round voice37b)")
     ap.add_argument("--walking", default="", help="also these speech-to-walking-noise ratios (dB), clips as rendered")
+    ap.add_argument("--mic-rate", type=int, help="the quiet room's streams through a microphone at this rate and the "
+                                                   "service's resampler (`voice_levels.through_mic`; stop 71)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     items = tune_items(args.cache, args.per_command, args.others, args.seed)
@@ -78,14 +80,15 @@ def main() -> int:
                                                   "end_of_speech_to_segment_ms_p50_p90")}), flush=True)
         for peak in levels(args.peaks, ""):
             def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
-                return in_room(at_level(speech, peak), -70.0, rng)
+                return through_mic(in_room(at_level(speech, peak), -70.0, rng), args.mic_rate)
 
-            row = {"floor": floor, "lift_floor": args.lift_floor, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
+            row = {"floor": floor, "lift_floor": args.lift_floor, "mic_rate": args.mic_rate, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
             rows.append(row)
             print(json.dumps({k: row[k] for k in ("floor", "peak_dbfs", "command_accuracy", "oov_accepted",
                                                   "false_walks", "no_segment_over_word", "segments_per_clip",
                                                   "end_of_speech_to_segment_ms_p50_p90")}), flush=True)
-        hiss = np.random.default_rng(args.seed).normal(0.0, 10 ** (-70 / 20), int(args.hiss_s * SAMPLE_RATE))
+        hiss = through_mic(np.random.default_rng(args.seed).normal(0.0, 10 ** (-70 / 20), int(args.hiss_s * SAMPLE_RATE)),
+                           args.mic_rate)
         segs = stream(engine, hiss, config)
         alone = {"floor": floor, "hiss_alone_s": args.hiss_s, "segments": len(segs),
                  "commands": [s[3].value for s in segs if s[3] is not None and policy.takes(s[3], s[4])]}
