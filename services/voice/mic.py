@@ -25,6 +25,7 @@ ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir
 MAX_CHANNELS = 8
 
 Stop = Callable[[], bool]
+"""Returns True when the source should stop."""
 
 
 class MicError(RuntimeError):

@@ -32,7 +32,7 @@ from typing import BinaryIO, Literal
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
 from services.voice.engine import Recognition
 from services.voice.level import Meter, amplified, amplify
-from services.voice.mic import ALTERNATIVES, CHUNK_S, MicError, MicFormat, mic_chunks
+from services.voice.mic import ALTERNATIVES, CHUNK_S, MicError, MicFormat, Stop, mic_chunks
 from services.voice.segmenter import Segmenter, SegmenterConfig
 
 
@@ -89,10 +89,6 @@ class SourceSpec:
     def __str__(self) -> str:
         return {"mic": f"mic:{self.target}" if self.target else "mic", "stdin": "stdin",
                 "watch": f"watch:{self.target}"}.get(self.kind, self.target)
-
-
-Stop = Callable[[], bool]
-"""Returns True when the source should stop."""
 
 
 Recognise = Callable[[bytes], Recognition]
