@@ -3,7 +3,10 @@
 The subscription covers `hri/<robot>/**`. Zenoh callbacks only queue samples; one writer thread
 validates each payload against the model its encoding names and writes it (a payload that is not a
 valid message of a known model is logged once per key, counted and left out: the file holds only
-messages that validate). At the end: messages per key, duration and file size.
+messages that validate). The queue holds at most `MAX_QUEUED_BYTES` of payloads: when the writer falls
+that far behind (a slow disk, a flood), newer samples are dropped, logged once per key and counted, so
+that a recording never grows the process's memory without bound. At the end: messages per key,
+duration, file size, and what was left out or dropped.
 """
 
 from __future__ import annotations
@@ -26,6 +29,11 @@ from services.runtime import ServiceContext
 
 _STOP = object()
 
+MAX_QUEUED_BYTES = 256 * 1024 * 1024
+"""Payload bytes the recorder queues for its writer at most; beyond it, samples are dropped and counted. A running
+robot with previews sends about 1.8 MB a minute (`bench/record_bench.py`), so only a writer stalled for long (a full
+or hung disk) or a flood reaches it."""
+
 
 @dataclass
 class RecordSummary:
@@ -34,6 +42,9 @@ class RecordSummary:
     payload_bytes: Counter[str] = field(default_factory=Counter)
     """JSON bytes recorded per key, before compression."""
     rejected: Counter[str] = field(default_factory=Counter)
+    """Samples that were not a valid message of a known model, per key."""
+    dropped: Counter[str] = field(default_factory=Counter)
+    """Samples dropped because the writer was `MAX_QUEUED_BYTES` behind, per key."""
     first: float | None = None
     last: float | None = None
     started: float = field(default_factory=time.time)
@@ -54,12 +65,12 @@ class RecordSummary:
     def table(self) -> Table:
         table = Table(title=str(self.path), caption=f"{self.messages} messages in {self.duration_s:.1f} s, "
                                                     f"{self.size_bytes / 1024:.1f} KiB")
-        for col in ("key", "messages", "rate /s", "JSON KiB", "left out"):
+        for col in ("key", "messages", "rate /s", "JSON KiB", "left out", "dropped"):
             table.add_column(col, justify="left" if col == "key" else "right")
-        for key in sorted(set(self.counts) | set(self.rejected)):
+        for key in sorted(set(self.counts) | set(self.rejected) | set(self.dropped)):
             rate = self.counts[key] / self.duration_s if self.duration_s > 0 else 0.0
             table.add_row(key, str(self.counts[key]), f"{rate:.1f}", f"{self.payload_bytes[key] / 1024:.1f}",
-                          str(self.rejected[key] or ""))
+                          str(self.rejected[key] or ""), str(self.dropped[key] or ""))
         return table
 
 
@@ -72,19 +83,35 @@ def without_images(keys: Keys) -> list[str]:
 class McapRecorder:
     """Records every sample under `keyexprs` (default: the robot's `hri/<robot>/**`) on `ctx`'s session."""
 
-    def __init__(self, ctx: ServiceContext, path: Path, keyexprs: Sequence[str] | None = None) -> None:
+    def __init__(self, ctx: ServiceContext, path: Path, keyexprs: Sequence[str] | None = None,
+                 max_queued_bytes: int = MAX_QUEUED_BYTES) -> None:
         self.ctx = ctx
         self.summary = RecordSummary(path)
         self._writer = McapWriter(path)
         self._queue: queue.SimpleQueue[object] = queue.SimpleQueue()
+        self._max_queued = max_queued_bytes
+        self._queued = 0  # payload bytes in the queue
+        self._queued_lock = threading.Lock()
         self._closed = False
         self._thread = threading.Thread(target=self._drain, name="mcap-writer", daemon=True)
         self._thread.start()
         self._subs = [ctx.session.declare_subscriber(k, self._on_sample) for k in keyexprs or [ctx.keys.all]]
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
-        # On a Zenoh thread: only queue (a slow callback pushes back on the network).
-        self._queue.put((str(sample.key_expr), str(sample.encoding), sample.payload.to_bytes()))
+        # On a Zenoh thread: only queue (a slow callback pushes back on the network), or drop when the writer is
+        # too far behind (the newest is dropped: what is queued is already in order for the file).
+        key, data = str(sample.key_expr), sample.payload.to_bytes()
+        with self._queued_lock:
+            full = self._queued + len(data) > self._max_queued
+            if not full:
+                self._queued += len(data)
+        if full:
+            if not self.summary.dropped[key]:
+                self.ctx.log.warning("recorder behind: dropping samples", key=key, queued_bytes=self._queued)
+            self.summary.dropped[key] += 1
+            self.ctx.counters.bump("dropped")
+            return
+        self._queue.put((key, str(sample.encoding), data))
 
     def _drain(self) -> None:
         while True:
@@ -96,6 +123,9 @@ class McapRecorder:
                 self._write(key, encoding, data)
             except Exception:  # one bad message must not end the recording
                 self.ctx.log.exception("recording a message failed", key=key)
+            finally:
+                with self._queued_lock:
+                    self._queued -= len(data)
 
     def _write(self, key: str, encoding: str, data: bytes) -> None:
         s = self.summary

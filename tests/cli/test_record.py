@@ -124,3 +124,27 @@ def test_recording_without_images_leaves_the_preview_unwatched(bus: ServiceConte
     bus.session.put(joints_key, b"{}")  # a key the list still covers (motion/**): seen, rejected
     wait_for(lambda: rec.summary.rejected[joints_key] == 1, timeout=5)
     rec.close()
+
+
+def test_a_recorder_whose_writer_falls_behind_drops_and_counts_instead_of_growing(bus: ServiceContext,
+                                                                                   tmp_path: Path) -> None:
+    rec = McapRecorder(bus, tmp_path / "behind.mcap", max_queued_bytes=1000)
+    release = __import__("threading").Event()
+    write = rec._write
+
+    def stalled(key: str, encoding: str, data: bytes) -> None:  # a disk that hangs until released
+        release.wait(10)
+        write(key, encoding, data)
+
+    rec._write = stalled  # type: ignore[method-assign]
+    voice = bus.publisher(bus.keys.voice_command, VoiceCommand)
+    size = len(VoiceCommand(command=Command.STOP, text="stop", confidence=0.9).model_dump_json())
+    for _ in range(20):
+        voice.put(VoiceCommand(command=Command.STOP, text="stop", confidence=0.9))
+    wait_for(lambda: rec.summary.dropped[bus.keys.voice_command] >= 20 - 1000 // size, timeout=5)
+    release.set()
+    summary = rec.close()
+    kept, dropped = summary.counts[bus.keys.voice_command], summary.dropped[bus.keys.voice_command]
+    assert kept + dropped == 20 and 0 < kept <= 1000 // size  # a sample counts until it is written
+    assert len(list(read_recording(tmp_path / "behind.mcap"))) == kept
+    assert rec._queued == 0 and "dropped" in [c.header for c in summary.table().columns]
