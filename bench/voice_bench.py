@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import math
 import multiprocessing
 import os
 import pickle
@@ -47,10 +48,11 @@ import sys
 import time
 from collections import Counter, defaultdict
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import resample_poly
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -59,6 +61,7 @@ from schemas.messages import Command
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
 from services.voice.engine import Engine, make_engine, one_blas_thread
+from services.voice.mic import CHUNK_S, ToServiceRate
 from services.voice.segmenter import Segmenter, SegmenterConfig
 from services.voice.spotter import whisper
 from services.voice.training import corpus, dataset, tts
@@ -221,6 +224,33 @@ def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bo
     return items
 
 
+def through_mic(x: np.ndarray, rate: int | None) -> np.ndarray:
+    """`x` (16 kHz, float) as a microphone at `rate` Hz would hand it to the service: the sound sampled at that rate
+    (`resample_poly`; the sound itself stays band-limited to 8 kHz), 16-bit, then brought back to 16 kHz by the
+    service's own path (`mic.ToServiceRate`, soxr) in 30 ms blocks. None: as it is."""
+    if rate is None:
+        return x
+    g = math.gcd(rate, SAMPLE_RATE)
+    pcm = to_pcm(np.clip(resample_poly(x, rate // g, SAMPLE_RATE // g), -1.0, 1.0))
+    convert, block = ToServiceRate(rate, 1), int(CHUNK_S * rate) * 2
+    out = b"".join(c for k in range(0, len(pcm), block) for c in convert(pcm[k : k + block]))
+    return np.frombuffer(out, "<i2") / 32768.0
+
+
+def mic_pcm(pcm: bytes, rate: int | None) -> bytes:
+    """A 16 kHz clip as a microphone at `rate` Hz would hand it to the service (`through_mic`), the same length
+    (the resampler holds back its last few ms: the clip is padded with silence for it, then cut)."""
+    if rate is None:
+        return pcm
+    x = np.concatenate([np.frombuffer(pcm, "<i2") / 32768.0, np.zeros(int(0.1 * SAMPLE_RATE))])
+    return to_pcm(through_mic(x, rate)[: len(pcm) // 2])
+
+
+def through_mic_items(items: list[Item], rate: int | None) -> list[Item]:
+    """Every clip, speech and noise, as a microphone at `rate` Hz would hand it to the service (None: as rendered)."""
+    return items if rate is None else [replace(it, pcm=mic_pcm(it.pcm, rate)) for it in items]
+
+
 def heldout_items(seed: int, workers: int) -> list[Item]:
     items = _rendered(heldout_recipes(seed), workers)
     items += [Item(NEIGHBOURS, it.voice, it.label, it.text, it.condition, it.pcm)
@@ -336,11 +366,12 @@ def speech_end_s(pcm: bytes, floor_db: float = 30.0) -> float:
 
 
 def stream_latency(engine: Engine, items: list[Item], n: int = 40,
-                   config: SegmenterConfig | None = None) -> dict[str, float]:
+                   config: SegmenterConfig | None = None, mic_rate: int | None = None) -> dict[str, float]:
     """End of speech -> command, on a stream: each clip in quiet noise, fed in 30 ms chunks to the
     service's VAD segmenter (with the engine for its early look, as the service); latency = audio time at which
     the segment is emitted - the clip's speech end (`speech_end_s`), plus decoding time (for a segment the early
-    look took: the time of the chunk's `feed`, which decoded it)."""
+    look took: the time of the chunk's `feed`, which decoded it). `mic_rate`: the stream, speech and hiss, as a
+    microphone at that rate would hand it to the service (`through_mic`)."""
     rng = np.random.default_rng(5)
     clean = [it for it in items if it.label < OTHER and it.condition == "clean"]
     picks = clean[:: max(1, len(clean) // n)][:n]  # n spread over the clean commands (before: a stride over all
@@ -352,7 +383,7 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
         x = np.concatenate([lead, np.frombuffer(it.pcm, "<i2") / 32768.0, np.zeros(SAMPLE_RATE)])
         x = x + rng.normal(0, 3e-4, x.size)
         speech_end = lead.size / SAMPLE_RATE + speech_end_s(it.pcm)
-        pcm = to_pcm(x)
+        pcm = to_pcm(through_mic(x, mic_rate))
         seg = Segmenter(config or SegmenterConfig(), recognise=engine.recognise)
         step = int(0.03 * SAMPLE_RATE) * 2
         for k in range(0, len(pcm), step):
@@ -466,6 +497,9 @@ def main() -> int:
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
                     help="the stream latency's end window in a clear stream: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--enrol-head", help="the head --enrol adapts (default: as `enroll`, the speech-embedding head)")
+    ap.add_argument("--mic-rate", type=int,
+                    help="every clip, and the stream latency's stream, as a microphone at this rate (Hz) would hand it "
+                         "to the service, resampled by its own path (`mic.ToServiceRate`; default: as rendered)")
     ap.add_argument("--enrol-voice", default="flite:slt",
                     help="the unseen voice --enrol enrols, a held-out voice (e.g. piper:en_US-joe-medium, a neural one)")
     args = ap.parse_args()
@@ -475,7 +509,10 @@ def main() -> int:
     print(f"Whisper (the default head's embedding) in {arithmetic['compute']}; this CPU's int8 sums "
           + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed default head was fitted")
           + " (services/voice/README.md, stop 67)", flush=True)
-    items = heldout_items(args.seed, args.workers)
+    rendered = heldout_items(args.seed, args.workers)
+    items = through_mic_items(rendered, args.mic_rate)
+    if args.mic_rate:
+        print(f"every clip through a microphone at {args.mic_rate} Hz and the service's resampler", flush=True)
     rows: list[dict[str, object]] = []
     for name in args.engines.split(","):
         spotter = name == "spotter"
@@ -488,9 +525,11 @@ def main() -> int:
                 row.update(extra)
                 if spotter:
                     row["whisper"] = arithmetic  # the figures depend on it (stop 67)
-                row["stream_latency"] = stream_latency(engine, [it for it in items if it.family not in corpus.HELDOUT_EXTRA],
+                    row["mic_rate"] = args.mic_rate
+                row["stream_latency"] = stream_latency(engine, [it for it in rendered if it.family not in corpus.HELDOUT_EXTRA],
                                                        config=SegmenterConfig(vad=args.vad, early_quiet_s=args.early_look,
-                                                                              clear_quiet_s=args.clear_window))
+                                                                              clear_quiet_s=args.clear_window),
+                                                       mic_rate=args.mic_rate)
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.enrol:

@@ -29,22 +29,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import resample_poly
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, early_look_arg, heldout_items  # noqa: E402,F401
+from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, early_look_arg, heldout_items, through_mic  # noqa: E402,F401
 from bench.voice_walking import LEAD_S, TAIL_S, pick, run_streams  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
-from services.voice.mic import CHUNK_S, ToServiceRate  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 
@@ -63,9 +60,9 @@ def in_room(speech: np.ndarray, floor_db: float, rng: np.random.Generator) -> np
 
 
 def run_files(engine: Engine, clips: list[Item], peak_db: float, floor_db: float, gain_db: float, policy: Policy,
-              seed: int) -> dict[str, object]:
-    """The clip alone at the level, with 0.2 s of the room's hiss either side, through the gain, straight to the
-    engine."""
+              seed: int, mic_rate: int | None = None) -> dict[str, object]:
+    """The clip alone at the level, with 0.2 s of the room's hiss either side, through the gain (and a microphone at
+    `mic_rate`: `through_mic`), straight to the engine."""
     rng = np.random.default_rng(seed)
     heard: Counter[str] = Counter()
     total: Counter[str] = Counter()
@@ -76,7 +73,7 @@ def run_files(engine: Engine, clips: list[Item], peak_db: float, floor_db: float
         speech = at_level(np.frombuffer(it.pcm, "<i2") / 32768.0, peak_db)
         x = rng.normal(0.0, 10 ** (floor_db / 20), speech.size + 2 * pad)
         x[pad : pad + speech.size] += speech
-        rec = engine.recognise(to_pcm(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20)))
+        rec = engine.recognise(to_pcm(through_mic(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20), mic_rate)))
         taken = policy.takes(rec.command, rec.confidence)
         if it.label < OTHER:
             word = WORDS[it.label]
@@ -101,19 +98,6 @@ def levels(peaks: str, overdrive: str) -> list[float]:
     return [float(p) for p in peaks.split(",") if p] + [float(d) for d in overdrive.split(",") if d]
 
 
-def through_mic(x: np.ndarray, rate: int | None) -> np.ndarray:
-    """`x` (16 kHz, float) as a microphone at `rate` Hz would hand it to the service: the sound sampled at that rate
-    (`resample_poly`; the sound itself stays band-limited to 8 kHz), 16-bit, then brought back to 16 kHz by the
-    service's own path (`mic.ToServiceRate`, soxr) in 30 ms blocks. None: as it is."""
-    if rate is None:
-        return x
-    g = math.gcd(rate, SAMPLE_RATE)
-    pcm = to_pcm(np.clip(resample_poly(x, rate // g, SAMPLE_RATE // g), -1.0, 1.0))
-    convert, block = ToServiceRate(rate, 1), int(CHUNK_S * rate) * 2
-    out = b"".join(c for k in range(0, len(pcm), block) for c in convert(pcm[k : k + block]))
-    return np.frombuffer(out, "<i2") / 32768.0
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engine", default="spotter")
@@ -132,7 +116,10 @@ def main() -> int:
     ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
                     help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
                          "(SegmenterConfig.vad_lift_floor_dbfs; default: the service's)")
-    ap.add_argument("--mic-rate", type=int, help="the stream path through a microphone at this rate, resampled by the "
+    ap.add_argument("--vad-lift-second", action="store_true",
+                    help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
+                         "first heard nothing (SegmenterConfig.vad_lift_second)")
+    ap.add_argument("--mic-rate", type=int, help="both paths through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
@@ -140,7 +127,8 @@ def main() -> int:
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift, vad_lift_floor_dbfs=args.vad_lift_floor)
+    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift, vad_lift_floor_dbfs=args.vad_lift_floor,
+                             vad_lift_second=args.vad_lift_second)
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -151,11 +139,12 @@ def main() -> int:
 
                 row = run_streams(engine, clips, build, config, policy, args.seed)
             elif path == "file":
-                row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed)
+                row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed, args.mic_rate)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
             rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift,
-                         "vad_lift_floor_dbfs": args.vad_lift_floor, "mic_rate": args.mic_rate, **row})
+                         "vad_lift_floor_dbfs": args.vad_lift_floor, "vad_lift_second": args.vad_lift_second,
+                         "mic_rate": args.mic_rate, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")

@@ -47,6 +47,7 @@ from bench.voice_bench import (  # noqa: E402
     early_look_arg,
     heldout_items,
     speech_end_s,
+    through_mic,
 )
 from schemas.messages import Command  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
@@ -102,10 +103,14 @@ Noise = Callable[[float, np.random.Generator], np.ndarray]
 
 
 def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: SegmenterConfig, policy: Policy, seed: int,
-              noise: Noise) -> dict[str, object]:
-    """Each clip `LEAD_S` into `noise` at `snr` dB (None: a faint hiss), then `TAIL_S` more: `run_streams`' row."""
+              noise: Noise, mic_rate: int | None = None) -> dict[str, object]:
+    """Each clip `LEAD_S` into `noise` at `snr` dB (None: a faint hiss), then `TAIL_S` more: `run_streams`' row.
+    `mic_rate`: each stream as a microphone at that rate would hand it to the service (`through_mic`)."""
 
     def build(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return through_mic(heard(speech, rng), mic_rate)
+
+    def heard(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         at = int(LEAD_S * SAMPLE_RATE)
         seconds = LEAD_S + speech.size / SAMPLE_RATE + TAIL_S
         if snr is None:  # quiet, as voice_bench's stream latency: a faint hiss
@@ -187,10 +192,10 @@ def speech_power(clips: list[Item]) -> float:
 
 
 def noise_only(engine: Engine, seconds: float, level_rms: float, config: SegmenterConfig, policy: Policy, seed: int,
-               noise: Noise) -> dict[str, object]:
+               noise: Noise, mic_rate: int | None = None) -> dict[str, object]:
     """The robot's noise alone at `level_rms`, no one speaking: what the robot hears in it."""
     rng = np.random.default_rng(seed + 1)
-    x = noise(seconds, rng) * level_rms
+    x = through_mic(noise(seconds, rng) * level_rms, mic_rate)
     segs = stream(engine, x, config)
     heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and policy.takes(cmd, conf))
     return {"vad": config.vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
@@ -224,6 +229,11 @@ def main() -> int:
     ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
                     help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
                          "(default: the service's)")
+    ap.add_argument("--vad-lift-second", action="store_true",
+                    help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
+                         "first heard nothing (SegmenterConfig.vad_lift_second)")
+    ap.add_argument("--mic-rate", type=int, help="every stream through a microphone at this rate, resampled by the "
+                                                   "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -243,12 +253,12 @@ def main() -> int:
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
                                  early_quiet_s=args.early_look,
                                  clear_quiet_s=args.clear_window, vad_lift_dbfs=args.vad_lift,
-                                 vad_lift_floor_dbfs=args.vad_lift_floor)
+                                 vad_lift_floor_dbfs=args.vad_lift_floor, vad_lift_second=args.vad_lift_second)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
-            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise)
+            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate)
             rows.append(row)
             print(json.dumps(row), flush=True)
-        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise))
+        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise, args.mic_rate))
         print(json.dumps({"noise_only": alone[-1]}), flush=True)
     print()
     print(f"{'VAD':7} {'SNR dB':>6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'no seg':>6} {'seg/clip':>8} {'seg s p90':>9} {'EoS->seg p50':>12}")

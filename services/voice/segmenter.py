@@ -12,6 +12,12 @@ quiet the utterance so far is decoded. If the engine accepts a command at `early
 utterance ends there and its segment carries that recognition, `quiet_s - early_quiet_s` sooner; otherwise the
 segmenter waits for `quiet_s` of quiet as before (a word with a short gap inside, or one the engine is unsure
 of, is decoded whole).
+
+The VAD's lift (Silero, off by default): the VAD hears a quiet stream with gain (`vad_lift_dbfs`), so that a far
+voice is found; the utterance's audio is as it came. With `vad_lift_second`, a second Silero hears the lifted
+stream beside the first, which hears it as it came: the first's utterances are the segments, as without the lift,
+and an utterance of the second counts only where the first heard nothing (no utterance of the first overlaps it,
+and the first is not in one when it ends). Where the voice is loud enough for the first, nothing changes.
 """
 
 from __future__ import annotations
@@ -19,7 +25,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from statistics import median
 from typing import Any
 
@@ -71,6 +77,10 @@ class SegmenterConfig:
     audio is as it came. None (the default): no gain. Round voice37 (`HRI_VOICE_VAD_LIFT`) did not pass: at -20 it
     found a far voice's words in a quiet room (held-out, -44 dBFS peak: 0.14 -> 0.63 of the commands) and cost
     nothing at trained levels, but lost words in the walking robot's noise (20 dB: 0.74 -> 0.52)."""
+    vad_lift_second: bool = False
+    """With `vad_lift_dbfs`: a second VAD hears the lifted stream, and its utterances count only where the first VAD,
+    which hears the stream as it came, heard nothing (the module's docstring); False: the one VAD hears the lifted
+    stream."""
     vad_max_gain_db: float = 24.0
     vad_peak_s: float = 10.0
     vad_lift_floor_dbfs: float | None = None
@@ -143,7 +153,12 @@ class Segmenter:
         self._clear_frames = self._frames_before_end(self.config.clear_quiet_s)  # ends a clear utterance; 0: none
         self._floor: deque[float] = deque(maxlen=max(1, round(self.config.noise_floor_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._peaks: deque[int] | None = None  # the VAD's lift: each frame's peak over `vad_peak_s`
-        if self.config.vad_lift_dbfs is not None and self.config.vad == "silero":
+        self._second: Segmenter | None = None  # `vad_lift_second`: the VAD that hears the lifted stream
+        self._spans: deque[tuple[float, float]] = deque(maxlen=16)  # with it: this VAD's recent utterances (s)
+        lifted = self.config.vad_lift_dbfs is not None and self.config.vad == "silero"
+        if lifted and self.config.vad_lift_second:
+            self._second = Segmenter(replace(self.config, vad_lift_second=False, early_quiet_s=None))
+        elif lifted:
             self._peaks = deque(maxlen=max(1, round(self.config.vad_peak_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._speech_power = 0.0  # sum of the current utterance's speech frames' mean square
         self._speech_frames = 0
@@ -171,6 +186,20 @@ class Segmenter:
         return bool(self._speech)
 
     def feed(self, pcm: bytes) -> list[Segment]:
+        out = self._heard(pcm)
+        return out if self._second is None else self._with_second(out, self._second.feed(pcm))
+
+    def _with_second(self, mine: list[Segment], second: list[Segment]) -> list[Segment]:
+        """This VAD's utterances, and those of the second (lifted) VAD that no utterance of this one overlaps, in
+        the order they ended."""
+        self._spans.extend((seg.start_s, seg.end_s) for seg in mine)
+        busy = bool(self._speech) or self._ep.in_speech
+        alone = [seg for seg in second
+                 if not busy and not any(start < seg.end_s and seg.start_s < end for start, end in self._spans)]
+        return sorted(mine + alone, key=lambda seg: seg.end_s)
+
+    def _heard(self, pcm: bytes) -> list[Segment]:
+        """This VAD's utterances that ended within `pcm`."""
         out: list[Segment] = []
         data = self._pending + pcm
         n = len(data) // self._frame * self._frame
@@ -208,7 +237,8 @@ class Segmenter:
                 self._start = self._utterance_start()
             self._speech.append(speech)
         seg = self._emit()
-        return [seg] if seg is not None else []
+        out = [seg] if seg is not None else []
+        return out if self._second is None else self._with_second(out, self._second.flush())
 
     def _after(self, speech: bytes | None) -> Segment | None:
         if speech is None:

@@ -202,13 +202,24 @@ def test_levels_bench_places_the_speech_at_its_level_in_the_room() -> None:
     assert np.isclose(np.abs(x[at : at + speech.size]).max(), 0.1, atol=0.002)
     assert levels("-44,-26", "6") == [-44.0, -26.0, 6.0] and levels("-3", "") == [-3.0]
     # `--mic-rate`: sampled at 48 kHz and brought back by the service's resampler, a 1 kHz tone arrives as it was
-    from bench.voice_levels import through_mic
+    from bench.voice_bench import mic_pcm, through_mic
 
     tone = 0.3 * np.sin(2 * np.pi * 1000 * np.arange(SAMPLE_RATE) / SAMPLE_RATE)
     back = through_mic(tone, 48000)
     assert through_mic(tone, None) is tone and SAMPLE_RATE - back.size <= 0.1 * SAMPLE_RATE
     mid = slice(2000, 12000)
     assert np.sqrt(np.mean((back[mid] - tone[mid]) ** 2)) < 0.01 * np.sqrt(np.mean(tone[mid] ** 2))
+    # voice_bench --mic-rate: a clip keeps its length and its timing; white hiss loses its top band (the resampler's
+    # low-pass), which a real microphone's converter never passes either
+    hiss = np.random.default_rng(1).normal(0.0, 0.05, SAMPLE_RATE)
+    pcm = (hiss * 32767).astype("<i2").tobytes()
+    out = np.frombuffer(mic_pcm(pcm, 44100), "<i2") / 32768.0
+    assert mic_pcm(pcm, None) is pcm and out.size == hiss.size
+    spectrum = np.abs(np.fft.rfft(out)) ** 2
+    freqs = np.fft.rfftfreq(out.size, 1 / SAMPLE_RATE)
+    top, speech_band = spectrum[freqs > 7800].mean(), spectrum[(freqs > 500) & (freqs < 6000)].mean()
+    assert top < 0.01 * speech_band
+    assert np.corrcoef(out[1000:-1000], hiss[1000:-1000])[0, 1] > 0.9
 
 
 def test_advice_never_names_a_gain_over_the_limit() -> None:

@@ -11,7 +11,7 @@ import pytest
 from services.voice import synth
 from services.voice.audio import from_pcm
 from services.voice.level import Level
-from services.voice.segmenter import Segmenter, SegmenterConfig
+from services.voice.segmenter import Segment, Segmenter, SegmenterConfig
 from tests.voice.streams import emitted, word_stream
 from tests.voice.test_level import at_peak
 
@@ -95,3 +95,35 @@ def test_the_floor_bound_keeps_a_noisy_stream_unlifted() -> None:
         seg = Segmenter(replace(LIFT, vad_lift_floor_dbfs=-55.0))
         seg._floor.append(10 ** (floor_db / 10))  # the noise floor, as mean square
         assert round(20 * np.log10(seg._vad_gain(frame)), 1) == lift_db
+
+
+SECOND = replace(LIFT, vad_lift_second=True)
+
+
+def test_a_second_vad_finds_the_quiet_words_and_leaves_the_loud_ones_to_the_first() -> None:
+    """Round voice37c: with `vad_lift_second` the first VAD hears the stream as it came and its utterances are cut
+    exactly as without the lift; the second, lifted, adds only what the first did not hear at all."""
+    quiet = at_peak(word_stream("stop", "yes"), -46.0)
+    assert emitted(quiet, OFF) == []
+    found = [s for _, s in emitted(quiet, SECOND)]
+    assert [(s.start_s, s.end_s) for s in found] == [(s.start_s, s.end_s) for _, s in emitted(quiet, LIFT)]
+    assert len(found) == 2 and all(-48.0 < Level.of(s.pcm).peak_dbfs < -44.0 for s in found)
+    loud = at_peak(word_stream("stop", "yes", "no"), -14.0)
+    off = [(s.start_s, s.end_s, s.pcm) for _, s in emitted(loud, OFF)]
+    assert len(off) == 3 and [(s.start_s, s.end_s, s.pcm) for _, s in emitted(loud, SECOND)] == off
+
+
+def test_an_utterance_of_the_second_vad_counts_only_where_the_first_heard_nothing() -> None:
+    seg = Segmenter(SECOND)
+    assert seg._second is not None and seg._peaks is None and seg._second._peaks is not None
+    assert seg._second._second is None and seg._second.recognise is None  # one lifted VAD; it decodes nothing early
+
+    def at(start: float, end: float) -> Segment:
+        return Segment(b"", start, end)
+
+    mine = [at(1.0, 1.8)]
+    both = seg._with_second(mine, [at(0.9, 2.0), at(3.0, 3.5)])
+    assert [(s.start_s, s.end_s) for s in both] == [(1.0, 1.8), (3.0, 3.5)]  # the overlapping one is the first's
+    assert seg._with_second([], [at(1.7, 2.4)]) == []  # overlaps an utterance the first heard before
+    seg._speech = [b"\0\0"]  # the first is in an utterance now: the second's waits for nothing, it is dropped
+    assert seg._with_second([], [at(5.0, 5.6)]) == []

@@ -60,6 +60,8 @@ def main() -> int:
     ap.add_argument("--walking", default="", help="also these speech-to-walking-noise ratios (dB), clips as rendered")
     ap.add_argument("--mic-rate", type=int, help="the quiet room's streams through a microphone at this rate and the "
                                                    "service's resampler (`voice_levels.through_mic`; stop 71)")
+    ap.add_argument("--second", action="store_true", help="SegmenterConfig.vad_lift_second (round voice37c): a second "
+                                                            "VAD hears the lifted stream")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     items = tune_items(args.cache, args.per_command, args.others, args.seed)
@@ -69,7 +71,7 @@ def main() -> int:
     rows = []
     for floor in args.floors.split(","):
         config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor),
-                         vad_lift_floor_dbfs=args.lift_floor)
+                         vad_lift_floor_dbfs=args.lift_floor, vad_lift_second=args.second)
         for snr in (float(v) for v in args.walking.split(",") if v):
             row = {"floor": floor, "lift_floor": args.lift_floor, "walking_snr_db": snr,
                    **run_ratio(engine, items, snr, config, policy, args.seed,
