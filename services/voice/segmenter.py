@@ -81,6 +81,10 @@ class SegmenterConfig:
     """With `vad_lift_dbfs`: a second VAD hears the lifted stream, and its utterances count only where the first VAD,
     which hears the stream as it came, heard nothing (the module's docstring); False: the one VAD hears the lifted
     stream."""
+    vad_lift_hold_s: float = 0.0
+    """With `vad_lift_second`: an utterance of the second VAD waits this long (stream time) after it ends, and counts
+    only if the first has not started one meanwhile (the lifted VAD may hear a loud word's faint onset alone, just
+    before the first hears the word); 0: it counts or not at once."""
     vad_max_gain_db: float = 24.0
     vad_peak_s: float = 10.0
     vad_lift_floor_dbfs: float | None = None
@@ -155,6 +159,7 @@ class Segmenter:
         self._peaks: deque[int] | None = None  # the VAD's lift: each frame's peak over `vad_peak_s`
         self._second: Segmenter | None = None  # `vad_lift_second`: the VAD that hears the lifted stream
         self._spans: deque[tuple[float, float]] = deque(maxlen=16)  # with it: this VAD's recent utterances (s)
+        self._waiting: list[tuple[Segment, float]] = []  # with it: the second's utterances held, and when they count
         lifted = self.config.vad_lift_dbfs is not None and self.config.vad == "silero"
         if lifted and self.config.vad_lift_second:
             self._second = Segmenter(replace(self.config, vad_lift_second=False, early_quiet_s=None))
@@ -189,14 +194,21 @@ class Segmenter:
         out = self._heard(pcm)
         return out if self._second is None else self._with_second(out, self._second.feed(pcm))
 
-    def _with_second(self, mine: list[Segment], second: list[Segment]) -> list[Segment]:
-        """This VAD's utterances, and those of the second (lifted) VAD that no utterance of this one overlaps, in
-        the order they ended."""
+    def _with_second(self, mine: list[Segment], second: list[Segment], final: bool = False) -> list[Segment]:
+        """This VAD's utterances, and those of the second (lifted) VAD that no utterance of this one overlaps and
+        that this one was not in when they ended or `vad_lift_hold_s` after (`final`: the stream ended, none is held
+        longer), in the order they ended."""
         self._spans.extend((seg.start_s, seg.end_s) for seg in mine)
         busy = bool(self._speech) or self._ep.in_speech
-        alone = [seg for seg in second
-                 if not busy and not any(start < seg.end_s and seg.start_s < end for start, end in self._spans)]
-        return sorted(mine + alone, key=lambda seg: seg.end_s)
+        now = self._consumed / (SAMPLE_RATE * SAMPLE_WIDTH)
+        self._waiting += [(seg, now + self.config.vad_lift_hold_s) for seg in second]
+        alone, held = [], []
+        for seg, due in self._waiting:
+            if busy or any(start < seg.end_s and seg.start_s < end for start, end in self._spans):
+                continue  # the first heard it, or heard something right after it: the second's is dropped
+            (alone if final or due <= now else held).append((seg, due))
+        self._waiting = held
+        return sorted(mine + [seg for seg, _ in alone], key=lambda seg: seg.end_s)
 
     def _heard(self, pcm: bytes) -> list[Segment]:
         """This VAD's utterances that ended within `pcm`."""
@@ -238,7 +250,7 @@ class Segmenter:
             self._speech.append(speech)
         seg = self._emit()
         out = [seg] if seg is not None else []
-        return out if self._second is None else self._with_second(out, self._second.flush())
+        return out if self._second is None else self._with_second(out, self._second.flush(), final=True)
 
     def _after(self, speech: bytes | None) -> Segment | None:
         if speech is None:

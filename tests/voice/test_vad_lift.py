@@ -100,17 +100,19 @@ def test_the_floor_bound_keeps_a_noisy_stream_unlifted() -> None:
 SECOND = replace(LIFT, vad_lift_second=True)
 
 
-def test_a_second_vad_finds_the_quiet_words_and_leaves_the_loud_ones_to_the_first() -> None:
-    """Round voice37c: with `vad_lift_second` the first VAD hears the stream as it came and its utterances are cut
-    exactly as without the lift; the second, lifted, adds only what the first did not hear at all."""
+@pytest.mark.parametrize("hold_s", [0.0, 0.5])
+def test_a_second_vad_finds_the_quiet_words_and_leaves_the_loud_ones_to_the_first(hold_s: float) -> None:
+    """Rounds voice37c and 37d: with `vad_lift_second` the first VAD hears the stream as it came and its utterances are
+    cut exactly as without the lift; the second, lifted, adds only what the first did not hear at all."""
+    config = replace(SECOND, vad_lift_hold_s=hold_s)
     quiet = at_peak(word_stream("stop", "yes"), -46.0)
     assert emitted(quiet, OFF) == []
-    found = [s for _, s in emitted(quiet, SECOND)]
+    found = [s for _, s in emitted(quiet, config)]
     assert [(s.start_s, s.end_s) for s in found] == [(s.start_s, s.end_s) for _, s in emitted(quiet, LIFT)]
     assert len(found) == 2 and all(-48.0 < Level.of(s.pcm).peak_dbfs < -44.0 for s in found)
     loud = at_peak(word_stream("stop", "yes", "no"), -14.0)
     off = [(s.start_s, s.end_s, s.pcm) for _, s in emitted(loud, OFF)]
-    assert len(off) == 3 and [(s.start_s, s.end_s, s.pcm) for _, s in emitted(loud, SECOND)] == off
+    assert len(off) == 3 and [(s.start_s, s.end_s, s.pcm) for _, s in emitted(loud, config)] == off
 
 
 def test_an_utterance_of_the_second_vad_counts_only_where_the_first_heard_nothing() -> None:
@@ -127,3 +129,29 @@ def test_an_utterance_of_the_second_vad_counts_only_where_the_first_heard_nothin
     assert seg._with_second([], [at(1.7, 2.4)]) == []  # overlaps an utterance the first heard before
     seg._speech = [b"\0\0"]  # the first is in an utterance now: the second's waits for nothing, it is dropped
     assert seg._with_second([], [at(5.0, 5.6)]) == []
+
+
+def test_the_second_vads_utterance_is_held_back_and_dropped_if_the_first_starts_one_meanwhile() -> None:
+    """Round voice37d: the lifted VAD may hear a loud word's faint onset alone and end before the first VAD starts on
+    the word; held `vad_lift_hold_s`, that fragment is dropped, and a far word nobody else heard still counts."""
+    seg = Segmenter(replace(SECOND, vad_lift_hold_s=0.5))
+
+    def at(start: float, end: float) -> Segment:
+        return Segment(b"", start, end)
+
+    def stream_time(seconds: float) -> None:
+        seg._consumed = int(seconds * 16000) * 2
+
+    stream_time(1.5)
+    assert seg._with_second([], [at(1.0, 1.5)]) == []  # held until 2.0
+    stream_time(1.8)
+    seg._speech = [b"\0\0"]  # the first starts on the word
+    assert seg._with_second([], []) == [] and seg._waiting == []  # the fragment is dropped
+    seg._speech = []
+    stream_time(4.0)
+    assert seg._with_second([], [at(3.4, 4.0)]) == []
+    stream_time(4.5)
+    assert [(s.start_s, s.end_s) for s in seg._with_second([], [])] == [(3.4, 4.0)]  # nobody else heard it
+    stream_time(6.0)
+    assert seg._with_second([], [at(5.5, 6.0)]) == []
+    assert [(s.start_s, s.end_s) for s in seg._with_second([], [], final=True)] == [(5.5, 6.0)]  # the stream ended

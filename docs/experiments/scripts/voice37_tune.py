@@ -62,6 +62,7 @@ def main() -> int:
                                                    "service's resampler (`voice_levels.through_mic`; stop 71)")
     ap.add_argument("--second", action="store_true", help="SegmenterConfig.vad_lift_second (round voice37c): a second "
                                                             "VAD hears the lifted stream")
+    ap.add_argument("--hold", type=float, default=0.0, help="SegmenterConfig.vad_lift_hold_s (round voice37d)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     items = tune_items(args.cache, args.per_command, args.others, args.seed)
@@ -71,7 +72,8 @@ def main() -> int:
     rows = []
     for floor in args.floors.split(","):
         config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor),
-                         vad_lift_floor_dbfs=args.lift_floor, vad_lift_second=args.second)
+                         vad_lift_floor_dbfs=args.lift_floor, vad_lift_second=args.second,
+                         vad_lift_hold_s=args.hold)
         for snr in (float(v) for v in args.walking.split(",") if v):
             row = {"floor": floor, "lift_floor": args.lift_floor, "walking_snr_db": snr,
                    **run_ratio(engine, items, snr, config, policy, args.seed,
