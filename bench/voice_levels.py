@@ -119,6 +119,9 @@ def main() -> int:
     ap.add_argument("--vad-lift-second", action="store_true",
                     help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
                          "first heard nothing (SegmenterConfig.vad_lift_second)")
+    ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
+                    help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
+                         "one meanwhile (SegmenterConfig.vad_lift_hold_s; default: the service's)")
     ap.add_argument("--mic-rate", type=int, help="both paths through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
@@ -128,7 +131,7 @@ def main() -> int:
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
     config = SegmenterConfig(vad_lift_dbfs=args.vad_lift, vad_lift_floor_dbfs=args.vad_lift_floor,
-                             vad_lift_second=args.vad_lift_second)
+                             vad_lift_second=args.vad_lift_second, vad_lift_hold_s=args.vad_lift_hold)
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -144,6 +147,7 @@ def main() -> int:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
             rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift,
                          "vad_lift_floor_dbfs": args.vad_lift_floor, "vad_lift_second": args.vad_lift_second,
+                         "vad_lift_hold_s": args.vad_lift_hold,
                          "mic_rate": args.mic_rate, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()

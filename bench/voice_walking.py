@@ -232,6 +232,9 @@ def main() -> int:
     ap.add_argument("--vad-lift-second", action="store_true",
                     help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
                          "first heard nothing (SegmenterConfig.vad_lift_second)")
+    ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
+                    help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
+                         "one meanwhile (SegmenterConfig.vad_lift_hold_s; default: the service's)")
     ap.add_argument("--mic-rate", type=int, help="every stream through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
@@ -253,7 +256,8 @@ def main() -> int:
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
                                  early_quiet_s=args.early_look,
                                  clear_quiet_s=args.clear_window, vad_lift_dbfs=args.vad_lift,
-                                 vad_lift_floor_dbfs=args.vad_lift_floor, vad_lift_second=args.vad_lift_second)
+                                 vad_lift_floor_dbfs=args.vad_lift_floor, vad_lift_second=args.vad_lift_second,
+                                 vad_lift_hold_s=args.vad_lift_hold)
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate)
             rows.append(row)

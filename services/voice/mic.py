@@ -61,7 +61,8 @@ def _int_in(variable: str, raw: str | None, low: int, high: int, what: str) -> i
 
 class ToServiceRate:
     """Interleaved 16-bit PCM at `rate` Hz with `channels` channels -> 16 kHz mono PCM in `CHUNK_S` chunks: the
-    channels averaged, then resampled by a streaming `soxr` resampler (its state carried across chunks)."""
+    channels averaged, then resampled by a streaming `soxr` resampler (its state carried across chunks; in float32,
+    so that the same sound always gives the same samples)."""
 
     def __init__(self, rate: int, channels: int) -> None:
         self.rate, self.channels = rate, channels
@@ -72,7 +73,10 @@ class ToServiceRate:
             except ImportError as exc:
                 raise MicError(f"the microphone gives {rate} Hz and resampling needs soxr ({exc}): "
                                f"pip install soxr, or the project's mic extra") from None
-            self._resampler = soxr.ResampleStream(rate, SAMPLE_RATE, 1, dtype="int16")
+            # in float32, rounded back to 16-bit here: with soxr's own 16-bit output the same sound came out a few
+            # LSB apart from one process to the next (stop 71), and quiet speech on the VAD's edge was found in one
+            # run and not the next
+            self._resampler = soxr.ResampleStream(rate, SAMPLE_RATE, 1, dtype="float32")
         self._out = b""
         self._step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
 
@@ -82,7 +86,8 @@ class ToServiceRate:
             x = x[: x.size - x.size % self.channels].reshape(-1, self.channels).astype(np.int32).mean(axis=1)
             x = np.rint(x).astype(np.int16)
         if self._resampler is not None:
-            x = self._resampler.resample_chunk(x)
+            y = self._resampler.resample_chunk(x.astype(np.float32) / np.float32(32768.0))
+            x = np.clip(np.rint(y * 32768.0), -32768, 32767).astype(np.int16)
         self._out += np.asarray(x, "<i2").tobytes()
         cut = len(self._out) - len(self._out) % self._step
         out = [self._out[i : i + self._step] for i in range(0, cut, self._step)]
