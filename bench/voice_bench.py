@@ -50,6 +50,7 @@ from collections import Counter, defaultdict
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.signal import resample_poly
@@ -434,6 +435,28 @@ def spotter_settings(args: argparse.Namespace, names: Iterable[str]) -> dict[str
 def early_look_arg(text: str) -> float | None:
     """A bench option that takes a number or `off` (None): `--early-look`, `--clear-window`, `--vad-lift`, `--vad-lift-floor`."""
     return None if text.strip().lower() == "off" else float(text)
+
+
+def add_lift_options(ap: argparse.ArgumentParser) -> None:
+    """The live stream's VAD lift (`SegmenterConfig.vad_lift_*`), for the benches that run the service's segmenter;
+    each defaults to the service's."""
+    ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
+                    help="Silero: the peak the VAD hears the loudest frame lifted to, dBFS, or off (default: the service's)")
+    ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
+                    help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
+                         "(default: the service's)")
+    ap.add_argument("--vad-lift-second", action=argparse.BooleanOptionalAction, default=SegmenterConfig.vad_lift_second,
+                    help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
+                         "first heard nothing (default: the service's)")
+    ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
+                    help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
+                         "one meanwhile (default: the service's)")
+
+
+def lift_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """`add_lift_options`' values as `SegmenterConfig` keywords."""
+    return {"vad_lift_dbfs": args.vad_lift, "vad_lift_floor_dbfs": args.vad_lift_floor,
+            "vad_lift_second": args.vad_lift_second, "vad_lift_hold_s": args.vad_lift_hold}
 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:

@@ -38,7 +38,17 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import OTHER, WALK, WORDS, Item, Policy, early_look_arg, heldout_items, through_mic  # noqa: E402,F401
+from bench.voice_bench import (  # noqa: E402,F401
+    OTHER,
+    WALK,
+    WORDS,
+    Item,
+    Policy,
+    add_lift_options,
+    heldout_items,
+    lift_settings,
+    through_mic,
+)
 from bench.voice_walking import LEAD_S, TAIL_S, pick, run_streams  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
@@ -110,18 +120,7 @@ def main() -> int:
                     help="dB of gain on what the sound card gave (clipped there), speech and hiss alike (HRI_VOICE_GAIN)")
     ap.add_argument("--per-family", type=int, default=14, help="clean commands and as many other words per family")
     ap.add_argument("--paths", default="stream,file", help="stream (VAD, then the engine), file (the engine alone)")
-    ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
-                    help="the peak the VAD hears the stream's loudest frame lifted to, dBFS, or off "
-                         "(SegmenterConfig.vad_lift_dbfs; default: the service's)")
-    ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
-                    help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
-                         "(SegmenterConfig.vad_lift_floor_dbfs; default: the service's)")
-    ap.add_argument("--vad-lift-second", action="store_true",
-                    help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
-                         "first heard nothing (SegmenterConfig.vad_lift_second)")
-    ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
-                    help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
-                         "one meanwhile (SegmenterConfig.vad_lift_hold_s; default: the service's)")
+    add_lift_options(ap)
     ap.add_argument("--mic-rate", type=int, help="both paths through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
@@ -130,8 +129,7 @@ def main() -> int:
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig(vad_lift_dbfs=args.vad_lift, vad_lift_floor_dbfs=args.vad_lift_floor,
-                             vad_lift_second=args.vad_lift_second, vad_lift_hold_s=args.vad_lift_hold)
+    config = SegmenterConfig(**lift_settings(args))
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -145,9 +143,7 @@ def main() -> int:
                 row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed, args.mic_rate)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
-            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "vad_lift_dbfs": args.vad_lift,
-                         "vad_lift_floor_dbfs": args.vad_lift_floor, "vad_lift_second": args.vad_lift_second,
-                         "vad_lift_hold_s": args.vad_lift_hold,
+            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, **lift_settings(args),
                          "mic_rate": args.mic_rate, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()

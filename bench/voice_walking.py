@@ -44,8 +44,10 @@ from bench.voice_bench import (  # noqa: E402
     WORDS,
     Item,
     Policy,
+    add_lift_options,
     early_look_arg,
     heldout_items,
+    lift_settings,
     speech_end_s,
     through_mic,
 )
@@ -224,17 +226,7 @@ def main() -> int:
                     help="the segmenter's early look: seconds of quiet, or off (default: the service's)")
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
                     help="the end window in a clear stream: seconds of quiet, or off (default: the service's)")
-    ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
-                    help="Silero: the peak the VAD hears the loudest frame lifted to, dBFS, or off (default: the service's)")
-    ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
-                    help="with --vad-lift: the level (dBFS RMS) the lift never brings the noise floor over, or off "
-                         "(default: the service's)")
-    ap.add_argument("--vad-lift-second", action="store_true",
-                    help="with --vad-lift: a second VAD hears the lifted stream, its utterances counted only where the "
-                         "first heard nothing (SegmenterConfig.vad_lift_second)")
-    ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
-                    help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
-                         "one meanwhile (SegmenterConfig.vad_lift_hold_s; default: the service's)")
+    add_lift_options(ap)
     ap.add_argument("--mic-rate", type=int, help="every stream through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
@@ -255,9 +247,7 @@ def main() -> int:
     for vad in args.vad.split(","):
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
                                  early_quiet_s=args.early_look,
-                                 clear_quiet_s=args.clear_window, vad_lift_dbfs=args.vad_lift,
-                                 vad_lift_floor_dbfs=args.vad_lift_floor, vad_lift_second=args.vad_lift_second,
-                                 vad_lift_hold_s=args.vad_lift_hold)
+                                 clear_quiet_s=args.clear_window, **lift_settings(args))
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate)
             rows.append(row)
