@@ -97,8 +97,8 @@ ClearWindowOption = Annotated[
 VadLiftOption = Annotated[
     str | None,
     typer.Option("--vad-lift", envvar="HRI_VOICE_VAD_LIFT",
-                 help="live stream (Silero): the peak (dBFS) a quiet stream's loudest moment is lifted to for the VAD "
-                      "alone, up to 24 dB, so that a quiet voice is found; or 'off' [default: off; round voice37]"),
+                 help="live stream (Silero): the peak (dBFS) a quiet stream's loudest moment is lifted to for a second "
+                      "VAD, up to 24 dB, so that a far voice is found; or 'off' [default: -20; round voice37d]"),
 ]
 GainOption = Annotated[
     str | None,

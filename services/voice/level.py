@@ -22,7 +22,9 @@ FULL_SCALE = 32767
 """A sample at or beyond this magnitude (16-bit) is clipped: the sound card had no larger number."""
 QUIET_PEAK_DBFS = -32.0
 """Speech peaking below this is quieter than any training clip by 6 dB, and the VAD starts to miss words (7 of 273
-held-out words at -32 dBFS, 70 at -38, 208 at -44)."""
+held-out words at -32 dBFS, 70 at -38, 208 at -44, in the generator's white hiss; with a microphone's noise spectrum
+61, 226 and 304 of 315). Since round voice37d a second VAD hears the stream lifted and finds most of them (0, 3 and 41
+of 315), 0.5 s late."""
 NOISY_SNR_DB = 20.0
 """An utterance whose speech is less than this over the stream's noise floor (the segmenter's estimate,
 `Segment.snr_db`) counts as noisy. On tuning clips (voice README, round voice38) the spotter took 6 % of other words
@@ -116,7 +118,8 @@ class Level:
             return f"the input clips ({self.clipped} samples at full scale): {lower}"
         said = []
         if self.is_quiet:
-            said.append(f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD misses words: "
+            said.append(f"speech peaks at {self.peak_dbfs:.0f} dBFS; below {QUIET_PEAK_DBFS:.0f} the VAD hears words late "
+                        f"or not at all: "
                          f"{_raise(self.peak_dbfs, gain_db)}")
         if self.is_noisy:
             said.append(f"speech is only {self.snr_db:.0f} dB over the noise floor; below {NOISY_SNR_DB:.0f} the spotter "

@@ -78,8 +78,8 @@ class VoiceSettings:
     """`HRI_VOICE_CLEAR_WINDOW`: seconds of quiet that end an utterance in a clear stream
     (`SegmenterConfig.clear_quiet_s`), or `off`; None: the default."""
     vad_lift: str | None = None
-    """`HRI_VOICE_VAD_LIFT`: the peak (dBFS) a quiet live stream is lifted to for the VAD alone
-    (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default."""
+    """`HRI_VOICE_VAD_LIFT`: the peak (dBFS) a quiet live stream is lifted to for the second VAD
+    (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default (-20)."""
     gain: str | None = None
     """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
     mic_rate: str | None = None

@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,7 @@ from services.voice.level import (
     amplify,
     gain_from,
 )
+from services.voice.segmenter import SegmenterConfig
 from services.voice.sources import SourceSpec, utterances
 from tests.conftest import ROOT, service_env, wait_for
 from tests.voice.streams import word_stream
@@ -110,12 +112,21 @@ def test_meter_reports_the_window_peak_and_floor() -> None:
 
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 def test_gain_lets_the_vad_find_speech_too_quiet_for_it() -> None:
-    """Two words peaking at -46 dBFS: the live stream's VAD (Silero) finds neither; with 20 dB of gain, both."""
+    """Two words peaking at -46 dBFS: Silero, hearing the stream as it came (the lift off), finds neither; with 20 dB
+    of gain, both. The default's second VAD hears the stream lifted by at most 15 dB here (the noise floor, -70 dBFS,
+    is kept under -55): one of them without gain; at -42 dBFS, where the first finds one, both, as they came."""
     pcm = at_peak(word_stream("stop", "yes"), -46.0)
-    found = [list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(pcm), gain_db=g)) for g in (0.0, 20.0)]
+    one_vad = replace(SegmenterConfig(), vad_lift_dbfs=None)
+    found = [list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(pcm), gain_db=g, segmenter=one_vad))
+             for g in (0.0, 20.0)]
     assert len(found[0]) == 0
     assert len(found[1]) == 2
     assert all(QUIET_PEAK_DBFS < Level.of(u.pcm).peak_dbfs < -20 for u in found[1])  # now within the trained levels
+    assert len(list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(pcm)))) == 1
+    nearer = at_peak(word_stream("stop", "yes"), -42.0)
+    assert len(list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(nearer), segmenter=one_vad))) == 1
+    lifted = list(utterances(SourceSpec("stdin"), lambda: False, stdin=io.BytesIO(nearer)))
+    assert len(lifted) == 2 and all(-44.0 < Level.of(u.pcm).peak_dbfs < QUIET_PEAK_DBFS for u in lifted)
 
 
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
@@ -174,9 +185,12 @@ def test_level_command_says_what_gain_a_quiet_microphone_needs() -> None:
                              input=pcm, capture_output=True, check=True, timeout=60)
         return out.stdout.decode().strip().splitlines()
 
-    lines = check(quiet)
+    lines = check(quiet, "--vad-lift", "off")  # one VAD, hearing the stream as it came
     assert "0 utterance(s)" in lines[-2] and "no speech found" in lines[-1]
     gain = lines[-1].rsplit("HRI_VOICE_GAIN=", 1)[1]
+    lifted = check(quiet)  # the default's second VAD finds a word, and says it is quiet and near the noise
+    assert "1 utterance(s)" in lifted[-2] and "(quiet)" in lifted[0]
+    assert "HRI_VOICE_GAIN=" in lifted[-1] and "nearer" in lifted[-1]
     lines = check(quiet, "--gain", gain)
     assert "2 utterance(s)" in lines[-2] and sum("(noisy)" in line for line in lines) == 2
     assert "over the noise floor" in lines[-1] and "nearer" in lines[-1] and "HRI_VOICE_GAIN" not in lines[-1]

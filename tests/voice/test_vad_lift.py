@@ -1,5 +1,5 @@
-"""Round voice37: the live stream's VAD hears a quiet stream lifted (`SegmenterConfig.vad_lift_dbfs`); the utterance's
-audio stays as it came."""
+"""Rounds voice37-37d: the live stream's VAD hears a quiet stream lifted (`SegmenterConfig.vad_lift_dbfs`; since 37d by a
+second VAD, the default); the utterance's audio stays as it came."""
 
 from __future__ import annotations
 
@@ -18,7 +18,8 @@ from tests.voice.test_level import at_peak
 pytestmark = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 
 OFF = replace(SegmenterConfig(), vad_lift_dbfs=None)
-LIFT = replace(SegmenterConfig(), vad_lift_dbfs=-20.0)
+LIFT = replace(SegmenterConfig(), vad_lift_dbfs=-20.0, vad_lift_floor_dbfs=None, vad_lift_second=False,
+               vad_lift_hold_s=0.0)  # one VAD hearing the lifted stream, as rounds voice37 and 37b
 
 
 def test_the_lift_finds_words_too_quiet_for_the_vad_and_hands_them_over_unchanged() -> None:
@@ -98,6 +99,13 @@ def test_the_floor_bound_keeps_a_noisy_stream_unlifted() -> None:
 
 
 SECOND = replace(LIFT, vad_lift_second=True)
+
+
+def test_the_default_is_round_voice37ds_second_vad() -> None:
+    config = SegmenterConfig()
+    assert (config.vad_lift_dbfs, config.vad_lift_floor_dbfs, config.vad_lift_second, config.vad_lift_hold_s) == (
+        -20.0, -55.0, True, 0.5)
+    assert Segmenter()._second is not None and Segmenter(OFF)._second is None
 
 
 @pytest.mark.parametrize("hold_s", [0.0, 0.5])
