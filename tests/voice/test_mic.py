@@ -94,8 +94,9 @@ def test_a_device_rate_is_mixed_down_resampled_and_filtered(rate: int) -> None:
 
 
 def test_the_same_sound_is_resampled_to_the_same_samples_in_every_process() -> None:
-    """soxr's own 16-bit output dithers at random: a quiet word on the VAD's edge was found in one run and not the
-    next (stop 71). Resampled in float32 and rounded here, two processes give the same bytes."""
+    """With soxr's own 16-bit output, the same sound came out a few LSB apart from one process to the next, and a
+    quiet word on the VAD's edge was found in one run and not the next (stop 71). Resampled in float32 and rounded
+    here, four processes give the same bytes."""
     code = ("import hashlib, numpy as np; from services.voice.mic import ToServiceRate; "
             "x = (np.random.default_rng(3).normal(0, 300, 48000 * 3)).astype('<i2').tobytes(); "
             "c = ToServiceRate(48000, 1); print(hashlib.sha1(b''.join(b''.join(c(x[k:k + 2880])) "
