@@ -205,7 +205,7 @@ class Segmenter:
         that this one was not in when they ended or `vad_lift_hold_s` after (`final`: the stream ended, none is held
         longer), in the order they ended."""
         self._spans.extend((seg.start_s, seg.end_s) for seg in mine)
-        busy = bool(self._speech) or self._ep.in_speech
+        busy = self.in_speech or self._ep.in_speech
         now = self._consumed / (SAMPLE_RATE * SAMPLE_WIDTH)
         self._waiting += [(seg, now + self.config.vad_lift_hold_s) for seg in second]
         alone, held = [], []

@@ -101,6 +101,11 @@ def test_the_floor_bound_keeps_a_noisy_stream_unlifted() -> None:
 SECOND = replace(LIFT, vad_lift_second=True)
 
 
+def at(start: float, end: float) -> Segment:
+    """A segment over `start`..`end` (s), for `Segmenter._with_second`."""
+    return Segment(b"", start, end)
+
+
 def test_the_default_is_round_voice37ds_second_vad() -> None:
     config = SegmenterConfig()
     assert (config.vad_lift_dbfs, config.vad_lift_floor_dbfs, config.vad_lift_second, config.vad_lift_hold_s) == (
@@ -128,9 +133,6 @@ def test_an_utterance_of_the_second_vad_counts_only_where_the_first_heard_nothin
     assert seg._second is not None and seg._peaks is None and seg._second._peaks is not None
     assert seg._second._second is None and seg._second.recognise is None  # one lifted VAD; it decodes nothing early
 
-    def at(start: float, end: float) -> Segment:
-        return Segment(b"", start, end)
-
     mine = [at(1.0, 1.8)]
     both = seg._with_second(mine, [at(0.9, 2.0), at(3.0, 3.5)])
     assert [(s.start_s, s.end_s) for s in both] == [(1.0, 1.8), (3.0, 3.5)]  # the overlapping one is the first's
@@ -143,9 +145,6 @@ def test_the_second_vads_utterance_is_held_back_and_dropped_if_the_first_starts_
     """Round voice37d: the lifted VAD may hear a loud word's faint onset alone and end before the first VAD starts on
     the word; held `vad_lift_hold_s`, that fragment is dropped, and a far word nobody else heard still counts."""
     seg = Segmenter(replace(SECOND, vad_lift_hold_s=0.5))
-
-    def at(start: float, end: float) -> Segment:
-        return Segment(b"", start, end)
 
     def stream_time(seconds: float) -> None:
         seg._consumed = int(seconds * 16000) * 2
