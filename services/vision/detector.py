@@ -103,6 +103,10 @@ class DetectorConfig:
     where they are judged on a sixteenth of the pixels: a speed knob. 160 makes detection about 20 %
     faster and costs 0.5-1 % of O and triangle recall on the tuning generator (2-3 % held-out)."""
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
+    filled_solidity: float = 0.93
+    """a filled triangle (no hole) fills at least this share of its outline's convex hull ..."""
+    filled_fill: float = 0.85
+    """... and of its minimum enclosing triangle (its shape confidence is 0.5 there, 1 at a full fill)"""
     surround: float = 0.3  # how far around a mark the card is inspected, as a fraction of its size
     border: float = 0.05  # the narrowest card border next to a mark that is judged, fraction of its size
     min_band_paper: float = 0.6  # share of that border band that must be paper
@@ -863,7 +867,7 @@ class MarkDetector:
         blob = _blob(bordered, size)
         if blob is None:
             return None
-        judged = _classify(blob)
+        judged = _classify(blob, self.config)
         if judged is None:
             whole = self._loose(level.g, own, blob, (x, y, w, h))
             parts = self._split(level, i, own, (x, y, w, h), loose_part=not whole)
@@ -1009,7 +1013,7 @@ class MarkDetector:
             )
             if blob is None:
                 continue
-            judged = _classify(blob)
+            judged = _classify(blob, cfg)
             sub = (x + sx, y + sy, sw, sh)
             if judged is None or judged[0] is Shape.O:
                 if (
@@ -1402,7 +1406,7 @@ def _blob(comp: np.ndarray, size: float) -> _Blob | None:
     return _Blob(outer, holes, area, size)
 
 
-def _classify(b: _Blob) -> tuple[Shape, float] | None:
+def _classify(b: _Blob, cfg: DetectorConfig) -> tuple[Shape, float] | None:
     if len(b.holes) == 1:
         return _ring_like(b)
     if not b.holes:
@@ -1410,7 +1414,7 @@ def _classify(b: _Blob) -> tuple[Shape, float] | None:
         hull_area = cv2.contourArea(hull)
         if hull_area <= 0:
             return None
-        return _cross(b, hull, hull_area) or _filled_triangle(b, hull_area)
+        return _cross(b, hull, hull_area) or _filled_triangle(b, hull_area, cfg.filled_solidity, cfg.filled_fill)
     return None
 
 
@@ -1422,15 +1426,15 @@ def _solid(b: _Blob | None, share: float) -> bool:
     return hull > 0 and b.area / hull >= share
 
 
-def _filled_triangle(b: _Blob, hull_area: float) -> tuple[Shape, float] | None:
+def _filled_triangle(b: _Blob, hull_area: float, solidity: float, min_fill: float) -> tuple[Shape, float] | None:
     """A solid triangle (on a card: the card test decides whether it is a mark or clutter); `hull_area`
-    is the area of the outline's convex hull."""
-    if b.area / hull_area < 0.93:
+    is the area of the outline's convex hull (`DetectorConfig.filled_solidity`, `filled_fill`)."""
+    if b.area / hull_area < solidity:
         return None
     fill = _triangle_fill(b.outer, b.area)
-    if fill < 0.85:
+    if fill < min_fill:
         return None
-    return Shape.TRIANGLE, 1.0 - 0.5 * (1 - fill) / 0.15
+    return Shape.TRIANGLE, 1.0 - 0.5 * (1 - fill) / (1 - min_fill)
 
 
 def _ring_like(b: _Blob) -> tuple[Shape, float] | None:
