@@ -836,3 +836,35 @@ def test_held_out_lens_distorts_frames_and_labels_as_opencvs_model_says() -> Non
         assert np.linalg.norm(cb - centre) <= np.linalg.norm(ca - centre) + 2  # barrel: pulled towards the centre
         x, y, bw, bh = lb.box
         assert 0 <= x and 0 <= y and x + bw <= w and y + bh <= h
+
+
+def _solid_triangle(bow: float) -> detector_module._Blob:
+    """A 40 px filled triangle whose sides bow inwards by `bow` of its size at their middles (as the adaptive
+    threshold eats a filled shape's edges), as the shape tests see it."""
+    corners = np.array([(30.0, 10.0), (70.0, 10.0), (50.0, 45.0)])
+    centre = corners.mean(axis=0)
+    outline = []
+    for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True):
+        for t in np.linspace(0, 1, 20, endpoint=False):
+            p = a + t * (b - a)
+            outline.append(p + (centre - p) / np.linalg.norm(centre - p) * bow * 40 * np.sin(np.pi * t))
+    mask = np.zeros((60, 100), np.uint8)
+    cv2.fillPoly(mask, [np.round(np.array(outline)).astype(np.int32)], 255)
+    blob = detector_module._blob(cv2.copyMakeBorder(mask, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0), 40.0)
+    assert blob is not None
+    return blob
+
+
+def test_the_filled_triangle_bars_are_settings() -> None:
+    """`filled_solidity` and `filled_fill` (round vision41): a straight-sided filled triangle is claimed at the
+    defaults with a high confidence; one bowed by the local threshold is not, and is at lower bars, at 0.5 on the
+    fill bar's edge."""
+    config = DetectorConfig()
+    straight = detector_module._classify(_solid_triangle(0.0), config)
+    assert straight is not None and straight[0] is Shape.TRIANGLE and straight[1] > 0.75
+    bowed = _solid_triangle(0.04)  # fills 0.85 of its hull, as a 30-50 px one on the tuning frames
+    assert detector_module._classify(bowed, config) is None
+    lower = dataclasses.replace(config, filled_solidity=0.8, filled_fill=0.7)
+    judged = detector_module._classify(bowed, lower)
+    assert judged is not None and judged[0] is Shape.TRIANGLE and 0.5 <= judged[1] < straight[1]
+    assert detector_module._classify(_solid_triangle(0.0), dataclasses.replace(config, filled_fill=0.999)) is None

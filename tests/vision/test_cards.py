@@ -1,0 +1,53 @@
+"""`bench/vision_cards.py`: what card the detector sees. An X, an O and an outline triangle are marks on any plain
+light card, however much paper is round them and whatever is behind it (a sheet held close fills the view; a white
+card in front of a white wall shows no edge); a filled triangle is one on a card that ends within about its width,
+in front of something darker. The bench's own tables show where a filled triangle is lost (the vision README)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from bench import vision_cards
+from schemas.messages import Shape
+from services.vision.detector import DetectorConfig, MarkDetector
+from services.vision.training import iou
+
+
+@pytest.fixture(scope="module")
+def found() -> dict:
+    return vision_cards.probe(MarkDetector(DetectorConfig()), borders=(0.3, 1.0, 3.0), sizes=(80,), turns=(25.0,))
+
+
+@pytest.mark.parametrize("mark", ["X", "O", "TRIANGLE"])
+def test_a_drawn_mark_is_found_on_any_card(found: dict, mark: str) -> None:
+    for kind, row in found[mark].items():
+        for border, cell in row.items():
+            assert cell == {"found": 1.0, "false": 0}, (mark, kind, border)
+
+
+def test_a_filled_triangle_is_found_on_a_card_before_a_darker_background(found: dict) -> None:
+    for kind in ("grey", "dark", "texture"):
+        for border in ("0.3", "1.0"):
+            assert found["filled TRIANGLE"][kind][border] == {"found": 1.0, "false": 0}, (kind, border)
+
+
+def test_the_frame_is_what_the_bench_says() -> None:
+    rng = np.random.default_rng(1)
+    img, box = vision_cards.card_frame("white", Shape.X, False, 80, 3.0, 25.0, rng)
+    assert img.shape == (vision_cards.H, vision_cards.W, 3)
+    assert 75 <= max(box[2:]) <= 115  # an 80 px X turned by 25 degrees
+    x, y, w, h = box
+    assert img[y : y + h, x : x + w].min() < 60  # the ink is in the box
+    d = MarkDetector(DetectorConfig()).detect(img)
+    assert [m.shape for m in d] == [Shape.X] and iou(d[0].box, box) >= 0.5
+
+
+def test_a_bad_setting_exits_2_naming_it() -> None:
+    import typer
+
+    app = typer.Typer()
+    app.command()(vision_cards.main)
+    result = CliRunner().invoke(app, ["--set", "bogus=1"])
+    assert result.exit_code == 2 and "bogus" in result.output
