@@ -4,7 +4,7 @@
 
 Neither frame generator answers a user's first question, "how do I make a card?", because each draws cards of its
 own proportions. This bench draws, for every mark (X, O, an outline TRIANGLE, a filled TRIANGLE), one card in the
-middle of a 640x480 frame: black ink (grey 30) on white paper (230), strokes an eighth of the mark, the mark 40, 80 or
+middle of a 640x480 frame: black ink (grey 30; `--ink` blue, red or green) on white paper (230), strokes an eighth of the mark, the mark 40, 80 or
 160 px wide, turned by 0, 25 or 60 degrees, with a card border on each side of 0.1 to 3 times the mark's width (at 3
 an A4 sheet round a 4 cm mark; past the frame's edge, a sheet held close fills the view) in front of a background
 of mid grey (120), dark grey (60), a blurred texture, or white as bright as the card (a white card held against a
@@ -34,7 +34,13 @@ from services.vision.synthetic import _draw_mark
 from services.vision.training import iou
 
 W, H = 640, 480
-PAPER, INK = 230, 30
+PAPER = 230
+INKS: dict[str, tuple[int, int, int]] = {  # BGR, as a marker pen's on white paper
+    "black": (30, 30, 30),
+    "blue": (150, 60, 20),
+    "red": (40, 40, 200),
+    "green": (60, 140, 30),
+}
 MARKS: dict[str, tuple[Shape, bool]] = {
     "X": (Shape.X, False),
     "O": (Shape.O, False),
@@ -59,13 +65,20 @@ def background(kind: str, rng: np.random.Generator) -> np.ndarray:
 
 
 def card_frame(
-    kind: str, shape: Shape, filled: bool, size: int, border: float, turn: float, rng: np.random.Generator
+    kind: str,
+    shape: Shape,
+    filled: bool,
+    size: int,
+    border: float,
+    turn: float,
+    rng: np.random.Generator,
+    ink: tuple[int, int, int] = INKS["black"],
 ) -> tuple[np.ndarray, tuple[int, int, int, int]]:
     """One frame: the card (turned by `turn` degrees about the frame's centre) over the background, and the
     mark's box."""
     side = int(round(size * (1 + 2 * border)))
     card = np.full((side, side, 3), PAPER, np.uint8)
-    pts = _draw_mark(card, shape, (side / 2, side / 2), float(size), size / 8, (INK,) * 3, 0.0, filled)
+    pts = _draw_mark(card, shape, (side / 2, side / 2), float(size), size / 8, ink, 0.0, filled)
     # the card's centre on the frame's centre, turned
     m = cv2.getRotationMatrix2D((side / 2, side / 2), turn, 1.0)
     m[:, 2] += (W / 2 - side / 2, H / 2 - side / 2)
@@ -88,6 +101,7 @@ def probe(
     borders: tuple[float, ...] = BORDERS,
     sizes: tuple[int, ...] = SIZES,
     turns: tuple[float, ...] = TURNS,
+    ink: str = "black",
 ) -> dict[str, Any]:
     """Found share and false marks per mark, background and border."""
     rng = np.random.default_rng(seed)
@@ -101,7 +115,7 @@ def probe(
                 found = false = 0
                 for size in sizes:
                     for turn in turns:
-                        img, box = card_frame(kind, shape, filled, size, border, turn, rng)
+                        img, box = card_frame(kind, shape, filled, size, border, turn, rng, INKS[ink])
                         hit = False
                         for d in detector.detect(img):
                             if not hit and d.shape is shape and iou(d.box, box) >= 0.5:
@@ -118,19 +132,22 @@ def probe(
 def main(
     settings: Annotated[list[str], typer.Option("--set", help="a detector setting KEY=VALUE")] = [],  # noqa: B006
     seed: Annotated[int, typer.Option(help="the noise and texture seed")] = 0,
+    ink: Annotated[str, typer.Option(help=f"the ink: {', '.join(INKS)}")] = "black",
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
 ) -> None:
     cv2.setNumThreads(1)
+    if ink not in INKS:
+        raise typer.BadParameter(f"{ink!r}: one of {', '.join(INKS)}", param_hint="--ink")
     try:
         config = parse_settings(settings)
     except ValueError as exc:
         raise typer.BadParameter(f"--set: {exc}") from None
-    result = probe(MarkDetector(config), seed)
+    result = probe(MarkDetector(config), seed, ink=ink)
     if as_json:
-        typer.echo(json.dumps({"settings": settings, "seed": seed, "marks": result}, indent=2))
+        typer.echo(json.dumps({"settings": settings, "seed": seed, "ink": ink, "marks": result}, indent=2))
         return
     lines = [
-        f"one card mid-frame, ink {INK} on paper {PAPER}; share of {len(SIZES) * len(TURNS)} frames "
+        f"one card mid-frame, {ink} ink {INKS[ink]} (BGR) on paper {PAPER}; share of {len(SIZES) * len(TURNS)} frames "
         f"(marks {', '.join(map(str, SIZES))} px, turned {', '.join(f'{t:g}' for t in TURNS)} deg) "
         "in which the mark was found [false marks]",
         f"detector settings: {' '.join(settings) if settings else 'the defaults'}",

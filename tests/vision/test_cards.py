@@ -33,6 +33,16 @@ def test_a_filled_triangle_is_found_on_a_card_before_a_darker_background(found: 
             assert found["filled TRIANGLE"][kind][border] == {"found": 1.0, "false": 0}, (kind, border)
 
 
+@pytest.mark.parametrize("ink", ["blue", "red", "green"])
+def test_a_coloured_mark_is_found_as_a_black_one(ink: str) -> None:
+    found = vision_cards.probe(
+        MarkDetector(DetectorConfig()), marks=("X", "filled TRIANGLE"), borders=(0.3,), sizes=(80,), turns=(25.0,), ink=ink
+    )
+    for mark in ("X", "filled TRIANGLE"):
+        for kind in ("grey", "dark", "texture"):
+            assert found[mark][kind]["0.3"] == {"found": 1.0, "false": 0}, (ink, mark, kind)
+
+
 def test_the_frame_is_what_the_bench_says() -> None:
     rng = np.random.default_rng(1)
     img, box = vision_cards.card_frame("white", Shape.X, False, 80, 3.0, 25.0, rng)
@@ -44,10 +54,11 @@ def test_the_frame_is_what_the_bench_says() -> None:
     assert [m.shape for m in d] == [Shape.X] and iou(d[0].box, box) >= 0.5
 
 
-def test_a_bad_setting_exits_2_naming_it() -> None:
+@pytest.mark.parametrize(("args", "named"), [(["--set", "bogus=1"], "bogus"), (["--ink", "purple"], "purple")])
+def test_a_bad_option_exits_2_naming_it(args: list[str], named: str) -> None:
     import typer
 
     app = typer.Typer()
     app.command()(vision_cards.main)
-    result = CliRunner().invoke(app, ["--set", "bogus=1"])
-    assert result.exit_code == 2 and "bogus" in result.output
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2 and named in result.output
