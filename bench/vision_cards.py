@@ -1,16 +1,16 @@
 """What card the robot can see: one mark on one plain card, the card's border and the background varied.
 
-    .venv/bin/python bench/vision_cards.py [--set KEY=VALUE ...] [--json]
+    .venv/bin/python bench/vision_cards.py [--ink black|blue|red|green] [--set KEY=VALUE ...] [--json]
 
 Neither frame generator answers a user's first question, "how do I make a card?", because each draws cards of its
 own proportions. This bench draws, for every mark (X, O, an outline TRIANGLE, a filled TRIANGLE), one card in the
-middle of a 640x480 frame: black ink (grey 30; `--ink` blue, red or green) on white paper (230), strokes an eighth of the mark, the mark 40, 80 or
-160 px wide, turned by 0, 25 or 60 degrees, with a card border on each side of 0.1 to 3 times the mark's width (at 3
-an A4 sheet round a 4 cm mark; past the frame's edge, a sheet held close fills the view) in front of a background
-of mid grey (120), dark grey (60), a blurred texture, or white as bright as the card (a white card held against a
-white wall or shirt: no card edge to see). Light sensor noise (sigma 2) and a one-pixel blur; nothing else. It
-prints, per mark, the share of its 9 frames (3 sizes x 3 turns) in which the detector found that mark (box IoU >=
-0.5) and the false marks found, by background and border.
+middle of a 640x480 frame: black ink (grey 30; `--ink` blue, red or green) on white paper (230), strokes an eighth of
+the mark, the mark 40, 80 or 160 px wide, turned by 0, 25 or 60 degrees, with a card border on each side of 0.1 to 3
+times the mark's width (at 3 an A4 sheet round a 4 cm mark; past the frame's edge, a sheet held close fills the view)
+in front of a background of mid grey (120), dark grey (60), a blurred texture, or white as bright as the card (a
+white card held against a white wall or shirt: no card edge to see). Light sensor noise (sigma 2) and a one-pixel
+blur; nothing else. It prints, per mark, the share of its 9 frames (3 sizes x 3 turns) in which the detector found
+that mark (box IoU >= 0.5) and the false marks found, by background and border.
 
 It is a probe of the detector's definition of a card, not a measure of recall: `bench/vision_bench.py` is that.
 By the contract a filled triangle that is not on a card is clutter; the detector's card is a light surface that
