@@ -18,6 +18,7 @@ from services.vision.annotate import annotate
 from services.vision.calibration import Calibration, Undistorter
 from services.vision.debounce import Confirmation, DebounceConfig
 from services.vision.detector import MarkDetector, parse_settings
+from services.vision.explain import near_misses
 from services.vision.service import NAME, VisionSettings, serve
 from services.vision.sources import SourceConfigError, SourceError, open_source
 
@@ -149,6 +150,14 @@ def detect(
     ] = None,
     settings: DetectorOption = "",
     calibration: CalibrationOption = None,
+    explain: Annotated[
+        bool,
+        typer.Option(
+            "--explain",
+            help="also say on stderr, for each shape the tests read as a mark but did not report, which rule "
+            "refused it (services/vision/explain.py)",
+        ),
+    ] = False,
 ) -> None:
     """Print one MarkObservation JSON line per image (no debounce; `frame` is the image's position).
 
@@ -179,6 +188,10 @@ def detect(
         if annotate_dir is not None:
             out = annotate_dir / f"{path.stem}.annotated.png"
             cv2.imwrite(str(out), annotate(image, found))
+        if explain:
+            for miss in near_misses(detector, image):
+                x, y, w, h = miss.box
+                typer.echo(f"{path}: {miss.shape.value} at {x},{y} {w}x{h} not reported: {miss.reason}", err=True)
     raise typer.Exit(1 if failed else 0)
 
 

@@ -1,0 +1,86 @@
+"""Why a mark-like shape in an image was not reported: the detector's trace, read out for a person.
+
+`python -m services.vision detect --explain IMAGE...` prints, for each image, the shapes the detector's own tests
+read as an X, O or triangle (or the verifier found most like one) but did not report, each with the last test it
+failed (`MarkDetector.trace`, the stages of `detector.STAGES`). A user holding a card up to their own camera learns
+which rule of "What counts as a mark" (vision README) refused it: a filled triangle on a card with too much paper
+round it, an O without a clear margin, a mark beside a word. Components no shape test read as a mark (noise,
+clutter) are not listed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from schemas.messages import Shape
+from services.vision.detector import Box, MarkDetector, box_overlap, to_gray
+
+REASONS: dict[str, str] = {
+    "unnamed": "no shape test read it clearly and the learned verifier was not sure enough to name it: blurred, "
+    "partly covered, or drawn loosely",
+    "card": "the card tests refused it: too little plain light paper right round it, other ink or a letter-sized "
+    "shape beside it, or too faint against the paper",
+    "O margin": "an O needs a clear margin of paper all round it (a tenth of its size): no finger or card edge "
+    "right next to it",
+    "hole": "its inside is not clean paper",
+    "confidence": "the shape tests read it only weakly",
+    "text line": "it stands in a line of text, as a letter of a word",
+    "verifier": "the learned verifier did not take it for a mark",
+}
+"""The stages a shape can be refused at once a test read it as a mark, in words."""
+
+FILLED_TRIANGLE = (
+    "; a filled triangle is a mark only on a card that ends within about its width, in front of something darker "
+    "than the paper (else it looks painted on a wall: draw an outline, or trim the card)"
+)
+"""Added where the verifier refused or did not name a triangle: the commonest such case (`bench/vision_cards.py`)."""
+
+SAME_PLACE = 0.5
+"""Two traced components whose boxes overlap by this share of the smaller are one shape (at two pyramid levels)."""
+
+
+@dataclass(frozen=True)
+class NearMiss:
+    """A shape the detector's tests read as `shape` at `box` (input pixels) but did not report: `stage` is the
+    furthest test it reached at any pyramid level."""
+
+    shape: Shape
+    box: Box
+    stage: str
+
+    @property
+    def reason(self) -> str:
+        hint = FILLED_TRIANGLE if self.shape is Shape.TRIANGLE and self.stage in ("verifier", "unnamed") else ""
+        return REASONS[self.stage] + hint
+
+
+def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> list[NearMiss]:
+    """Up to `limit` near misses in `image` (BGR or grey, any size), largest first; none over a reported mark."""
+    gray = to_gray(image)
+    scale = 1.0
+    if max(gray.shape) > detector.config.max_side:  # as `MarkDetector.steps` scales a large frame
+        scale = max(gray.shape) / detector.config.max_side
+        size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
+        gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
+    found, traced = detector.trace(gray)
+    stages = list(REASONS)
+    shapes = sorted(
+        (t for t in traced if t.shape is not None and t.stage in REASONS),
+        key=lambda t: (-stages.index(t.stage), -t.box[2] * t.box[3]),  # the furthest stage first
+    )
+    out: list[NearMiss] = []
+    for t in shapes:
+        if any(box_overlap(t.box, d.box) >= SAME_PLACE for d in found):
+            continue  # that place was reported
+        if any(box_overlap(t.box, m.box) >= SAME_PLACE for m in out):
+            continue  # the same shape at another pyramid level, which got no further
+        assert t.shape is not None
+        out.append(NearMiss(t.shape, t.box, t.stage))
+    out.sort(key=lambda m: -m.box[2] * m.box[3])
+    return [
+        NearMiss(m.shape, tuple(round(v * scale) for v in m.box), m.stage)  # type: ignore[arg-type]
+        for m in out[:limit]
+    ]
