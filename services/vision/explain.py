@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Shape
-from services.vision.detector import Box, MarkDetector, box_overlap, to_gray
+from services.vision.detector import STAGES, Box, MarkDetector, box_overlap, to_gray
 
 REASONS: dict[str, str] = {
     "unnamed": "no shape test read it clearly and the learned verifier was not sure enough to name it: blurred, "
@@ -66,10 +66,9 @@ def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> li
         size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
         gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
     found, traced = detector.trace(gray)
-    stages = list(REASONS)
     shapes = sorted(
         (t for t in traced if t.shape is not None and t.stage in REASONS),
-        key=lambda t: (-stages.index(t.stage), -t.box[2] * t.box[3]),  # the furthest stage first
+        key=lambda t: (-STAGES.index(t.stage), -t.box[2] * t.box[3]),  # the furthest stage first
     )
     out: list[NearMiss] = []
     for t in shapes:
