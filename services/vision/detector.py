@@ -514,14 +514,7 @@ class MarkDetector:
         """`detect` in steps, for a caller that wants to do something else between them (the vision
         service looks at a newer frame's coarser levels: `lookahead.py`): the very same work and
         detections. Another frame's steps may run meanwhile only on another instance (`twin`)."""
-        gray = to_gray(image)
-        # work at about 640x480 whatever the camera gives: the thresholds are tuned for that scale
-        # (and a large frame would cost more); boxes are mapped back to the input's pixels
-        scale = 1.0
-        if max(gray.shape) > self.config.max_side:
-            scale = max(gray.shape) / self.config.max_side
-            size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
-            gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
+        gray, scale = working_gray(image, self.config.max_side)
         found = yield from self._detect_gray(gray)
         if scale == 1.0:
             return found
@@ -1362,6 +1355,18 @@ def _labels(binary: np.ndarray, connectivity: int = 8) -> tuple[int, np.ndarray]
     except cv2.error:  # more than 65535 components
         found = cv2.connectedComponents(binary, connectivity=connectivity)
     return int(found[0]), found[1]
+
+
+def working_gray(image: np.ndarray, max_side: int) -> tuple[np.ndarray, float]:
+    """`image` in grey at most `max_side` on its longest side, and the factor its boxes scale back by: the detector
+    works at about 640x480 whatever the camera gives, because its thresholds are tuned for that scale (and a large
+    frame would cost more)."""
+    gray = to_gray(image)
+    if max(gray.shape) <= max_side:
+        return gray, 1.0
+    scale = max(gray.shape) / max_side
+    size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
+    return cv2.resize(gray, size, interpolation=cv2.INTER_AREA), scale
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:

@@ -12,11 +12,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from schemas.messages import Shape
-from services.vision.detector import STAGES, Box, MarkDetector, box_overlap, to_gray
+from services.vision.detector import STAGES, Box, MarkDetector, box_overlap, working_gray
 
 REASONS: dict[str, str] = {
     "unnamed": "no shape test read it clearly and the learned verifier was not sure enough to name it: blurred, "
@@ -59,12 +58,7 @@ class NearMiss:
 
 def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> list[NearMiss]:
     """Up to `limit` near misses in `image` (BGR or grey, any size), largest first; none over a reported mark."""
-    gray = to_gray(image)
-    scale = 1.0
-    if max(gray.shape) > detector.config.max_side:  # as `MarkDetector.steps` scales a large frame
-        scale = max(gray.shape) / detector.config.max_side
-        size = (round(gray.shape[1] / scale), round(gray.shape[0] / scale))
-        gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
+    gray, scale = working_gray(image, detector.config.max_side)  # as `MarkDetector.steps` scales a large frame
     found, traced = detector.trace(gray)
     shapes = sorted(
         (t for t in traced if t.shape is not None and t.stage in REASONS),
