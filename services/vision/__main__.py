@@ -18,9 +18,9 @@ from services.vision.annotate import annotate
 from services.vision.calibration import Calibration, Undistorter
 from services.vision.debounce import Confirmation, DebounceConfig
 from services.vision.detector import MarkDetector, parse_settings
-from services.vision.explain import near_misses
+from services.vision.explain import CardCheck, explained
 from services.vision.service import NAME, VisionSettings, serve
-from services.vision.sources import SourceConfigError, SourceError, open_source
+from services.vision.sources import EndOfStream, SourceConfigError, SourceError, open_source
 
 app = typer.Typer(add_completion=False, help=__doc__, rich_markup_mode=None)  # help text as written
 
@@ -181,17 +181,66 @@ def detect(
             continue
         if undistort is not None:
             image = undistort(image)
-        found = detector.detect(image)
+        found, misses = explained(detector, image) if explain else (detector.detect(image), [])
         obs = MarkObservation(stamp=os.path.getmtime(path), frame=i, marks=[d.to_mark() for d in found])
         sys.stdout.write(obs.model_dump_json() + "\n")
         sys.stdout.flush()
         if annotate_dir is not None:
             out = annotate_dir / f"{path.stem}.annotated.png"
             cv2.imwrite(str(out), annotate(image, found))
-        if explain:
-            for miss in near_misses(detector, image):
-                x, y, w, h = miss.box
-                typer.echo(f"{path}: {miss.shape.value} at {x},{y} {w}x{h} not reported: {miss.reason}", err=True)
+        for miss in misses:
+            x, y, w, h = miss.box
+            typer.echo(f"{path}: {miss.shape.value} at {x},{y} {w}x{h} not reported: {miss.reason}", err=True)
+    raise typer.Exit(1 if failed else 0)
+
+
+
+@app.command()
+def check(
+    source: SourceOption = "camera:0",
+    frames: Annotated[
+        int, typer.Option("--frames", min=1, help="frames to look at (fewer if a file or folder ends first)")
+    ] = 30,
+    settings: DetectorOption = "",
+    calibration: CalibrationOption = None,
+    seed: SeedOption = 0,
+) -> None:
+    """Hold a card up to the camera: in how many frames each mark was reported, and which rule refused any shape
+    that was read as a mark but not reported (explain.py). Ctrl-C stops early and still prints the summary."""
+    try:
+        detector = MarkDetector(parse_settings(settings))
+        lens = _calibration(calibration)
+        src = open_source(source, seed=seed)
+    except (ValueError, SourceConfigError) as exc:
+        typer.echo(f"vision: invalid configuration: {exc}", err=True)
+        raise typer.Exit(2) from None
+    except SourceError as exc:
+        typer.echo(f"vision: {exc}", err=True)
+        raise typer.Exit(1) from None
+    undistort = Undistorter(lens) if lens is not None else None
+    seen = CardCheck()
+    failed = False
+    try:
+        src.open()
+        while seen.frames < frames:
+            frame = src.read(timeout=5.0)
+            if frame is None:
+                typer.echo(f"vision: no frame from {source} in 5 s", err=True)
+                break
+            image = undistort(frame.image) if undistort is not None else frame.image
+            found, misses = explained(detector, image)
+            seen.add([d.shape for d in found], misses)
+    except EndOfStream:
+        pass
+    except SourceError as exc:  # no such camera, or it stopped
+        typer.echo(f"vision: {exc}", err=True)
+        failed = True
+    except KeyboardInterrupt:
+        pass
+    finally:
+        src.close()
+    for line in seen.summary():
+        typer.echo(line)
     raise typer.Exit(1 if failed else 0)
 
 

@@ -10,12 +10,12 @@ clutter) are not listed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from schemas.messages import Shape
-from services.vision.detector import STAGES, Box, MarkDetector, box_overlap, working_gray
+from services.vision.detector import STAGES, Box, Detection, MarkDetector, box_overlap, working_gray
 
 REASONS: dict[str, str] = {
     "unnamed": "no shape test read it clearly and the learned verifier was not sure enough to name it: blurred, "
@@ -58,6 +58,12 @@ class NearMiss:
 
 def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> list[NearMiss]:
     """Up to `limit` near misses in `image` (BGR or grey, any size), largest first; none over a reported mark."""
+    return explained(detector, image, limit)[1]
+
+
+def explained(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> tuple[list[Detection], list[NearMiss]]:
+    """`detector.detect(image)`'s marks (the same: the trace is the detection, recorded) and `near_misses`, in one
+    pass, boxes in `image`'s pixels."""
     gray, scale = working_gray(image, detector.config.max_side)  # as `MarkDetector.steps` scales a large frame
     found, traced = detector.trace(gray)
     shapes = sorted(
@@ -73,7 +79,44 @@ def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> li
         assert t.shape is not None
         out.append(NearMiss(t.shape, t.box, t.stage))
     out.sort(key=lambda m: -m.box[2] * m.box[3])
-    return [
-        NearMiss(m.shape, tuple(round(v * scale) for v in m.box), m.stage)  # type: ignore[arg-type]
-        for m in out[:limit]
-    ]
+
+    def scaled(box: Box) -> Box:
+        return box if scale == 1.0 else tuple(round(v * scale) for v in box)  # type: ignore[return-value]
+
+    return (
+        [Detection(d.shape, d.confidence, scaled(d.box)) for d in found],
+        [NearMiss(m.shape, scaled(m.box), m.stage) for m in out[:limit]],
+    )
+
+
+@dataclass
+class CardCheck:
+    """What `python -m services.vision check` saw over a run of frames: in how many each shape was reported, and
+    each (shape, rule) a shape was refused by, in how many frames."""
+
+    frames: int = 0
+    reported: dict[Shape, int] = field(default_factory=dict)
+    refused: dict[tuple[Shape, str], int] = field(default_factory=dict)
+
+    def add(self, found: list[Shape], misses: list[NearMiss]) -> None:
+        """One frame: the shapes reported in it and its near misses (each shape and rule counted once a frame)."""
+        self.frames += 1
+        for shape in set(found):
+            self.reported[shape] = self.reported.get(shape, 0) + 1
+        for key in {(m.shape, m.stage) for m in misses}:
+            self.refused[key] = self.refused.get(key, 0) + 1
+
+    def summary(self) -> list[str]:
+        """Lines for a person: each shape reported, then each refusal with its rule in words, most frequent first."""
+        if not self.frames:
+            return ["no frame was read"]
+        lines = [f"{self.frames} frame(s) looked at"]
+        for shape in Shape:
+            if shape in self.reported:
+                lines.append(f"{shape.value}: reported in {self.reported[shape]} of {self.frames} frames")
+        for (shape, stage), n in sorted(self.refused.items(), key=lambda kv: -kv[1]):
+            why = NearMiss(shape, (0, 0, 0, 0), stage).reason
+            lines.append(f"{shape.value}: read but not reported in {n} of {self.frames} frames: {why}")
+        if not self.reported and not self.refused:
+            lines.append("nothing mark-like was seen: is the card in view, large enough (about 40 px), and in focus?")
+        return lines

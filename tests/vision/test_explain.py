@@ -15,7 +15,7 @@ from bench.vision_cards import card_frame
 from schemas.messages import Shape
 from services.vision.__main__ import app
 from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-from services.vision.explain import FILLED_TRIANGLE, REASONS, near_misses
+from services.vision.explain import FILLED_TRIANGLE, REASONS, CardCheck, NearMiss, explained, near_misses
 
 
 @pytest.fixture(scope="module")
@@ -82,3 +82,47 @@ def test_detect_explain_writes_reasons_on_stderr_only(tmp_path: Path) -> None:
     lines = explained.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"{tmp_path / 'wide.png'}: TRIANGLE at ")
     assert "not reported: the learned verifier" in lines[0] and "trim the card" in lines[0]
+
+
+def test_card_check_counts_each_shape_and_rule_once_a_frame() -> None:
+    seen = CardCheck()
+    assert seen.summary() == ["no frame was read"]
+    miss = NearMiss(Shape.TRIANGLE, (1, 2, 3, 4), "verifier")
+    seen.add([Shape.X, Shape.X], [miss, NearMiss(Shape.TRIANGLE, (9, 9, 3, 4), "verifier")])
+    seen.add([], [miss, NearMiss(Shape.O, (5, 5, 5, 5), "O margin")])
+    seen.add([], [])
+    assert seen.reported == {Shape.X: 1} and seen.refused == {(Shape.TRIANGLE, "verifier"): 2, (Shape.O, "O margin"): 1}
+    lines = seen.summary()
+    assert lines[:2] == ["3 frame(s) looked at", "X: reported in 1 of 3 frames"]
+    assert lines[2] == f"TRIANGLE: read but not reported in 2 of 3 frames: {miss.reason}"  # the most frequent first
+    assert lines[3].startswith("O: read but not reported in 1 of 3 frames: an O needs a clear margin")
+    empty = CardCheck()
+    empty.add([], [])
+    assert "nothing mark-like was seen" in empty.summary()[-1]
+
+
+def test_check_looks_at_a_folder_of_frames(tmp_path: Path) -> None:
+    for name, border in (("a_wide", 3.0), ("b_ok", 0.3), ("c_wide", 3.0)):
+        cv2.imwrite(str(tmp_path / f"{name}.png"), _card(border)[0])
+    result = CliRunner().invoke(app, ["check", "--source", str(tmp_path), "--frames", "10"])
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[:2] == ["3 frame(s) looked at", "TRIANGLE: reported in 1 of 3 frames"]
+    assert lines[2].startswith("TRIANGLE: read but not reported in 2 of 3 frames: the learned verifier")
+    two = CliRunner().invoke(app, ["check", "--source", str(tmp_path), "--frames", "2"])
+    assert two.stdout.splitlines()[0] == "2 frame(s) looked at"
+
+
+def test_check_without_its_camera_names_it_and_the_alternatives() -> None:
+    result = CliRunner().invoke(app, ["check", "--source", "camera:/dev/hri-no-such-camera", "--frames", "2"])
+    assert result.exit_code == 1
+    assert "camera:/dev/hri-no-such-camera" in result.stderr and "synthetic" in result.stderr
+    assert result.stdout.splitlines() == ["no frame was read"]
+    bad = CliRunner().invoke(app, ["check", "--source", "bogus:thing"])
+    assert bad.exit_code == 2 and "bogus" in bad.stderr
+
+
+def test_explained_reports_what_detect_reports(detector: MarkDetector) -> None:
+    for border, size in ((0.3, (640, 480)), (0.3, (1280, 960)), (3.0, (1280, 960))):
+        img = cv2.resize(_card(border)[0], size, interpolation=cv2.INTER_LINEAR)
+        assert explained(detector, img)[0] == detector.detect(img), (border, size)
