@@ -194,7 +194,6 @@ def detect(
     raise typer.Exit(1 if failed else 0)
 
 
-
 @app.command()
 def check(
     source: SourceOption = "camera:0",

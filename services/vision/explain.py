@@ -5,11 +5,12 @@ read as an X, O or triangle (or the verifier found most like one) but did not re
 failed (`MarkDetector.trace`, the stages of `detector.STAGES`). A user holding a card up to their own camera learns
 which rule of "What counts as a mark" (vision README) refused it: a filled triangle on a card with too much paper
 round it, an O without a clear margin, a mark beside a word. Components no shape test read as a mark (noise,
-clutter) are not listed.
+clutter) are not listed. `python -m services.vision check` counts the same over a source's frames (`CardCheck`).
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,18 +53,18 @@ class NearMiss:
 
     @property
     def reason(self) -> str:
-        hint = FILLED_TRIANGLE if self.shape is Shape.TRIANGLE and self.stage in ("verifier", "unnamed") else ""
-        return REASONS[self.stage] + hint
+        return why(self.shape, self.stage)
 
 
-def near_misses(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> list[NearMiss]:
-    """Up to `limit` near misses in `image` (BGR or grey, any size), largest first; none over a reported mark."""
-    return explained(detector, image, limit)[1]
+def why(shape: Shape, stage: str) -> str:
+    """The rule that refused a shape read as `shape` at `stage`, in words."""
+    hint = FILLED_TRIANGLE if shape is Shape.TRIANGLE and stage in ("verifier", "unnamed") else ""
+    return REASONS[stage] + hint
 
 
 def explained(detector: MarkDetector, image: np.ndarray, limit: int = 5) -> tuple[list[Detection], list[NearMiss]]:
-    """`detector.detect(image)`'s marks (the same: the trace is the detection, recorded) and `near_misses`, in one
-    pass, boxes in `image`'s pixels."""
+    """What `detector.detect(image)` reports (the same marks: the trace is that detection, recorded) and up to `limit`
+    near misses, largest first, none over a reported mark; `image` BGR or grey, any size; boxes in its pixels."""
     gray, scale = working_gray(image, detector.config.max_side)  # as `MarkDetector.steps` scales a large frame
     found, traced = detector.trace(gray)
     shapes = sorted(
@@ -95,16 +96,14 @@ class CardCheck:
     each (shape, rule) a shape was refused by, in how many frames."""
 
     frames: int = 0
-    reported: dict[Shape, int] = field(default_factory=dict)
-    refused: dict[tuple[Shape, str], int] = field(default_factory=dict)
+    reported: Counter[Shape] = field(default_factory=Counter)
+    refused: Counter[tuple[Shape, str]] = field(default_factory=Counter)
 
     def add(self, found: list[Shape], misses: list[NearMiss]) -> None:
         """One frame: the shapes reported in it and its near misses (each shape and rule counted once a frame)."""
         self.frames += 1
-        for shape in set(found):
-            self.reported[shape] = self.reported.get(shape, 0) + 1
-        for key in {(m.shape, m.stage) for m in misses}:
-            self.refused[key] = self.refused.get(key, 0) + 1
+        self.reported.update(set(found))
+        self.refused.update({(m.shape, m.stage) for m in misses})
 
     def summary(self) -> list[str]:
         """Lines for a person: each shape reported, then each refusal with its rule in words, most frequent first."""
@@ -114,9 +113,8 @@ class CardCheck:
         for shape in Shape:
             if shape in self.reported:
                 lines.append(f"{shape.value}: reported in {self.reported[shape]} of {self.frames} frames")
-        for (shape, stage), n in sorted(self.refused.items(), key=lambda kv: -kv[1]):
-            why = NearMiss(shape, (0, 0, 0, 0), stage).reason
-            lines.append(f"{shape.value}: read but not reported in {n} of {self.frames} frames: {why}")
+        for (shape, stage), n in self.refused.most_common():
+            lines.append(f"{shape.value}: read but not reported in {n} of {self.frames} frames: {why(shape, stage)}")
         if not self.reported and not self.refused:
             lines.append("nothing mark-like was seen: is the card in view, large enough (about 40 px), and in focus?")
         return lines

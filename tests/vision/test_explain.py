@@ -15,7 +15,7 @@ from bench.vision_cards import card_frame
 from schemas.messages import Shape
 from services.vision.__main__ import app
 from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-from services.vision.explain import FILLED_TRIANGLE, REASONS, CardCheck, NearMiss, explained, near_misses
+from services.vision.explain import FILLED_TRIANGLE, REASONS, CardCheck, NearMiss, explained
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +35,7 @@ def test_a_filled_triangle_taken_for_a_painted_one_is_explained(
 ) -> None:
     img, box = _card(border, background)
     assert detector.detect(img) == []
-    misses = near_misses(detector, img)
+    misses = explained(detector, img)[1]
     assert [(m.shape, m.stage) for m in misses] == [(Shape.TRIANGLE, "verifier")]
     assert box_overlap(misses[0].box, box) >= 0.8
     assert misses[0].reason == REASONS["verifier"] + FILLED_TRIANGLE
@@ -44,16 +44,16 @@ def test_a_filled_triangle_taken_for_a_painted_one_is_explained(
 def test_a_reported_mark_or_an_empty_frame_has_nothing_to_explain(detector: MarkDetector) -> None:
     img, _ = _card(0.3)
     assert [d.shape for d in detector.detect(img)] == [Shape.TRIANGLE]
-    assert near_misses(detector, img) == []
+    assert explained(detector, img)[1] == []
     x, _ = _card(0.3, shape=Shape.X, filled=False)
-    assert near_misses(detector, x) == []
-    assert near_misses(detector, np.full((480, 640, 3), 128, np.uint8)) == []
+    assert explained(detector, x)[1] == []
+    assert explained(detector, np.full((480, 640, 3), 128, np.uint8))[1] == []
 
 
 def test_a_large_frame_is_explained_in_its_own_pixels(detector: MarkDetector) -> None:
     img, box = _card(3.0)
     big = cv2.resize(img, (1280, 960), interpolation=cv2.INTER_LINEAR)
-    (miss,) = near_misses(detector, big)
+    (miss,) = explained(detector, big)[1]
     assert box_overlap(miss.box, tuple(2 * v for v in box)) >= 0.8  # type: ignore[arg-type]
     assert max(miss.box[2:]) > 140  # not the 640-px frame's box
 
