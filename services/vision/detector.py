@@ -222,16 +222,15 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
     proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
-    propose_sure: float = 0.0
-    """a proposal whose heatmap peak reaches this (0: never) is kept at the lower of `propose_thresholds` and
-    `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame at half size and the
-    verifier from the three crops. On tuning frames (stop 75) the proposer's strongest X and triangle peaks were
-    nearly all on true marks, small or blurred ones to which the verifier, which sees only crops, gave under its
-    bar; the triangle peaks also rose on filled arrows on white labels (the arrow probe), the X peaks did not.
-    Round vision42 (the vision README)"""
-    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.99, 0.9)
-    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (O and
-    TRIANGLE as `propose_thresholds`: the same bars, so only an X gains)"""
+    propose_sure: tuple[float, ...] = (0.0, 0.0, 0.0)
+    """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
+    `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
+    at half size and the verifier from the three crops. On tuning frames (stop 75) the proposer's strongest X and
+    triangle peaks were nearly all on true marks, small or blurred ones to which the verifier, which sees only
+    crops, gave under its bar; triangle peaks of 0.6-0.75 also came on filled arrows on white labels (the arrow
+    probe), X peaks of 0.7 and more on none of the probe's clutter. Round vision42 (the vision README)"""
+    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.99, 0.05)
+    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure`"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -291,11 +290,11 @@ class DetectorConfig:
             raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
         if set(self.split.split(",")) - {"", "grey", "loose", "edge"}:
             raise ValueError(f"split: {self.split!r}: '' (off) or any of grey, loose, edge, comma-separated")
-        for name in ("propose_thresholds", "propose_sure_thresholds"):
+        for name in ("propose_thresholds", "propose_sure", "propose_sure_thresholds"):
             if len(getattr(self, name)) != 3:
                 raise ValueError(f"{name}: {getattr(self, name)}: three, for X, O and TRIANGLE")
-        if not 0.0 <= self.propose_sure <= 1.0:
-            raise ValueError(f"propose_sure: {self.propose_sure}: a heatmap peak, 0 (never) to 1")
+        if not all(0.0 <= v <= 1.0 for v in self.propose_sure):
+            raise ValueError(f"propose_sure: {self.propose_sure}: heatmap peaks, 0 (never) to 1")
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
@@ -589,8 +588,8 @@ class MarkDetector:
     def _proposed(self, gray: np.ndarray, found: list[Detection]) -> list[Detection]:
         """The proposer's peaks where nothing was detected, each kept if the verifier, shown its box as a
         loose candidate (cropped at the coarsest level where it is still 48 px), gives the proposed
-        shape enough probability (`DetectorConfig.propose_thresholds`; a peak of `propose_sure` or more:
-        `propose_sure_thresholds` where they are lower). Never over a component the
+        shape enough probability (`DetectorConfig.propose_thresholds`; with a peak of its shape's
+        `propose_sure` or more, `propose_sure_thresholds` where they are lower). Never over a component the
         context tests refused (the card tests, the O's margin, a line of text: only the verifier's
         rescue may overrule some of them), nor over any letter in a line of text (`_in_text`)."""
         assert self.proposer is not None and self.verifier is not None
@@ -610,7 +609,7 @@ class MarkDetector:
         for p, row in zip(props, probs, strict=True):
             k = CLASSES.index(p.shape)
             need = cfg.propose_thresholds[k]
-            if cfg.propose_sure > 0 and p.score >= cfg.propose_sure:
+            if 0 < cfg.propose_sure[k] <= p.score:
                 need = min(need, cfg.propose_sure_thresholds[k])
             if row[k] >= need:
                 out.append(Detection(p.shape, float(row[k]), p.box))
