@@ -220,3 +220,38 @@ def test_a_negative_blind_share_is_refused_before_any_render(tmp_path: Path) -> 
     result = CliRunner().invoke(app, ["--out", str(tmp_path / "p.onnx"), "--blind", "-0.5"])
     assert result.exit_code == 2 and "--blind -0.5: a share of at least 0" in result.output
     assert not (tmp_path / "p.onnx").exists()
+
+
+def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
+    """`propose_sure` (round vision42): a small X under strong motion blur that the proposer peaks on at 0.7 or
+    more, but to which the verifier gives under its proposal bar (0.3), is kept at the sure bar instead; a sure
+    peak set for another shape changes nothing, and the verifier still judges at the sure bar."""
+    from dataclasses import replace
+
+    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.synthetic import SceneGenerator, Variation
+
+    def found(config: DetectorConfig, seed: int) -> bool:
+        img, labels = SceneGenerator(seed=seed, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
+        box = labels[0].box
+        return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
+
+    off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0))
+    sure_x = replace(off, propose_sure=(0.7, 0.0, 0.0), propose_sure_thresholds=(0.01, 0.99, 0.9))
+    for seed in (67, 173):  # the first frame of each: X 0.11 and 0.22 from the verifier
+        assert not found(off, seed)
+        assert not found(replace(sure_x, propose_sure=(0.0, 0.0, 0.7)), seed)
+        assert not found(replace(sure_x, propose_sure_thresholds=(0.5, 0.99, 0.9)), seed)
+        assert found(sure_x, seed)
+
+
+def test_sure_peaks_are_three_and_between_0_and_1() -> None:
+    from services.vision.detector import DetectorConfig, parse_settings
+
+    assert parse_settings("propose_sure=0.7,0,0.8").propose_sure == (0.7, 0.0, 0.8)
+    with pytest.raises(ValueError, match="propose_sure"):
+        DetectorConfig(propose_sure=(0.7, 0.0))
+    with pytest.raises(ValueError, match="propose_sure"):
+        DetectorConfig(propose_sure=(1.5, 0.0, 0.0))
+    with pytest.raises(ValueError, match="propose_sure_thresholds"):
+        DetectorConfig(propose_sure_thresholds=(0.1, 0.2))
