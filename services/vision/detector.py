@@ -225,12 +225,13 @@ class DetectorConfig:
     propose_sure: tuple[float, ...] = (0.0, 0.0, 0.0)
     """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
     `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
-    at half size and the verifier from the three crops. On tuning frames (stop 75) the proposer's strongest X and
-    triangle peaks were nearly all on true marks, small or blurred ones to which the verifier, which sees only
-    crops, gave under its bar; triangle peaks of 0.6-0.75 also came on filled arrows on white labels (the arrow
-    probe), X peaks of 0.7 and more on none of the probe's clutter. Round vision42 (the vision README)"""
+    at half size and the verifier from the three crops. Off: round vision42 (the vision README) tried X at 0.7 (bar
+    0.01). On tuning frames the proposer's strongest X peaks were nearly all on small, blurred true X the verifier
+    gave under its bar; held-out it found 5 of 52 missed X for one false X, but on the blind generator 2 of 47 for 5
+    false X. Triangle peaks of 0.6-0.8 also came on filled arrows on white labels (the arrow probe)"""
     propose_sure_thresholds: tuple[float, ...] = (0.01, 0.99, 0.05)
-    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure`"""
+    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (round
+    vision42's probe: X 0.01, TRIANGLE 0.05; O as `propose_thresholds`, so an O's sure peak alone changes nothing)"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
