@@ -39,6 +39,10 @@ scenes, cameras and noise with them and without, so a run with them pairs with o
   up darkens the frames after it.
 
     .venv/bin/python bench/vision_clips.py [--clips 100] [--seed 2718] [--hand] [--rolling-shutter] [--auto-exposure] [--json]
+                                           [--set KEY=VALUE ...]
+
+`--set` changes a detector setting from `DetectorConfig`'s default, as the service's `--detector` does (to compare a
+variant on the very same clips).
 """
 
 from __future__ import annotations
@@ -61,7 +65,7 @@ sys.path.insert(0, str(ROOT))
 
 from schemas.messages import Shape  # noqa: E402
 from services.vision.debounce import DANGER_SHAPES, Confirmation, DebounceConfig, Debouncer  # noqa: E402
-from services.vision.detector import Detection, MarkDetector, box_overlap  # noqa: E402
+from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings  # noqa: E402
 from services.vision.heldout import CLIP_FPS, CLIP_FRAMES, CLIP_SHOWN, HeldOutClip, HeldOutGenerator  # noqa: E402
 
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
@@ -280,6 +284,7 @@ def _tables(r: dict[str, Any]) -> str:
     lines = [
         f"held-out clips, seed {r['seed']}: {r['clips_per_class']} clips per class of {r['frames_per_clip']} frames "
         f"at {CLIP_FPS:g} fps, the card up from frame {r['shown']}; OpenCV {r['opencv']}, 1 thread",
+        f"detector settings: {' '.join(r['settings']) or 'the defaults'}",
         f"what a person and a real camera add: {effects}; the mark more than half in view from frames after the card "
         f"goes up p50 {r['frames_to_view']['p50']}, p90 {r['frames_to_view']['p90']}, max {r['frames_to_view']['max']}",
         "",
@@ -357,14 +362,22 @@ def main(
         bool, typer.Option(help="the camera's gain follows the frame's brightness")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="KEY=VALUE: a DetectorConfig setting, as the service's --detector takes it"),
+    ] = None,
 ) -> None:
+    try:
+        config = parse_settings(settings or [])  # the service's own parsing (--detector, HRI_VISION_DETECTOR)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--set") from None
     if frames <= CLIP_SHOWN:
         raise typer.BadParameter(
             f"a clip needs more than its {CLIP_SHOWN} lead-in frames", param_hint="--frames"
         )
     cv2.setNumThreads(1)
     gen = HeldOutGenerator(seed=seed)
-    detector = MarkDetector()
+    detector = MarkDetector(config)
     runs: list[tuple[HeldOutClip, list[list[Detection]]]] = []
     cpu = 0.0
     for i in range(clips * len(CLASSES)):
@@ -385,6 +398,7 @@ def main(
     result = {
         "seed": seed,
         "effects": {"hand": hand, "rolling_shutter": rolling_shutter, "auto_exposure": auto_exposure},
+        "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "frames_to_view": {
             "p50": _pct(to_view, 0.5),
             "p90": _pct(to_view, 0.9),

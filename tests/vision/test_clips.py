@@ -110,6 +110,23 @@ def test_bench_prints_events_per_class() -> None:
     assert bad.exit_code == 2 and "lead-in" in bad.output
 
 
+def test_bench_takes_detector_settings_and_refuses_a_bad_one() -> None:
+    import json
+
+    import typer
+
+    app = typer.Typer()
+    app.command()(vision_clips.main)
+    args = ["--clips", "1", "--frames", "8", "--seed", "3", "--set", "propose=0"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "detector settings: propose=0" in result.output
+    as_json = CliRunner().invoke(app, [*args, "--json"])
+    assert json.loads(as_json.output)["settings"] == ["propose=0"]
+    bad = CliRunner().invoke(app, ["--clips", "1", "--set", "no_such_setting=1"])
+    assert bad.exit_code == 2 and "no_such_setting" in bad.output
+
+
 def test_other_windows_replay_the_same_detections() -> None:
     """A false O seen in three frames running lifts a danger under 3 of 4, not under 4 of 5; an X seen once stops
     the robot under 1 of 3, not under 2 of 3."""
