@@ -52,7 +52,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
-from services.vision.proposer import Proposer
+from services.vision.proposer import Proposal, Proposer
 from services.vision.verifier import CLASSES, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
 
 Box = tuple[int, int, int, int]
@@ -587,17 +587,30 @@ class MarkDetector:
         return _merge(found, self.config.overlap)
 
     def _proposed(self, gray: np.ndarray, found: list[Detection]) -> list[Detection]:
-        """The proposer's peaks where nothing was detected, each kept if the verifier, shown its box as a
-        loose candidate (cropped at the coarsest level where it is still 48 px), gives the proposed
-        shape enough probability (`DetectorConfig.propose_thresholds`; with a peak of its shape's
-        `propose_sure` or more, `propose_sure_thresholds` where they are lower). Never over a component the
-        context tests refused (the card tests, the O's margin, a line of text: only the verifier's
-        rescue may overrule some of them), nor over any letter in a line of text (`_in_text`)."""
-        assert self.proposer is not None and self.verifier is not None
+        """The proposer's peaks where nothing was detected (`_judged_proposals`), each kept if the verifier gives
+        the proposed shape enough probability (`DetectorConfig.propose_thresholds`; with a peak of its shape's
+        `propose_sure` or more, `propose_sure_thresholds` where they are lower)."""
         cfg = self.config
+        out = []
+        for p, row in self._judged_proposals(gray, found):
+            k = CLASSES.index(p.shape)
+            need = cfg.propose_thresholds[k]
+            if 0 < cfg.propose_sure[k] <= p.score:
+                need = min(need, cfg.propose_sure_thresholds[k])
+            if row[k] >= need:
+                out.append(Detection(p.shape, float(row[k]), p.box))
+        return out
+
+    def _judged_proposals(self, gray: np.ndarray, found: list[Detection]) -> list[tuple[Proposal, np.ndarray]]:
+        """The proposer's peaks (`propose`) where nothing was detected, each with the verifier's probabilities
+        for its box shown as a loose candidate (cropped at the coarsest level where it is still 48 px), in one
+        call. Never over a component the context tests refused (the card tests, the O's margin, a line of text:
+        only the verifier's rescue may overrule some of them), nor over any letter in a line of text
+        (`_in_text`)."""
+        assert self.proposer is not None and self.verifier is not None
         props = [
             p
-            for p in self.proposer.propose(gray, cfg.propose)
+            for p in self.proposer.propose(gray, self.config.propose)
             if all(box_overlap(p.box, d.box) <= 0.3 for d in found)
             and not any(box_overlap(p.box, box) > 0.5 for box in self._vetoes)
             and not self._in_text(p.box)
@@ -606,15 +619,7 @@ class MarkDetector:
             return []
         patches = np.stack([self.proposal_crops(gray, p.box) for p in props])
         probs = self.verifier.probabilities(patches, np.stack([claim(None)] * len(props)))
-        out = []
-        for p, row in zip(props, probs, strict=True):
-            k = CLASSES.index(p.shape)
-            need = cfg.propose_thresholds[k]
-            if 0 < cfg.propose_sure[k] <= p.score:
-                need = min(need, cfg.propose_sure_thresholds[k])
-            if row[k] >= need:
-                out.append(Detection(p.shape, float(row[k]), p.box))
-        return out
+        return list(zip(props, probs, strict=True))
 
     def proposal_crops(self, gray: np.ndarray, box: Box) -> np.ndarray:
         """The verifier's crops of a proposal's `box` in the frame just detected (or harvested), cut at

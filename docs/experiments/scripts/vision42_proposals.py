@@ -1,7 +1,7 @@
 """Round vision42's recording (tuning frames and the arrow probe only): every proposal the detector shows the verifier,
 with its heatmap peak and the verifier's probability for the proposed shape, labelled true when it is on the frame's
-mark with the right shape (the bench's box rule). The detector is today's, unchanged; `_proposed` is wrapped only to
-see what it is given.
+mark with the right shape (the bench's box rule). The detector is today's, unchanged; `_judged_proposals` is wrapped
+only to see what it gives.
     PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision42_proposals.py SEED FRAMES HAND OUT.json
     PYTHONPATH=. .venv/bin/python docs/experiments/scripts/vision42_proposals.py arrows OUT.json
 HAND: the share drawn by hand and of varied hands (0.5 for 7132, 0 for 7133). `arrows`: the arrow probe's 750 frames
@@ -17,35 +17,27 @@ import numpy as np
 
 from schemas.messages import Shape
 from services.vision import detector as D
+from services.vision.proposer import Proposal
 from services.vision.synthetic import SceneGenerator, Variation
-from services.vision.verifier import CLASSES, claim
+from services.vision.verifier import CLASSES
 
 cv2.setNumThreads(1)
 ORDER = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 
 
 class Recording(D.MarkDetector):
-    """Today's detector; each proposal `_proposed` judges is also written down with the verifier's probability."""
+    """Today's detector; each proposal the verifier judges is also written down with its probability."""
 
     def __init__(self) -> None:
         super().__init__()
         self.rows: list[dict] = []
 
-    def _proposed(self, gray: np.ndarray, found: list[D.Detection]) -> list[D.Detection]:
-        props = [
-            p
-            for p in self.proposer.propose(gray, self.config.propose)
-            if all(D.box_overlap(p.box, d.box) <= 0.3 for d in found)
-            and not any(D.box_overlap(p.box, b) > 0.5 for b in self._vetoes)
-            and not self._in_text(p.box)
-        ]
-        if props:
-            patches = np.stack([self.proposal_crops(gray, p.box) for p in props])
-            probs = self.verifier.probabilities(patches, np.stack([claim(None)] * len(props)))
-            for p, row in zip(props, probs, strict=True):
-                self.rows.append({"shape": p.shape.name, "peak": p.score, "prob": float(row[CLASSES.index(p.shape)]),
-                                  "box": list(p.box)})
-        return super()._proposed(gray, found)
+    def _judged_proposals(self, gray: np.ndarray, found: list[D.Detection]) -> list[tuple[Proposal, np.ndarray]]:
+        judged = super()._judged_proposals(gray, found)
+        for p, row in judged:
+            self.rows.append({"shape": p.shape.name, "peak": p.score, "prob": float(row[CLASSES.index(p.shape)]),
+                              "box": list(p.box)})
+        return judged
 
 
 def main() -> None:
