@@ -225,13 +225,14 @@ class DetectorConfig:
     propose_sure: tuple[float, ...] = (0.0, 0.0, 0.0)
     """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
     `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
-    at half size and the verifier from the three crops. Off: round vision42 (the vision README) tried X at 0.7 (bar
-    0.01). On tuning frames the proposer's strongest X peaks were nearly all on small, blurred true X the verifier
-    gave under its bar; held-out it found 5 of 52 missed X for one false X, but on the blind generator 2 of 47 for 5
-    false X. Triangle peaks of 0.6-0.8 also came on filled arrows on white labels (the arrow probe)"""
-    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.99, 0.05)
-    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (round
-    vision42's probe: X 0.01, TRIANGLE 0.05; O as `propose_thresholds`, so an O's sure peak alone changes nothing)"""
+    at half size and the verifier from the three crops. Off: rounds vision42-42c (the vision README) found more
+    marks on both generators the detector was not tuned on, and more false ones on the blind generator. An X at 0.7
+    (bar 0.01): held-out 5 of 52 missed X for one false X, blind 2 of 47 for 5 false X. An O at 0.6 (bar 0.75, then
+    0.85): held-out 29 of 183 and 24 of 191 missed O for no false O, blind 14 of 100 and 14 of 134 for one and two
+    false O. Triangle peaks of 0.6-0.8 also came on filled arrows on white labels (the arrow probe)"""
+    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.85, 0.05)
+    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (the last
+    bars rounds vision42-42c tried: X 0.01, O 0.85, TRIANGLE 0.05)"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
