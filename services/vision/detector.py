@@ -52,6 +52,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
+from services.vision.proposer import MODEL_PATH as PROPOSER_PATH
 from services.vision.proposer import Proposal, Proposer
 from services.vision.verifier import CLASSES, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
 
@@ -261,6 +262,10 @@ class DetectorConfig:
     """the second network's ONNX file ("": the committed `verifier_triangles.onnx`), for judging a retrained one
     with the benches' `--set` (`python -m services.vision.training --out ...`; round vision40); a file that is no
     verifier for this code's inputs is refused when the detector is made"""
+    proposer_model: str = ""
+    """the proposer's ONNX file ("": the committed `proposer.onnx`), for judging a retrained one with the benches'
+    `--set` (`python -m services.vision.proposer_training --out ...`; round vision43); a file that is no proposer is
+    refused when the detector is made"""
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -300,11 +305,13 @@ class DetectorConfig:
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
-        if self.hand_triangle_model and not Path(self.hand_triangle_model).is_file():
-            raise ValueError(
-                f"hand_triangle_model: {self.hand_triangle_model!r}: no such file (give the second network's ONNX "
-                "file, made by python -m services.vision.training, or '' for the committed one)"
-            )
+        for name, maker in (("hand_triangle_model", "training"), ("proposer_model", "proposer_training")):
+            path = getattr(self, name)
+            if path and not Path(path).is_file():
+                raise ValueError(
+                    f"{name}: {path!r}: no such file (give an ONNX file made by python -m services.vision.{maker}, "
+                    "or '' for the committed one)"
+                )
 
 
 @dataclass
@@ -476,7 +483,8 @@ class MarkDetector:
         if verifier is None and self.config.verify:
             verifier = Verifier.load(MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
-        self.proposer = Proposer.load() if self.config.propose > 0 and self.verifier is not None else None
+        proposer = Path(self.config.proposer_model) if self.config.proposer_model else PROPOSER_PATH
+        self.proposer = Proposer.load(proposer) if self.config.propose > 0 and self.verifier is not None else None
         asked = max(self.config.hand_triangle, self.config.hand_triangle_loose) > 0 and self.verifier is not None
         model = Path(self.config.hand_triangle_model) if self.config.hand_triangle_model else TRIANGLES_PATH
         self.triangles = Verifier.load(model) if asked else None

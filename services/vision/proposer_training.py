@@ -3,7 +3,8 @@
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.proposer_training [--frames 24000] [--epochs 10] [--seed 20261125]
                                                 [--jobs 2] [--threads 2] [--cache FILE] [--width N x5]
-                                                [--blind SHARE] [--keep-float FILE | --from-float FILE]
+                                                [--blind SHARE] [--arrows] [--everyday]
+                                                [--keep-float FILE | --from-float FILE]
 
 Its defaults trained the float32 model of 48ea60e (37 min on 2 cores); the committed `proposer.onnx` is
 that model quantised by `--from-float` (round vision19), the last step of every training run too.
@@ -42,7 +43,15 @@ import typer
 from schemas.messages import Shape
 from services.vision.proposer import HEADS, INPUT_FORMAT, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode
 from services.vision.synthetic import Box, SceneGenerator
-from services.vision.training import BLIND_SEEDS, CLUTTERED, DEFAULT, ORDER, blind_chunks, split_chunks
+from services.vision.training import (
+    BLIND_SEEDS,
+    CLUTTERED,
+    DEFAULT,
+    ORDER,
+    blind_chunks,
+    more_clutter,
+    split_chunks,
+)
 
 if TYPE_CHECKING:
     import torch  # type: ignore[import-not-found,unused-ignore]
@@ -78,9 +87,10 @@ def _arrays(draw: Callable[[Shape | None], tuple[np.ndarray, list[tuple[Shape, B
     return inputs, labels
 
 
-def render(seed: int, frames: int) -> Chunk:
-    """`_arrays` of `frames` tuning frames drawn with `seed`."""
-    variation = (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS)
+def render(seed: int, frames: int, arrows: bool = False, everyday: bool = False) -> Chunk:
+    """`_arrays` of `frames` tuning frames drawn with `seed`; `arrows` and `everyday` add the verifier training's
+    extra kinds of clutter to a cluttered (odd-seed) chunk (`training.more_clutter`)."""
+    variation = more_clutter((CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS), seed, arrows, everyday)
     gen = SceneGenerator(width=WIDTH, height=HEIGHT, seed=seed, variation=variation)
 
     def draw(shape: Shape | None) -> tuple[np.ndarray, list[tuple[Shape, Box]]]:
@@ -104,24 +114,31 @@ def render_blind(seed: int, frames: int) -> Chunk:
     return _arrays(draw, frames)
 
 
-def render_all(frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0) -> list[Chunk]:
-    """`render` of chunks with seeds seed, seed + 1, ...; then, with `blind` > 0, `blind_chunks(frames,
-    blind, CHUNK)` chunks of `render_blind` with seeds seed + BLIND_SEEDS, ... (listed after the tuning chunks);
-    read from / written to `cache` (one made with other seeds is not used)."""
+def render_all(
+    frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0, arrows: bool = False,
+    everyday: bool = False,
+) -> list[Chunk]:
+    """`render` of chunks with seeds seed, seed + 1, ... (with `arrows` and `everyday` clutter); then, with
+    `blind` > 0, `blind_chunks(frames, blind, CHUNK)` chunks of `render_blind` with seeds seed + BLIND_SEEDS, ...
+    (listed after the tuning chunks); read from / written to `cache` (one made with other seeds or other clutter
+    is not used)."""
     tuning = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     blinds = [seed + BLIND_SEEDS + k for k in range(blind_chunks(frames, blind, CHUNK))]
     seeds = tuning + blinds
+    clutter = [int(arrows), int(everyday)]
     if cache is not None and cache.exists():
         with np.load(cache) as z:
-            if z["seeds"].tolist() == seeds:
+            made_with = z["clutter"].tolist() if "clutter" in z else [0, 0]
+            if z["seeds"].tolist() == seeds and made_with == clutter:
                 return [(z[f"x_{k}"], z[f"y_{k}"]) for k in range(len(seeds))]
+    n = len(tuning)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        parts = list(pool.map(render, tuning, [CHUNK] * len(tuning)))
+        parts = list(pool.map(render, tuning, [CHUNK] * n, [arrows] * n, [everyday] * n))
         parts += pool.map(render_blind, blinds, [CHUNK] * len(blinds))
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{n}_{k}": a for k, p in enumerate(parts) for n, a in zip("xy", p, strict=True)}
-        np.savez(cache, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
+        np.savez(cache, seeds=np.array(seeds), clutter=np.array(clutter), **arrays)  # type: ignore[arg-type]
     return parts
 
 
@@ -414,13 +431,24 @@ def main(
             "training only (round vision30; the bench's blind split then no longer judges the proposer blind)"
         ),
     ] = 0.0,
+    arrows: Annotated[
+        bool,
+        typer.Option(help="the cluttered chunks also draw arrows, as the verifier's --arrows (round vision43)"),
+    ] = False,
+    everyday: Annotated[
+        bool,
+        typer.Option(
+            help="the cluttered chunks also draw stars, check marks and clock faces, as the verifier's --everyday "
+            "(round vision43)"
+        ),
+    ] = False,
 ) -> None:
     if len(widths) != 5:
         raise typer.BadParameter("give --width five times: strides 2, 4, 8, 16 and 32", param_hint="--width")
     if blind < 0:
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0", param_hint="--blind")
     t0 = time.monotonic()
-    parts = render_all(frames, seed, jobs, cache, blind)
+    parts = render_all(frames, seed, jobs, cache, blind, arrows, everyday)
     train, val = split_chunks(parts, blind_chunks(frames, blind, CHUNK))
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
     with tempfile.TemporaryDirectory() as tmp:

@@ -111,6 +111,17 @@ def _harvest_detector(levels: str) -> MarkDetector:
     return MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
 
 
+def more_clutter(variation: Variation, seed: int, arrows: bool, everyday: bool) -> Variation:
+    """`variation` with, for a cluttered chunk (odd `seed`), arrows drawn as often as each hard kind of clutter
+    (`arrows`; round vision21) and stars twice, check marks and clock faces once each (`everyday`), all from
+    `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation` unchanged."""
+    if arrows and seed % 2:
+        variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
+    if everyday and seed % 2:
+        variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
+    return variation
+
+
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
@@ -131,13 +142,12 @@ def harvest(
     import cv2
 
     cv2.setNumThreads(1)
-    variation = (CLUTTERED if seed % 2 else DEFAULT).only(
-        hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes)
+    variation = more_clutter(
+        (CLUTTERED if seed % 2 else DEFAULT).only(
+            hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes)
+        ),
+        seed, arrows, everyday,
     )
-    if arrows and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
-    if everyday and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
     gen = SceneGenerator(seed=seed, variation=variation)
     det = _harvest_detector(levels)
     proposer = Proposer.load() if proposals > 0 else None

@@ -66,6 +66,24 @@ def test_a_file_that_is_not_a_proposer_is_refused(tmp_path: Path) -> None:
         Proposer.load(VERIFIER)
 
 
+def test_another_proposer_is_loaded_from_its_file_and_a_missing_or_wrong_one_is_refused(tmp_path: Path) -> None:
+    """`proposer_model` (round vision43): the proposer from another file, as the benches' `--set` judge a retrained
+    one; a file that does not exist is refused with the settings, one that is no proposer when the detector is
+    made (here the verifier's model: the file named is the one read)."""
+    from services.vision.detector import MarkDetector, parse_settings
+    from services.vision.verifier import MODEL_PATH as VERIFIER
+
+    copy = tmp_path / "proposer.onnx"
+    copy.write_bytes(MODEL_PATH.read_bytes())
+    gray = np.random.default_rng(5).integers(0, 256, (240, 320), dtype=np.uint8)
+    other = MarkDetector(parse_settings(f"proposer_model={copy}")).proposer
+    assert other is not None and np.array_equal(other.heads(gray), Proposer.load().heads(gray))
+    with pytest.raises(ValueError, match=r"proposer_model: .*no such file.*proposer_training"):
+        parse_settings(f"proposer_model={tmp_path / 'missing.onnx'}")
+    with pytest.raises(ValueError, match="made for inputs"):
+        MarkDetector(parse_settings(f"proposer_model={VERIFIER}"))
+
+
 def test_the_committed_model_loads_is_small_and_takes_any_frame_size() -> None:
     p = Proposer.load()
     assert MODEL_PATH.stat().st_size < 600_000  # int8 weights: 0.44 MB (1.6 MB in float32)
@@ -175,6 +193,31 @@ def test_a_blind_render_is_deterministic_and_labels_the_blind_generators_marks()
     assert (marks[:, 3:] > 0).all() and (marks[:, 1] + marks[:, 3] <= WIDTH + 1).all()
     assert (marks[:, 2] + marks[:, 4] <= HEIGHT + 1).all()
     assert not np.array_equal(x, render_blind(BLIND_SEEDS + 4, 8)[0])
+
+
+def test_more_clutter_changes_only_the_cluttered_chunks_and_the_cache_knows_it(tmp_path: Path) -> None:
+    """`proposer_training --arrows --everyday` (round vision43): the verifier training's extra clutter is drawn in the
+    cluttered (odd-seed) chunks only, and a cache rendered without it is not used for a run that asks for it."""
+    from services.vision import proposer_training as pt
+
+    assert all(np.array_equal(p, q) for p, q in zip(pt.render(4, 4), pt.render(4, 4, True, True), strict=True))
+    plain, more = pt.render(3, 4), pt.render(3, 4, arrows=True, everyday=True)
+    assert not np.array_equal(plain[0], more[0])
+    assert plain[1][:, 0].tolist() == more[1][:, 0].tolist() == [0, 1, 2, -1]  # still `training.ORDER`
+
+    class Refused(RuntimeError):
+        pass
+
+    def no_pool(*args: object, **kwargs: object) -> None:
+        raise Refused
+
+    cache = tmp_path / "frames.npz"
+    np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])  # an older cache: no clutter recorded
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pt, "ProcessPoolExecutor", no_pool)
+        assert np.array_equal(pt.render_all(4, 7, 1, cache)[0][0], plain[0])
+        with pytest.raises(Refused):
+            pt.render_all(4, 7, 1, cache, everyday=True)
 
 
 def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) -> None:
