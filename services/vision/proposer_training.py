@@ -16,7 +16,10 @@ cards held by people's variety of fingers. Each frame is kept only as the networ
 (`proposer.network_input`: grey, half of 640x480) and its one mark's shape and box. With `--blind SHARE`
 (round vision30; not the committed recipe) SHARE frames of `blind.BlindGenerator` per tuning frame are added
 in whole chunks after the tuning ones (seeds `training.BLIND_SEEDS` on, as the verifier's `--blind`), for
-training only: the held-back tenth the report is made on stays tuning chunks.
+training only: the held-back tenth the report is made on stays tuning chunks. With `--arrows` and `--everyday`
+(round vision43; not the committed recipe) the cluttered chunks also draw the verifier training's extra kinds of
+clutter (arrows; stars, check marks and clock faces: `training.more_clutter`), so the proposer learns that they
+are not marks; the benches judge such a model with `--set proposer_model=FILE`.
 
 The network (`_net`) is a small fully convolutional encoder-decoder (stride 32 at its deepest, for the
 context of a mark filling the frame; output at stride 8) trained with CenterNet's losses (a focal loss
