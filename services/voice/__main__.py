@@ -290,6 +290,10 @@ def train(
         "--pseudo", min=0,
         help="clips per pseudo-word one consonant from a command (the `pseudo` split, from phonemes; tried on "
              "tuning data in session 48; 0: not fitted on) [default: the committed recipe's, Sizes.pseudo_repeats]")] = None,
+    far: Annotated[float, typer.Option(
+        "--far", min=0.0, max=1.0,
+        help="share of every split's speech clips said from further away: a peak of -48 to -26 dBFS over a "
+             "microphone's hiss (round voice39; 0: the committed recipe, none)")] = 0.0,
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
              "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
@@ -363,6 +367,8 @@ def train(
         sizes = replace(sizes, neural_positives=neural)
     if pseudo is not None:
         sizes = replace(sizes, pseudo_repeats=pseudo)
+    if far:
+        sizes = replace(sizes, far=far)
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()),
                          fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights), near_weight=near_weight,

@@ -63,12 +63,13 @@ def main() -> int:
     ap.add_argument("--second", action="store_true", help="SegmenterConfig.vad_lift_second (round voice37c): a second "
                                                             "VAD hears the lifted stream")
     ap.add_argument("--hold", type=float, default=0.0, help="SegmenterConfig.vad_lift_hold_s (round voice37d)")
+    ap.add_argument("--head", help="spotter head file (round voice39; default: the committed default head)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     items = tune_items(args.cache, args.per_command, args.others, args.seed)
     print(f"{sum(i.label < OTHER for i in items)} commands, {sum(i.label == OTHER for i in items)} other words", flush=True)
     policy = Policy.from_knowledge()
-    engine = make_engine("spotter")
+    engine = make_engine("spotter", head_path=args.head)
     rows = []
     for floor in args.floors.split(","):
         config = replace(SegmenterConfig(), vad_lift_dbfs=None if floor == "none" else float(floor),

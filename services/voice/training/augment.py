@@ -3,7 +3,7 @@ limits, and noise at a chosen SNR. Every random choice comes from the caller's g
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.signal import butter, fftconvolve, resample_poly, sosfilt
@@ -25,6 +25,9 @@ class Augment:
     snr_db: float = 30.0
     peak: float = 0.5
     pad_s: tuple[float, float] = (0.4, 0.4)
+    floor_dbfs: float | None = None
+    """A microphone's own hiss under everything, dBFS RMS (white, low-passed at 7.2 kHz as a converter's
+    anti-alias filter leaves it: voice README, stop 71); None: only the 16-bit dither."""
 
     @classmethod
     def draw(cls, rng: np.random.Generator, strength: float = 1.0) -> Augment:
@@ -36,6 +39,29 @@ class Augment:
         return cls(tempo=tempo, reverb_rt60=rt60, band=band, noise=kind, snr_db=float(rng.uniform(3, 30)),
                    peak=float(10 ** rng.uniform(-1.3, -0.1)), pad_s=(float(rng.uniform(0.2, 0.7)),
                                                                     float(rng.uniform(0.2, 0.7))))
+
+
+FAR_PEAK_DBFS = (-48.0, -26.0)
+"""`far`: the peak of a far or quiet voice, dBFS (the default draw's peaks are -26 to -2)."""
+FAR_FLOOR_DBFS = (-74.0, -66.0)
+"""`far`: the microphone's hiss under it, dBFS RMS (the levels bench's quiet room is -70)."""
+
+
+def far(aug: Augment, rng: np.random.Generator, share: float) -> Augment:
+    """`aug`, or with probability `share` the same clip said from further away: its peak drawn from `FAR_PEAK_DBFS`,
+    over a microphone's hiss from `FAR_FLOOR_DBFS` (round voice39). A far voice is a noisier one: at -44 dBFS peak
+    over -70 dBFS of hiss the speech is about 13 dB above it. Draws from `rng` only, so the clip's other choices
+    are the ones `Augment.draw` made."""
+    if not rng.random() < share:
+        return aug
+    return replace(aug, peak=float(10 ** (rng.uniform(*FAR_PEAK_DBFS) / 20)),
+                   floor_dbfs=float(rng.uniform(*FAR_FLOOR_DBFS)))
+
+
+def hiss(n: int, rms_dbfs: float, rng: np.random.Generator) -> np.ndarray:
+    """A microphone's own noise: white, low-passed at 7.2 kHz, at `rms_dbfs` RMS."""
+    x = sosfilt(butter(4, 7200.0, btype="lowpass", fs=SAMPLE_RATE, output="sos"), rng.normal(size=n))
+    return x * 10 ** (rms_dbfs / 20) / (np.sqrt(np.mean(x**2)) + 1e-12)
 
 
 def room_impulse(rt60: float, rng: np.random.Generator) -> np.ndarray:
@@ -83,4 +109,6 @@ def apply(speech: np.ndarray, aug: Augment, rng: np.random.Generator,
         bg = babble(x.size, rng, others or []) if aug.noise == "babble" else noise(aug.noise, x.size, rng)
         bg = bg / (np.sqrt(np.mean(bg**2)) + 1e-12)
         x = x + bg * np.sqrt(p / 10 ** (aug.snr_db / 10))
+    if aug.floor_dbfs is not None:
+        x = x + hiss(x.size, aug.floor_dbfs, rng)
     return x + rng.normal(0.0, 2.0 / 32768.0, x.size)

@@ -47,6 +47,8 @@ class Recipe:
     seed: int = 0
     strength: float = 1.0
     """Augmentation strength (0: clean)."""
+    far: float = 0.0
+    """Chance that the clip is said from further away (`augment.far`; round voice39's `Sizes.far`); 0: never."""
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,9 @@ class Sizes:
     """Per pseudo-word one consonant from a command (`pseudo.pseudo_words`), `pseudo` split: espeak-ng's training
     voices and the recorded speakers that read its phonemes (MBROLA's), half as virtual speakers; 0 (the committed
     recipe): no `pseudo` split is fitted on (tried on tuning data only, rule voice25: not a better curve)."""
+    far: float = 0.0
+    """Share of every split's speech clips said from further away (round voice39, `train --far`): a peak of -48 to
+    -26 dBFS over a microphone's hiss (`augment.far`); 0 (the committed recipe): none."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -319,7 +324,7 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         raise ValueError(f"recipes are for train or tune, not {split!r}")
     for _ in range(n_noise):
         out.append(Recipe(rng.choice(NOISES), OTHER, seed=rng.randrange(2**31)))
-    return out
+    return [replace(r, far=sizes.far) if r.voice else r for r in out] if sizes.far else out
 
 
 _EMBEDDERS: dict[str, UtteranceEmbedder] = {}
@@ -348,6 +353,8 @@ def render_utterance(r: Recipe) -> bytes:
     else:
         speech = tts.synthesise(r.text, r.voice, r.speed, r.pitch)
         aug = augment.Augment.draw(rng, r.strength)
+        if r.far:  # its own generator: the clip's other draws stay the ones a near clip makes
+            aug = augment.far(aug, np.random.default_rng([r.seed, 39]), r.far)
         others: list[np.ndarray] = []
         if aug.noise == "babble":
             others = [tts.synthesise(w, r.voice, 1.0, 1.0) * rng.uniform(0.3, 1.0)
@@ -373,8 +380,16 @@ def _features(r: Recipe, embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray,
     return emb.embed_mel(spec)[:FRAMES].astype(np.float16), spec.astype(np.float16)
 
 
+def _recorded(r: Recipe) -> dict[str, object]:
+    fields = asdict(r)
+    if not r.far:
+        del fields["far"]
+    return fields
+
+
 def _key(items: list[Recipe]) -> str:
-    blob = json.dumps([DATASET_VERSION] + [asdict(r) for r in items], sort_keys=True).encode()
+    # a field at its default is left out, so that adding one (`far`) keeps every cache made before it
+    blob = json.dumps([DATASET_VERSION] + [_recorded(r) for r in items], sort_keys=True).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
