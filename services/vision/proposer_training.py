@@ -140,7 +140,7 @@ def render_all(
         parts += pool.map(render_blind, blinds, [CHUNK] * len(blinds))
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
-        arrays = {f"{n}_{k}": a for k, p in enumerate(parts) for n, a in zip("xy", p, strict=True)}
+        arrays = {f"{name}_{k}": a for k, p in enumerate(parts) for name, a in zip("xy", p, strict=True)}
         np.savez(cache, seeds=np.array(seeds), clutter=np.array(clutter), **arrays)  # type: ignore[arg-type]
     return parts
 
@@ -462,7 +462,8 @@ def main(
             )
             export(net, from_float)
         quantize(from_float, out, calibration_frames(train), Path(tmp))
-        result: dict[str, Any] = {"train_frames": sum(len(p[0]) for p in train)}
+        result: dict[str, Any] = {"train_frames": sum(len(p[0]) for p in train), "arrows": arrows, "everyday": everyday,
+                                  "blind": blind, "seed": seed}
         for t in thresholds:
             result[f"at_{t:g}"] = report(Proposer.load(out), val, t)
         middle = thresholds[len(thresholds) // 2]
