@@ -381,6 +381,8 @@ def _features(r: Recipe, embedding: str = SPEECH_EMBEDDING) -> tuple[np.ndarray,
 
 
 def _recorded(r: Recipe) -> dict[str, object]:
+    """The recipe's fields as its cache key hashes them: `far` only when set, so that every cache made before the
+    field existed keeps its key."""
     fields = asdict(r)
     if not r.far:
         del fields["far"]
@@ -388,7 +390,6 @@ def _recorded(r: Recipe) -> dict[str, object]:
 
 
 def _key(items: list[Recipe]) -> str:
-    # a field at its default is left out, so that adding one (`far`) keeps every cache made before it
     blob = json.dumps([DATASET_VERSION] + [_recorded(r) for r in items], sort_keys=True).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
