@@ -294,6 +294,10 @@ def train(
         "--far", min=0.0, max=1.0,
         help="share of every split's speech clips said from further away: a peak of -48 to -26 dBFS over a "
              "microphone's hiss (round voice39; 0: the committed recipe, none)")] = 0.0,
+    far_where: Annotated[str, typer.Option(
+        "--far-where",
+        help="which splits --far reaches: all (the tune splits, which place the knots, too; round voice39) or train "
+             "(the splits the head is fitted on only; round voice39b)")] = "all",
     embedding: Annotated[str, typer.Option(
         help="the speech embedding the head reads: whisper-tiny.en (the default head), speech-embedding (the "
              "walk gate and enrolment base; crops) or whisper-tiny.en-100ms (round voice21, the default head's "
@@ -367,8 +371,10 @@ def train(
         sizes = replace(sizes, neural_positives=neural)
     if pseudo is not None:
         sizes = replace(sizes, pseudo_repeats=pseudo)
+    if far_where not in ("all", "train"):
+        raise typer.BadParameter(f"{far_where!r}: all or train", param_hint="--far-where")
     if far:
-        sizes = replace(sizes, far=far)
+        sizes = replace(sizes, far=far, far_tune=far_where == "all")
     cfg = shipped_recipe(embedding, word_folds, more_voices, seed=seed, workers=workers, sizes=sizes,
                          fold_accept_exempt=tuple(fold_accept_exempt or ()),
                          fold_unscored=tuple(fold_unscored or ()), split_weights=tuple(weights), near_weight=near_weight,

@@ -11,6 +11,7 @@ from scipy.signal import welch
 from services.voice.audio import SAMPLE_RATE
 from services.voice.training import augment, dataset
 from services.voice.training.dataset import OTHER, Recipe, Sizes
+from tests.voice.conftest import TrainCli
 
 
 def dbfs(x: np.ndarray) -> float:
@@ -46,6 +47,26 @@ def test_sizes_far_marks_the_speech_clips_of_every_split_and_nothing_else() -> N
     assert [replace(r, far=0.0) for r in far] == near
     assert {r.far for r in far if r.voice} == {0.3} and {r.far for r in far if not r.voice} == {0.0}
     assert any(not r.voice for r in far)
+
+
+def test_far_where_train_leaves_the_tune_splits_near() -> None:
+    """Round voice39b: with `far_tune` off the knots are placed on the tune speech a head without far voices has."""
+    train_only = replace(Sizes(), far=0.3, far_tune=False)
+    for split in ("tune", "neighbours-tune", "speakers-tune", "recorded-tune"):
+        assert dataset.recipes(split, train_only, 12) == dataset.recipes(split, Sizes(), 12), split
+    for split in ("positives", "engines"):
+        fitted = dataset.recipes(split, train_only, 12)
+        assert fitted == dataset.recipes(split, replace(Sizes(), far=0.3), 12), split
+        assert {r.far for r in fitted if r.voice} == {0.3}, split
+
+
+def test_train_far_where_option(train_cli: TrainCli) -> None:
+    assert train_cli("--far", "0.3", "--far-where", "train", "--out", "/dev/null").exit_code == 0
+    assert train_cli("--far", "0.3", "--out", "/dev/null").exit_code == 0
+    refused = train_cli("--far", "0.3", "--far-where", "tune", "--out", "/dev/null")
+    assert refused.exit_code == 2 and len(train_cli.recipes) == 2  # refused before any training
+    assert [cfg.sizes.far_tune for cfg in train_cli.recipes] == [False, True]
+    assert {cfg.sizes.far for cfg in train_cli.recipes} == {0.3}
 
 
 def test_a_cache_made_before_far_existed_is_still_found() -> None:

@@ -107,6 +107,10 @@ class Sizes:
     far: float = 0.0
     """Share of every split's speech clips said from further away (round voice39, `train --far`): a peak of -48 to
     -26 dBFS over a microphone's hiss (`augment.far`); 0 (the committed recipe): none."""
+    far_tune: bool = True
+    """Whether `far` applies to the tune splits too (round voice39); False (round voice39b, `train --far-where
+    train`): only to the splits the head is fitted on, so the knots are placed on the same near tune speech as
+    without it."""
     recorded_tune_positives: int = 30
     """Per command and per recorded training voice, `recorded-tune` (with the tune non-commands): the
     tune figures per recorded speaker, and a leave-one-speaker-out check of the recipe."""
@@ -195,14 +199,13 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
     A non-command that espeak-ng says exactly like a command (`corpus.tts_homophones`) is left out."""
     rng = random.Random(f"{seed}:{split}")
     kind = split.partition(":")[0]  # speakers:1 is another round of speakers
+    tune_split = kind in ("tune", "neighbours-tune", "speakers-tune", "recorded-tune")
     if split == "foreign":
         voices = list(corpus.FOREIGN_TRAIN)
     elif split == "neural":
         voices = list(corpus.NEURAL_TRAIN)
     else:
-        side = {"engines": "train", "neighbours": "train", "positives": "train", "speakers": "train",
-                "pseudo": "train", "neighbours-tune": "tune", "speakers-tune": "tune",
-                "recorded-tune": "tune"}.get(kind, split)
+        side = "tune" if tune_split else "train"
         voices = corpus.voices(side, sizes.tune_recorded if side == "tune" else sizes.recorded)
     if split in ("engines", "recorded-tune"):
         voices = [v for v in voices if not v.startswith("espeak:")]
@@ -324,7 +327,8 @@ def recipes(split: str, sizes: Sizes, seed: int) -> list[Recipe]:
         raise ValueError(f"recipes are for train or tune, not {split!r}")
     for _ in range(n_noise):
         out.append(Recipe(rng.choice(NOISES), OTHER, seed=rng.randrange(2**31)))
-    return [replace(r, far=sizes.far) if r.voice else r for r in out] if sizes.far else out
+    far = sizes.far if sizes.far_tune or not tune_split else 0.0
+    return [replace(r, far=far) if r.voice else r for r in out] if far else out
 
 
 _EMBEDDERS: dict[str, UtteranceEmbedder] = {}
