@@ -302,6 +302,10 @@ class DetectorConfig:
                 raise ValueError(f"{name}: {getattr(self, name)}: three, for X, O and TRIANGLE")
         if not all(0.0 <= v <= 1.0 for v in self.propose_sure):
             raise ValueError(f"propose_sure: {self.propose_sure}: heatmap peaks, 0 (never) to 1")
+        for name in ("propose_thresholds", "propose_sure_thresholds"):
+            if not all(v >= 0.0 for v in getattr(self, name)):
+                raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
+                                 f"never kept)")
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")

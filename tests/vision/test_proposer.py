@@ -288,7 +288,8 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
         assert found(sure_x, seed)
 
 
-def test_sure_peaks_are_three_and_between_0_and_1() -> None:
+def test_sure_peaks_and_verifier_bars_are_checked() -> None:
+    """Three of each; a peak from 0 (never) to 1; a verifier bar 0 or more (above 1 means never: tests use 1.01)."""
     from services.vision.detector import DetectorConfig, parse_settings
 
     assert parse_settings("propose_sure=0.7,0,0.8").propose_sure == (0.7, 0.0, 0.8)
@@ -298,3 +299,8 @@ def test_sure_peaks_are_three_and_between_0_and_1() -> None:
         DetectorConfig(propose_sure=(1.5, 0.0, 0.0))
     with pytest.raises(ValueError, match="propose_sure_thresholds"):
         DetectorConfig(propose_sure_thresholds=(0.1, 0.2))
+    with pytest.raises(ValueError, match="propose_thresholds.*0 or more"):
+        DetectorConfig(propose_thresholds=(0.3, -0.1, 0.9))
+    with pytest.raises(ValueError, match="propose_sure_thresholds.*0 or more"):
+        DetectorConfig(propose_sure_thresholds=(-0.01, 0.85, 0.05))
+    assert DetectorConfig(propose_thresholds=(1.01, 0.99, 0.9)).propose_thresholds[0] == 1.01  # above 1: never
