@@ -234,6 +234,11 @@ class DetectorConfig:
     propose_sure_thresholds: tuple[float, ...] = (0.01, 0.85, 0.05)
     """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (the last
     bars rounds vision42-42c tried: X 0.01, O 0.85, TRIANGLE 0.05)"""
+    propose_x_span: float = 0.0
+    """a proposed X is refused if the ink at its middle belongs to a component (at the finest pyramid level) whose
+    longest side is at least this many times the proposal's: two cables, tape lines or pen strokes crossing, or a
+    cable lying in a loop, look like an X where they cross but run on far past it, while a mark's strokes end
+    (stop 78's crossing probe). 0: off"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -306,6 +311,8 @@ class DetectorConfig:
             if not all(v >= 0.0 for v in getattr(self, name)):
                 raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
                                  f"never kept)")
+        if self.propose_x_span < 0:
+            raise ValueError(f"propose_x_span: {self.propose_x_span}: times a proposal's side, 0 (off) or more")
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
@@ -610,9 +617,25 @@ class MarkDetector:
             need = cfg.propose_thresholds[k]
             if 0 < cfg.propose_sure[k] <= p.score:
                 need = min(need, cfg.propose_sure_thresholds[k])
-            if row[k] >= need:
+            if row[k] >= need and not (p.shape is Shape.X and self._runs_on(p.box)):
                 out.append(Detection(p.shape, float(row[k]), p.box))
         return out
+
+    def _runs_on(self, box: Box) -> bool:
+        """Whether the ink at the middle of `box` (frame pixels) belongs to a component, at the finest pyramid level
+        judged, at least `propose_x_span` times the box's longest side (`DetectorConfig.propose_x_span`; 0: never)."""
+        span = self.config.propose_x_span
+        if not span or not self._levels:
+            return False
+        level = min(self._levels, key=lambda lv: lv.f)
+        x, y, w, h = _down(box, level.f)
+        mx, my = 3 * w // 10, 3 * h // 10  # the middle 40 %: where an X's strokes cross
+        middle = level.labels[max(0, y + my) : max(0, y + h - my), max(0, x + mx) : max(0, x + w - mx)]
+        ids = np.unique(middle[middle > 0])
+        if not len(ids):
+            return False
+        sides = np.maximum(level.stats[ids, 2], level.stats[ids, 3])
+        return bool(np.max(sides) >= span * max(w, h))
 
     def _judged_proposals(self, gray: np.ndarray, found: list[Detection]) -> list[tuple[Proposal, np.ndarray]]:
         """The proposer's peaks (`propose`) where nothing was detected, each with the verifier's probabilities
