@@ -288,6 +288,38 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
         assert found(sure_x, seed)
 
 
+def _crossing(seed: int) -> np.ndarray:
+    """No mark: two long straight strokes (cables, tape) crossing on plain paper."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    img = np.full((480, 640, 3), int(rng.integers(120, 220)), np.uint8)
+    at, a0 = rng.uniform([200, 150], [440, 330]), rng.uniform(0, np.pi)
+    for a in (a0, a0 + rng.uniform(0.6, 2.5)):
+        d = np.array([np.cos(a), np.sin(a)]) * rng.uniform(200, 400)
+        ends = [tuple(int(v) for v in at + k * d) for k in (-1, 1)]
+        cv2.line(img, ends[0], ends[1], (40, 60, 30), int(rng.integers(3, 8)), cv2.LINE_AA)
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+def test_a_proposed_x_whose_strokes_run_on_is_refused_with_propose_x_span() -> None:
+    """Round vision44's setting: where two long strokes cross, the proposer proposes an X and the verifier takes it for
+    one (6 of these 30 frames by default); with `propose_x_span` 2 the crossing's ink is seen to run on past the
+    proposal and no X is kept, while the small blurred marks the proposer finds are all still found."""
+    from services.vision.detector import DetectorConfig, MarkDetector
+    from services.vision.synthetic import SceneGenerator, Variation
+
+    default, span = MarkDetector(DetectorConfig()), MarkDetector(DetectorConfig(propose_x_span=2.0))
+    frames = [_crossing(seed) for seed in range(30)]
+    assert sum(any(d.shape is Shape.X for d in default.detect(img)) for img in frames) >= 3
+    assert not any(span.detect(img) for img in frames)
+    gen = SceneGenerator(seed=31, variation=Variation(size=(28.0, 60.0), blur=20.0))
+    marked = [gen.frame((Shape.X, Shape.O, Shape.TRIANGLE)[i % 3]) for i in range(45)]
+    assert _found(span, marked) == _found(default, marked)
+    with pytest.raises(ValueError, match="propose_x_span"):
+        DetectorConfig(propose_x_span=-1.0)
+
+
 def test_sure_peaks_and_verifier_bars_are_checked() -> None:
     """Three of each; a peak from 0 (never) to 1; a verifier bar 0 or more (above 1 means never: tests use 1.01)."""
     from services.vision.detector import DetectorConfig, parse_settings
