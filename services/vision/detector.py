@@ -235,10 +235,17 @@ class DetectorConfig:
     """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (the last
     bars rounds vision42-42c tried: X 0.01, O 0.85, TRIANGLE 0.05)"""
     propose_x_span: float = 0.0
-    """a proposed X is refused if the ink at its middle belongs to a component (at the finest pyramid level) whose
-    longest side is at least this many times the proposal's: two cables, tape lines or pen strokes crossing, or a
-    cable lying in a loop, look like an X where they cross but run on far past it, while a mark's strokes end
-    (stop 78's crossing probe). 0: off"""
+    """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
+    its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
+    the proposal's, and that component leaves a circle round the proposal (radius `propose_x_ring` times its
+    longest side) in at least `propose_x_exits` separate narrow strokes. Two cables, tape lines or pen strokes
+    crossing, or a cable lying in a loop, look like an X where they cross but run on past it in four directions; a
+    mark joined to a finger, a passing cable or a dark surround leaves in one or two, or over a wide arc (stop 78's
+    crossing probe; round vision44, the size alone, lost X of those kinds). 0: off"""
+    propose_x_exits: int = 3
+    propose_x_ring: float = 0.9
+    propose_x_arc: float = 0.12
+    """the widest a stroke leaving the circle may be, as a share of the circle (a dark surround is wider)"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -311,8 +318,9 @@ class DetectorConfig:
             if not all(v >= 0.0 for v in getattr(self, name)):
                 raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
                                  f"never kept)")
-        if self.propose_x_span < 0:
-            raise ValueError(f"propose_x_span: {self.propose_x_span}: times a proposal's side, 0 (off) or more")
+        if self.propose_x_span < 0 or self.propose_x_ring <= 0 or self.propose_x_exits < 1:
+            raise ValueError(f"propose_x_span {self.propose_x_span}, propose_x_ring {self.propose_x_ring}, "
+                             f"propose_x_exits {self.propose_x_exits}: 0 (off) or more, above 0, 1 or more")
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
@@ -622,20 +630,41 @@ class MarkDetector:
         return out
 
     def _runs_on(self, box: Box) -> bool:
-        """Whether the ink at the middle of `box` (frame pixels) belongs to a component, at the finest pyramid level
-        judged, at least `propose_x_span` times the box's longest side (`DetectorConfig.propose_x_span`; 0: never)."""
-        span = self.config.propose_x_span
-        if not span or not self._levels:
+        """Whether the ink at the middle of `box` (frame pixels) runs on past it as crossing strokes do
+        (`DetectorConfig.propose_x_span`; 0: never)."""
+        cfg = self.config
+        if not cfg.propose_x_span or not self._levels:
             return False
         level = min(self._levels, key=lambda lv: lv.f)
         x, y, w, h = _down(box, level.f)
         mx, my = 3 * w // 10, 3 * h // 10  # the middle 40 %: where an X's strokes cross
         middle = level.labels[max(0, y + my) : max(0, y + h - my), max(0, x + mx) : max(0, x + w - mx)]
         ids = np.unique(middle[middle > 0])
+        ids = ids[np.maximum(level.stats[ids, 2], level.stats[ids, 3]) >= cfg.propose_x_span * max(w, h)]
         if not len(ids):
             return False
-        sides = np.maximum(level.stats[ids, 2], level.stats[ids, 3])
-        return bool(np.max(sides) >= span * max(w, h))
+        r = cfg.propose_x_ring * max(w, h)
+        n = max(64, int(2 * np.pi * r))  # a sample a pixel: a thin stroke is not stepped over
+        t = np.arange(n) * 2 * np.pi / n
+        px = np.round(x + w / 2 + r * np.cos(t)).astype(int)
+        py = np.round(y + h / 2 + r * np.sin(t)).astype(int)
+        rows, cols = level.labels.shape
+        inside = (px >= 0) & (py >= 0) & (px < cols) & (py < rows)
+        on = np.zeros(n, bool)
+        on[inside] = np.isin(level.labels[py[inside], px[inside]], ids)
+        if on.all() or not on.any():
+            return False
+        start = int(np.argmin(on))  # walk the circle from a point off the ink: every run is whole
+        runs, length = [], 0
+        for v in np.roll(on, -start):
+            if v:
+                length += 1
+            elif length:
+                runs.append(length)
+                length = 0
+        if length:
+            runs.append(length)
+        return len(runs) >= cfg.propose_x_exits and max(runs) <= cfg.propose_x_arc * n
 
     def _judged_proposals(self, gray: np.ndarray, found: list[Detection]) -> list[tuple[Proposal, np.ndarray]]:
         """The proposer's peaks (`propose`) where nothing was detected, each with the verifier's probabilities
