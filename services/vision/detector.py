@@ -246,6 +246,10 @@ class DetectorConfig:
     propose_x_ring: float = 0.9
     propose_x_arc: float = 0.12
     """the widest a stroke leaving the circle may be, as a share of the circle (a dark surround is wider)"""
+    propose_x_cover: float = 0.0
+    """the most of the circle the component may cover, and the strokes leaving it be at most twice
+    `propose_x_exits` (0: no limit): crossing strokes leave a few narrow runs on paper, while a dark or textured
+    background that a small card's X touches covers much of the circle, broken into many runs (round vision44c)"""
     hand_triangle: float = 0.8
     """a second network's word on triangles (`verifier_triangles.onnx`: the verifier's recipe trained with 40 % of
     the triangles drawn by hand): a TRIANGLE the shape tests claimed and the card tests passed, which the verifier
@@ -664,6 +668,8 @@ class MarkDetector:
                 length = 0
         if length:
             runs.append(length)
+        if cfg.propose_x_cover and (sum(runs) > cfg.propose_x_cover * n or len(runs) > 2 * cfg.propose_x_exits):
+            return False
         return len(runs) >= cfg.propose_x_exits and max(runs) <= cfg.propose_x_arc * n
 
     def _judged_proposals(self, gray: np.ndarray, found: list[Detection]) -> list[tuple[Proposal, np.ndarray]]:
