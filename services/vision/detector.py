@@ -241,7 +241,9 @@ class DetectorConfig:
     longest side) in at least `propose_x_exits` separate narrow strokes. Two cables, tape lines or pen strokes
     crossing, or a cable lying in a loop, look like an X where they cross but run on past it in four directions; a
     mark joined to a finger, a passing cable or a dark surround leaves in one or two, or over a wide arc (stop 78's
-    crossing probe; round vision44, the size alone, lost X of those kinds). 0: off"""
+    crossing probe; round vision44, the size alone, lost X of those kinds). 0: off. Off since rounds vision44-44c
+    (vision README): at 2 with `propose_x_cover` 0.25 it took the probe's frames with a false X from 92 to 32 of 600
+    and the blind generator's false X from 43 to 29, but lost 10 more held-out X (37 -> 47 of 4,000 frames)"""
     propose_x_exits: int = 3
     propose_x_ring: float = 0.9
     propose_x_arc: float = 0.12

@@ -303,13 +303,15 @@ def _crossing(seed: int) -> np.ndarray:
 
 
 def test_a_proposed_x_whose_strokes_run_on_is_refused_with_propose_x_span() -> None:
-    """Round vision44's setting: where two long strokes cross, the proposer proposes an X and the verifier takes it for
-    one (6 of these 30 frames by default); with `propose_x_span` 2 the crossing's ink is seen to run on past the
-    proposal and no X is kept, while the small blurred marks the proposer finds are all still found."""
+    """Rounds vision44-44c's settings: where two long strokes cross, the proposer proposes an X and the verifier takes
+    it for one (6 of these 30 frames with the committed models); with `propose_x_span` 2 (and `propose_x_cover`
+    0.25) the crossing's ink is seen to run on past the proposal, leaving a circle round it in four narrow runs, and
+    no X is kept, while the small blurred marks the proposer finds are all still found."""
     from services.vision.detector import DetectorConfig, MarkDetector
     from services.vision.synthetic import SceneGenerator, Variation
 
-    default, span = MarkDetector(DetectorConfig()), MarkDetector(DetectorConfig(propose_x_span=2.0))
+    default = MarkDetector(DetectorConfig(propose_x_span=0.0))
+    span = MarkDetector(DetectorConfig(propose_x_span=2.0, propose_x_cover=0.25))
     frames = [_crossing(seed) for seed in range(30)]
     assert sum(any(d.shape is Shape.X for d in default.detect(img)) for img in frames) >= 3
     assert not any(span.detect(img) for img in frames)
