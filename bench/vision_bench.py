@@ -210,18 +210,21 @@ def main(
 
 
 def _detector(settings: list[str]) -> MarkDetector:
-    verifier = Verifier.load()
-    rest = []
+    rest: list[str] = []
+    limits: list[tuple[str, str]] = []  # the verifier's own thresholds, set after it is loaded
     for item in settings:
         key, _, value = item.partition("=")
         if key in ("thresholds", "loose_thresholds"):
-            verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
+            limits.append((key, value))
         else:
             rest.append(item)
     try:
         config = parse_settings(rest)  # the service's own parsing (--detector, HRI_VISION_DETECTOR)
     except ValueError as exc:
         raise typer.BadParameter(f"--set: {exc} (or the verifier's thresholds / loose_thresholds)") from None
+    verifier = Verifier.load(Path(config.verifier_model)) if config.verifier_model else Verifier.load()
+    for key, value in limits:
+        verifier = dataclasses.replace(verifier, **{key: tuple(float(v) for v in value.split(","))})  # type: ignore[arg-type]
     return MarkDetector(config, verifier=verifier)
 
 

@@ -280,6 +280,10 @@ class DetectorConfig:
     """the second network's ONNX file ("": the committed `verifier_triangles.onnx`), for judging a retrained one
     with the benches' `--set` (`python -m services.vision.training --out ...`; round vision40); a file that is no
     verifier for this code's inputs is refused when the detector is made"""
+    verifier_model: str = ""
+    """the verifier's ONNX file ("": the committed `verifier.onnx`), for judging a retrained or re-joined one with the
+    benches' `--set` (`python -m services.vision.ensemble ... --out ...`; round vision45); a file that is no verifier
+    for this code's inputs is refused when the detector is made; a verifier handed to `MarkDetector` wins"""
     proposer_model: str = ""
     """the proposer's ONNX file ("": the committed `proposer.onnx`), for judging a retrained one with the benches'
     `--set` (`python -m services.vision.proposer_training --out ...`; round vision43); a file that is no proposer is
@@ -330,7 +334,9 @@ class DetectorConfig:
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
-        for name, maker in (("hand_triangle_model", "training"), ("proposer_model", "proposer_training")):
+        for name, maker in (
+            ("hand_triangle_model", "training"), ("proposer_model", "proposer_training"), ("verifier_model", "ensemble")
+        ):
             path = getattr(self, name)
             if path and not Path(path).is_file():
                 raise ValueError(
@@ -506,7 +512,7 @@ class MarkDetector:
     def __init__(self, config: DetectorConfig | None = None, verifier: Verifier | None = None) -> None:
         self.config = config or DetectorConfig()
         if verifier is None and self.config.verify:
-            verifier = Verifier.load(MODEL_PATH)
+            verifier = Verifier.load(Path(self.config.verifier_model) if self.config.verifier_model else MODEL_PATH)
         self.verifier = verifier if self.config.verify else None
         proposer = Path(self.config.proposer_model) if self.config.proposer_model else PROPOSER_PATH
         self.proposer = Proposer.load(proposer) if self.config.propose > 0 and self.verifier is not None else None

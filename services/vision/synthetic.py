@@ -59,14 +59,17 @@ DISTRACTORS: tuple[str, ...] = (
     "filled_triangle",
     "sign",
 )
-EXTRA_DISTRACTORS: tuple[str, ...] = ("arrow", "star", "check", "clock")
+EXTRA_DISTRACTORS: tuple[str, ...] = ("arrow", "star", "check", "clock", "crossing")
 """Clutter kinds the generator can draw but does not by default (`Variation.kinds`): adding one to the
 defaults would change every seed's frames. "arrow" (round vision21): an arrow, its head a filled
 triangle, on a light label or straight on the scene; the verifier trained before it named 58 % of such
 labels a triangle (`docs/experiments/scripts/vision21_triclutter_probe.py`). "star", "check" and "clock"
 (round vision23): a star sticker or printed star, a check mark (a tick, sometimes in its box) and a clock
 face (a ring with ticks and two hands inside), each on a light plate or straight on the scene: everyday
-things the third, blind generator (`blind.py`) showed the detector taking for an X, a triangle or an O."""
+things the third, blind generator (`blind.py`) showed the detector taking for an X, a triangle or an O.
+"crossing" (round vision45): two cables or pen strokes crossing at the clutter's point, or one cable lying in a
+loop that crosses itself there, each running on well past the crossing; stop 78 found the detector's proposer
+naming such crossings X (`docs/experiments/scripts/vision44_crossing_probe.py`, its own drawing code)."""
 
 
 @dataclass(frozen=True)
@@ -362,6 +365,8 @@ class SceneGenerator:
             _draw_arrow(img, rng, cx, cy, size)
         elif kind in ("star", "check", "clock"):
             _draw_pictogram(img, rng, kind, cx, cy, size)
+        elif kind == "crossing":
+            _draw_crossing(img, rng, cx, cy, size)
         else:
             raise ValueError(f"unknown clutter kind {kind!r}: one of {', '.join(DISTRACTORS + EXTRA_DISTRACTORS)}")
 
@@ -828,6 +833,47 @@ def _bezier(rng: Rng, w: int, h: int) -> np.ndarray:
     tt = np.linspace(0, 1, 40)[:, None]
     curve = (1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt**2 * p[2] + tt**3 * p[3]
     return np.round(curve).astype(np.int32).reshape(-1, 1, 2)
+
+
+def _cubic(p: np.ndarray, n: int = 60) -> np.ndarray:
+    """n points of the cubic Bezier curve with control points p (4, 2)."""
+    tt = np.linspace(0, 1, n)[:, None]
+    return (1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt**2 * p[2] + tt**3 * p[3]
+
+
+def _draw_crossing(img: np.ndarray, rng: Rng, cx: float, cy: float, size: float) -> None:
+    """Not a mark: strokes crossing at (cx, cy), each running on well past it (three to ten times `size`: two short
+    strokes crossing are an X, drawn without its card). 40 % one cable
+    lying in a loop (a cubic whose inner control points swap sides, so it crosses itself once); else two cables or
+    pen strokes crossing at 25-90 degrees, bent or nearly straight, each in its own width and, half the time, its own
+    ink (a cable over a pen line)."""
+    turn = rng.uniform(0, 2 * math.pi)
+    rot = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+    strokes: list[np.ndarray] = []
+    if rng.random() < 0.4:
+        reach, lift = size * rng.uniform(1.0, 4.0), size * rng.uniform(3.0, 6.0)
+        p = np.array([[-reach, 0.0], [2.0 * reach, lift], [-2.0 * reach, lift], [reach, 0.0]])
+        p += rng.normal(0, size * 0.1, p.shape)
+        curve = _cubic(p, 120)
+        gap = np.linalg.norm(curve[:, None] - curve[None], axis=2)
+        gap[np.abs(np.subtract.outer(np.arange(120), np.arange(120))) < 15] = np.inf  # not a point and its neighbours
+        i, j = np.unravel_index(np.argmin(gap), gap.shape)
+        strokes.append(curve - (curve[i] + curve[j]) / 2)  # its knot at the point
+    else:
+        apart = rng.uniform(math.radians(25), math.radians(90))
+        for ang in (0.0, apart):
+            d = np.array([math.cos(ang), math.sin(ang)])
+            n = np.array([-d[1], d[0]])
+            a, b = size * rng.uniform(3.0, 10.0), size * rng.uniform(3.0, 10.0)
+            bend = size * rng.uniform(-1.5, 1.5) * (rng.random() < 0.7)
+            p = np.array([-a * d, -a / 3 * d + bend * n, b / 3 * d + bend * n, b * d])
+            curve = _cubic(p, 80)
+            strokes.append(curve - curve[np.argmin(np.linalg.norm(curve, axis=1))])  # through the point
+    own_ink = rng.random() < 0.5
+    ink = _dark_or_any(rng)
+    for curve in strokes:
+        pts = np.round(curve @ rot.T + (cx, cy)).astype(np.int32).reshape(-1, 1, 2)
+        cv2.polylines(img, [pts], False, _dark_or_any(rng) if own_ink else ink, int(rng.integers(2, 12)), cv2.LINE_AA)
 
 
 def _draw_text(img: np.ndarray, rng: Rng, org: tuple[int, int], colour: tuple[int, int, int]) -> None:

@@ -9,7 +9,7 @@ asked only about claimed triangles the first refuses (`DetectorConfig.hand_trian
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday] [--blind SHARE] [--epochs 6] [--width 1]
+                                       [--everyday] [--crossings] [--blind SHARE] [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
@@ -111,20 +111,26 @@ def _harvest_detector(levels: str) -> MarkDetector:
     return MarkDetector(replace(HARVEST, levels=parse_levels(levels)) if levels else HARVEST)
 
 
-def more_clutter(variation: Variation, seed: int, arrows: bool, everyday: bool) -> Variation:
+def more_clutter(
+    variation: Variation, seed: int, arrows: bool, everyday: bool, crossings: bool = False
+) -> Variation:
     """`variation` with, for a cluttered chunk (odd `seed`), arrows drawn as often as each hard kind of clutter
-    (`arrows`; round vision21) and stars twice, check marks and clock faces once each (`everyday`), all from
-    `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation` unchanged."""
+    (`arrows`; round vision21), stars twice, check marks and clock faces once each (`everyday`) and crossing strokes
+    twice (`crossings`; round vision45), all from `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation`
+    unchanged."""
     if arrows and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
     if everyday and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
+    if crossings and seed % 2:
+        variation = variation.only(kinds=(*variation.kinds, "crossing", "crossing"))
     return variation
 
 
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
+    crossings: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -138,7 +144,7 @@ def harvest(
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
     pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks' kinds of clutter also list stars twice and check
-    marks and clock faces once each (`synthetic.EXTRA_DISTRACTORS`)."""
+    marks and clock faces once each, with `crossings` crossing strokes twice (`synthetic.EXTRA_DISTRACTORS`)."""
     import cv2
 
     cv2.setNumThreads(1)
@@ -146,7 +152,7 @@ def harvest(
         (CLUTTERED if seed % 2 else DEFAULT).only(
             hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes)
         ),
-        seed, arrows, everyday,
+        seed, arrows, everyday, crossings,
     )
     gen = SceneGenerator(seed=seed, variation=variation)
     det = _harvest_detector(levels)
@@ -254,11 +260,12 @@ def harvest_all(
     hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
     everyday: bool = False,
     blind: float = 0.0,
+    crossings: bool = False,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
     `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
     tuning chunks); read from / written to `cache` (a cache made with other seeds, another `printed`, `hands`,
-    `proposals`, `arrows`, `hand_drawn`, `everyday` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
+    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
     not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     n_blind = blind_chunks(frames, blind)
@@ -266,11 +273,12 @@ def harvest_all(
         with np.load(cache) as z:
             shares = {
                 k: float(z[k]) if k in z else 0.0
-                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday", "blind")
+                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday", "blind", "crossings")
             }
             pyramid = str(z["levels"]) if "levels" in z else ""
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
-                     "hand_drawn": hand_drawn, "everyday": float(everyday), "blind": blind}
+                     "hand_drawn": hand_drawn, "everyday": float(everyday), "blind": blind,
+                     "crossings": float(crossings)}
             drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
             same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
             same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
@@ -280,7 +288,7 @@ def harvest_all(
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
-                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n)
+                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n, [crossings] * n)
         )
         parts += pool.map(harvest_blind, [seed + BLIND_SEEDS + k for k in range(n_blind)], [CHUNK] * n_blind,
                           [levels] * n_blind)
@@ -299,6 +307,7 @@ def harvest_all(
             hand_drawn_shapes=np.array(hand_drawn_shapes),
             everyday=np.array(float(everyday)),
             blind=np.array(blind),
+            crossings=np.array(float(crossings)),
             **arrays,
         )
     return parts
@@ -522,6 +531,12 @@ def main(
         bool,
         typer.Option(help="the cluttered chunks also draw stars, check marks and clock faces (round vision23)"),
     ] = False,
+    crossings: Annotated[
+        bool,
+        typer.Option(
+            help="the cluttered chunks also draw crossing strokes: two cables crossing, a cable in a loop (round vision45)"
+        ),
+    ] = False,
     blind: Annotated[
         float,
         typer.Option(
@@ -564,7 +579,7 @@ def main(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--claimed-kept") from None
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
-                        hand_drawn_shapes, everyday, blind)
+                        hand_drawn_shapes, everyday, blind, crossings)
     train, val = split_chunks(parts, blind_chunks(frames, blind))  # the report stays on held-back tuning chunks
     if only:
         train, val = [claimed_kept(p, only) for p in train], [claimed_kept(p, only) for p in val]

@@ -247,6 +247,53 @@ def test_an_arrow_harvest_adds_arrows_to_the_cluttered_chunks_only() -> None:
     assert not np.array_equal(plain[2], arrows[2]) and int((arrows[2] == none).sum()) > 0
 
 
+def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cache_knows_it(tmp_path: Path) -> None:
+    """`training --crossings` (round vision45): crossing strokes drawn in the cluttered (odd-seed) chunks only; a
+    cache made without them is not used for a run that asks for them (here: a harvest that is refused)."""
+    from services.vision import training
+
+    assert "crossing" in training.more_clutter(training.CLUTTERED, 3, False, False, crossings=True).kinds
+    assert training.more_clutter(training.DEFAULT, 4, False, False, crossings=True) == training.DEFAULT
+    plain, crossings = training.harvest(3, 8), training.harvest(3, 8, crossings=True)
+    assert not all(np.array_equal(p, q) for p, q in zip(plain, crossings, strict=True))
+
+    class Refused(RuntimeError):
+        pass
+
+    def no_pool(*args: object, **kwargs: object) -> None:
+        raise Refused
+
+    cache = tmp_path / "harvest.npz"
+    np.savez(cache, seeds=np.array([7]), levels=np.array(""), **{f"0_{j}": a for j, a in enumerate(plain)})
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(training, "ProcessPoolExecutor", no_pool)
+        assert np.array_equal(training.harvest_all(8, 7, 1, cache)[0][0], plain[0])  # no crossings: the cache
+        with pytest.raises(Refused):
+            training.harvest_all(8, 7, 1, cache, crossings=True)
+
+
+def test_another_verifier_is_loaded_from_its_file_and_a_missing_one_is_refused(tmp_path: Path) -> None:
+    """`verifier_model` (round vision45): the verifier from another file, as the benches' `--set` judge a re-joined
+    one; the file named is the one read (a copy judges as the committed one, the triangles' network does not); a
+    file that does not exist is refused with the settings, naming the command that makes one."""
+    from bench.vision_bench import _detector
+    from services.vision.detector import parse_settings
+    from services.vision.verifier import MODEL_PATH as VERIFIER
+
+    copy = tmp_path / "verifier.onnx"
+    copy.write_bytes(VERIFIER.read_bytes())
+    rows = [claim(Shape.X), claim(None)]
+    images = np.stack([crops(*_card(Shape.X)), crops(*_card(Shape.O))])
+    committed = Verifier.load().probabilities(images, np.stack(rows))
+    for det in (MarkDetector(parse_settings(f"verifier_model={copy}")), _detector([f"verifier_model={copy}"])):
+        assert det.verifier is not None and np.allclose(det.verifier.probabilities(images, np.stack(rows)), committed)
+    other = _detector([f"verifier_model={VERIFIER.parent / 'verifier_triangles.onnx'}", "thresholds=0.5,0.5,0.5"])
+    assert other.verifier is not None and other.verifier.thresholds == (0.5, 0.5, 0.5)
+    assert not np.allclose(other.verifier.probabilities(images, np.stack(rows)), committed)
+    with pytest.raises(ValueError, match=r"verifier_model: .*no such file.*ensemble"):
+        parse_settings(f"verifier_model={tmp_path / 'missing.onnx'}")
+
+
 def test_a_hand_drawn_harvest_draws_its_marks_by_hand_reproducibly() -> None:
     """`training --hand-drawn S` (round vision22): the marks of the harvested frames are drawn by hand, so their
     candidates differ from the exact marks'; the same call gives the same candidates."""
