@@ -331,6 +331,9 @@ class DetectorConfig:
         if self.propose_x_span < 0 or self.propose_x_ring <= 0 or self.propose_x_exits < 1:
             raise ValueError(f"propose_x_span {self.propose_x_span}, propose_x_ring {self.propose_x_ring}, "
                              f"propose_x_exits {self.propose_x_exits}: 0 (off) or more, above 0, 1 or more")
+        if not 0.0 < self.propose_x_arc <= 1.0 or not 0.0 <= self.propose_x_cover <= 1.0:
+            raise ValueError(f"propose_x_arc {self.propose_x_arc}, propose_x_cover {self.propose_x_cover}: shares of "
+                             "the circle, above 0 to 1, and 0 (off) to 1")
         for name in ("hand_triangle", "hand_triangle_loose", "hand_triangle_floor", "hand_triangle_solid"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name}: {getattr(self, name)}: a probability, 0 (off) to 1")
@@ -667,18 +670,11 @@ class MarkDetector:
         if on.all() or not on.any():
             return False
         start = int(np.argmin(on))  # walk the circle from a point off the ink: every run is whole
-        runs, length = [], 0
-        for v in np.roll(on, -start):
-            if v:
-                length += 1
-            elif length:
-                runs.append(length)
-                length = 0
-        if length:
-            runs.append(length)
-        if cfg.propose_x_cover and (sum(runs) > cfg.propose_x_cover * n or len(runs) > 2 * cfg.propose_x_exits):
+        edges = np.diff(np.concatenate(([0], np.roll(on, -start).astype(np.int8), [0])))
+        runs = np.flatnonzero(edges < 0) - np.flatnonzero(edges > 0)
+        if cfg.propose_x_cover and (runs.sum() > cfg.propose_x_cover * n or len(runs) > 2 * cfg.propose_x_exits):
             return False
-        return len(runs) >= cfg.propose_x_exits and max(runs) <= cfg.propose_x_arc * n
+        return bool(len(runs) >= cfg.propose_x_exits and runs.max() <= cfg.propose_x_arc * n)
 
     def _judged_proposals(self, gray: np.ndarray, found: list[Detection]) -> list[tuple[Proposal, np.ndarray]]:
         """The proposer's peaks (`propose`) where nothing was detected, each with the verifier's probabilities

@@ -320,6 +320,9 @@ def test_a_proposed_x_whose_strokes_run_on_is_refused_with_propose_x_span() -> N
     assert _found(span, marked) == _found(default, marked)
     with pytest.raises(ValueError, match="propose_x_span"):
         DetectorConfig(propose_x_span=-1.0)
+    for arc, cover in ((0.0, 0.0), (1.5, 0.0), (0.12, -0.1), (0.12, 1.2)):
+        with pytest.raises(ValueError, match="propose_x_arc.*propose_x_cover"):
+            DetectorConfig(propose_x_arc=arc, propose_x_cover=cover)
 
 
 def test_sure_peaks_and_verifier_bars_are_checked() -> None:
