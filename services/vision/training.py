@@ -9,7 +9,7 @@ asked only about claimed triangles the first refuses (`DetectorConfig.hand_trian
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday] [--crossings] [--blind SHARE] [--epochs 6] [--width 1]
+                                       [--everyday] [--crossings N] [--blind SHARE] [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
@@ -112,25 +112,25 @@ def _harvest_detector(levels: str) -> MarkDetector:
 
 
 def more_clutter(
-    variation: Variation, seed: int, arrows: bool, everyday: bool, crossings: bool = False
+    variation: Variation, seed: int, arrows: bool, everyday: bool, crossings: int = 0
 ) -> Variation:
     """`variation` with, for a cluttered chunk (odd `seed`), arrows drawn as often as each hard kind of clutter
     (`arrows`; round vision21), stars twice, check marks and clock faces once each (`everyday`) and crossing strokes
-    twice (`crossings`; round vision45), all from `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation`
+    `crossings` times (round vision45: 2; vision45c: 6), all from `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation`
     unchanged."""
     if arrows and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
     if everyday and seed % 2:
         variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
     if crossings and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, "crossing", "crossing"))
+        variation = variation.only(kinds=(*variation.kinds, *["crossing"] * crossings))
     return variation
 
 
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
-    crossings: bool = False,
+    crossings: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -144,7 +144,7 @@ def harvest(
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
     pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks' kinds of clutter also list stars twice and check
-    marks and clock faces once each, with `crossings` crossing strokes twice (`synthetic.EXTRA_DISTRACTORS`)."""
+    marks and clock faces once each, with `crossings` crossing strokes that many times (`synthetic.EXTRA_DISTRACTORS`)."""
     import cv2
 
     cv2.setNumThreads(1)
@@ -260,7 +260,7 @@ def harvest_all(
     hand_drawn_shapes: str = HAND_DRAWN_SHAPES,
     everyday: bool = False,
     blind: float = 0.0,
-    crossings: bool = False,
+    crossings: int = 0,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
     `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
@@ -532,11 +532,13 @@ def main(
         typer.Option(help="the cluttered chunks also draw stars, check marks and clock faces (round vision23)"),
     ] = False,
     crossings: Annotated[
-        bool,
+        int,
         typer.Option(
-            help="the cluttered chunks also draw crossing strokes: two cables crossing, a cable in a loop (round vision45)"
+            min=0,
+            help="the cluttered chunks also draw crossing strokes (two cables crossing, a cable in a loop), listed this "
+            "many times among their kinds of clutter (round vision45: 2, vision45c: 6; 0: none)",
         ),
-    ] = False,
+    ] = 0,
     blind: Annotated[
         float,
         typer.Option(

@@ -248,13 +248,14 @@ def test_an_arrow_harvest_adds_arrows_to_the_cluttered_chunks_only() -> None:
 
 
 def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cache_knows_it(tmp_path: Path) -> None:
-    """`training --crossings` (round vision45): crossing strokes drawn in the cluttered (odd-seed) chunks only; a
+    """`training --crossings N` (round vision45): crossing strokes drawn in the cluttered (odd-seed) chunks only; a
     cache made without them is not used for a run that asks for them (here: a harvest that is refused)."""
     from services.vision import training
 
-    assert "crossing" in training.more_clutter(training.CLUTTERED, 3, False, False, crossings=True).kinds
-    assert training.more_clutter(training.DEFAULT, 4, False, False, crossings=True) == training.DEFAULT
-    plain, crossings = training.harvest(3, 8), training.harvest(3, 8, crossings=True)
+    kinds = training.more_clutter(training.CLUTTERED, 3, False, False, crossings=6).kinds
+    assert kinds.count("crossing") == 6 and kinds[: len(training.CLUTTERED.kinds)] == training.CLUTTERED.kinds
+    assert training.more_clutter(training.DEFAULT, 4, False, False, crossings=2) == training.DEFAULT
+    plain, crossings = training.harvest(3, 8), training.harvest(3, 8, crossings=2)
     assert not all(np.array_equal(p, q) for p, q in zip(plain, crossings, strict=True))
 
     class Refused(RuntimeError):
@@ -269,7 +270,7 @@ def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cach
         mp.setattr(training, "ProcessPoolExecutor", no_pool)
         assert np.array_equal(training.harvest_all(8, 7, 1, cache)[0][0], plain[0])  # no crossings: the cache
         with pytest.raises(Refused):
-            training.harvest_all(8, 7, 1, cache, crossings=True)
+            training.harvest_all(8, 7, 1, cache, crossings=2)
 
 
 def test_another_verifier_is_loaded_from_its_file_and_a_missing_one_is_refused(tmp_path: Path) -> None:
