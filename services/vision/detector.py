@@ -219,10 +219,12 @@ class DetectorConfig:
     cannot judge it (it has no component). Needs `verify`. On since round vision19 (its int8 model): on
     fresh held-out seeds it found 30 % of the X and triangles missed without it, for 10 more false ones in
     4,000 frames, at 113.9 frames per CPU-second against 133.8 (vision README, "The learned proposer")."""
-    propose_thresholds: tuple[float, ...] = (0.3, 0.99, 0.9)
+    propose_thresholds: tuple[float, ...] = (0.5, 0.99, 0.9)
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
-    tuning seeds 99 + 555 (round vision18b); X 0.3 since round vision23g (0.7 before), whose verifier gives a
-    proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`)"""
+    tuning seeds 99 + 555 (round vision18b); X 0.3 from round vision23g (0.7 before), whose verifier gives a
+    proposal, like any loose candidate, the lower of two networks' X (`ensemble.py`); 0.5 since round vision45c,
+    whose second network learned crossing strokes (a cable in a loop, two taped lines) as not an X: chosen on tuning
+    seed 7156 and crossing-probe seed 78 by the round's rule"""
     propose_sure: tuple[float, ...] = (0.0, 0.0, 0.0)
     """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
     `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
