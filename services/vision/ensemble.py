@@ -3,6 +3,7 @@
     pip install -e '.[train]'
     python -m services.vision.training --out main.onnx                # the default recipe
     python -m services.vision.training --everyday --out everyday.onnx  # stars, check marks, clocks (round vision23)
+    # the committed veto since round vision45c: --everyday --crossings 6 --proposals 0.3 (crossing strokes too)
     python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out services/vision/verifier.onnx]
     python -m services.vision.ensemble new-main.onnx services/vision/verifier.onnx --out joined.onnx  # keep its veto
     python -m services.vision.ensemble main.onnx everyday.onnx --veto-shapes "X,TRIANGLE*9" --out FILE  # cap more

@@ -830,9 +830,7 @@ def _rotated_rect(cx: float, cy: float, w: float, h: float, ang: float) -> np.nd
 
 def _bezier(rng: Rng, w: int, h: int) -> np.ndarray:
     p = rng.uniform([-50, -50], [w + 50, h + 50], size=(4, 2))
-    tt = np.linspace(0, 1, 40)[:, None]
-    curve = (1 - tt) ** 3 * p[0] + 3 * (1 - tt) ** 2 * tt * p[1] + 3 * (1 - tt) * tt**2 * p[2] + tt**3 * p[3]
-    return np.round(curve).astype(np.int32).reshape(-1, 1, 2)
+    return np.round(_cubic(p, 40)).astype(np.int32).reshape(-1, 1, 2)
 
 
 def _cubic(p: np.ndarray, n: int = 60) -> np.ndarray:

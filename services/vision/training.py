@@ -1,7 +1,8 @@
 """Train the mark verifier (`verifier.onnx`) on candidates from the TUNING generator (`--blind`: the blind one's too).
 
-The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday`,
-joined by `python -m services.vision.ensemble` (round vision23g; see there). The committed `verifier_triangles.onnx`,
+The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday --crossings 6
+--proposals 0.3` (round vision45c; `--everyday` alone from round vision23g), joined by `python -m
+services.vision.ensemble` (see there). The committed `verifier_triangles.onnx`,
 asked only about claimed triangles the first refuses (`DetectorConfig.hand_triangle`, round vision34), is `--hand-drawn
 0.4 --hand-drawn-shapes TRIANGLE` (never written by default: `--out` names the file).
 
