@@ -10,6 +10,7 @@ import pytest
 
 from schemas.messages import Shape
 from services.vision.proposer import HEADS, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode, network_input
+from tests.vision.pools import PoolRefused, no_pool
 
 
 def _as_output(heat: np.ndarray, index: int, size: np.ndarray, offset: np.ndarray, w: int) -> np.ndarray:
@@ -205,18 +206,11 @@ def test_more_clutter_changes_only_the_cluttered_chunks_and_the_cache_knows_it(t
     assert not np.array_equal(plain[0], more[0])
     assert plain[1][:, 0].tolist() == more[1][:, 0].tolist() == [0, 1, 2, -1]  # still `training.ORDER`
 
-    class Refused(RuntimeError):
-        pass
-
-    def no_pool(*args: object, **kwargs: object) -> None:
-        raise Refused
-
     cache = tmp_path / "frames.npz"
     np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])  # an older cache: no clutter recorded
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(pt, "ProcessPoolExecutor", no_pool)
+    with no_pool(pt):
         assert np.array_equal(pt.render_all(4, 7, 1, cache)[0][0], plain[0])
-        with pytest.raises(Refused):
+        with pytest.raises(PoolRefused):
             pt.render_all(4, 7, 1, cache, everyday=True)
 
 
@@ -237,18 +231,11 @@ def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) 
         np.savez(path, seeds=np.array(seeds), **arrays)  # type: ignore[arg-type]
         return path
 
-    class Refused(RuntimeError):
-        pass
-
-    def no_pool(*args: object, **kwargs: object) -> None:
-        raise Refused
-
     seeds = [7, 8, 7 + pt.BLIND_SEEDS]  # two tuning chunks, then one blind chunk (share 0.5 of 1,000 frames)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(pt, "ProcessPoolExecutor", no_pool)
+    with no_pool(pt):
         got = pt.render_all(2 * pt.CHUNK, 7, 1, cache(seeds), blind=0.5)
         assert [int(p[0][0]) for p in got] == [0, 1, 2]
-        with pytest.raises(Refused):
+        with pytest.raises(PoolRefused):
             pt.render_all(2 * pt.CHUNK, 7, 1, cache(seeds[:2]), blind=0.5)
 
 

@@ -14,6 +14,7 @@ import typer
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
 from services.vision.verifier import CLASSES, MODEL_PATH, PATCH, SHAPES, Verifier, claim, crops
+from tests.vision.pools import PoolRefused, no_pool
 
 Box = tuple[int, int, int, int]
 
@@ -258,18 +259,11 @@ def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cach
     plain, crossings = training.harvest(3, 8), training.harvest(3, 8, crossings=2)
     assert not all(np.array_equal(p, q) for p, q in zip(plain, crossings, strict=True))
 
-    class Refused(RuntimeError):
-        pass
-
-    def no_pool(*args: object, **kwargs: object) -> None:
-        raise Refused
-
     cache = tmp_path / "harvest.npz"
     np.savez(cache, seeds=np.array([7]), levels=np.array(""), **{f"0_{j}": a for j, a in enumerate(plain)})
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(training, "ProcessPoolExecutor", no_pool)
+    with no_pool(training):
         assert np.array_equal(training.harvest_all(8, 7, 1, cache)[0][0], plain[0])  # no crossings: the cache
-        with pytest.raises(Refused):
+        with pytest.raises(PoolRefused):
             training.harvest_all(8, 7, 1, cache, crossings=2)
 
 
@@ -334,18 +328,11 @@ def test_the_harvest_cache_is_reused_for_the_same_shapes_however_spelt(tmp_path:
     def read(cache: Path, shapes: str) -> list[tuple[np.ndarray, ...]]:
         return training.harvest_all(2 * training.CHUNK, 7, 1, cache, hand_drawn=0.4, hand_drawn_shapes=shapes)
 
-    class Refused(RuntimeError):
-        pass
-
-    def no_pool(*args: object, **kwargs: object) -> None:
-        raise Refused
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(training, "ProcessPoolExecutor", no_pool)  # a harvest would start here
+    with no_pool(training):  # a harvest would start here
         for stored, asked in (("TRIANGLE", "triangle"), ("O,X", "X,O"), ("X,O,TRIANGLE", " triangle, x ,o")):
             got = read(cache_for(stored), asked)
             assert [[a.tolist() for a in p] for p in got] == [[a.tolist() for a in p] for p in parts]
-        with pytest.raises(Refused):  # other shapes: the cache is not used
+        with pytest.raises(PoolRefused):  # other shapes: the cache is not used
             read(cache_for("TRIANGLE"), "X")
 
 
@@ -377,17 +364,10 @@ def test_blind_chunks_come_after_the_tuning_chunks_and_the_cache_knows_the_share
                  **{f"{k}_{j}": a for k, p in enumerate(parts[:n]) for j, a in enumerate(p)})
         return path
 
-    class Refused(RuntimeError):
-        pass
-
-    def no_pool(*args: object, **kwargs: object) -> None:
-        raise Refused
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(training, "ProcessPoolExecutor", no_pool)
+    with no_pool(training):
         got = training.harvest_all(2 * training.CHUNK, 7, 1, cache(0.5, 3), blind=0.5)
         assert [[a.tolist() for a in p] for p in got] == [[a.tolist() for a in p] for p in parts]
-        with pytest.raises(Refused):
+        with pytest.raises(PoolRefused):
             training.harvest_all(2 * training.CHUNK, 7, 1, cache(0.0, 2), blind=0.5)
 
 
