@@ -119,13 +119,10 @@ def more_clutter(
     (`arrows`; round vision21), stars twice, check marks and clock faces once each (`everyday`) and crossing strokes
     `crossings` times (round vision45: 2; vision45c: 6), all from `synthetic.EXTRA_DISTRACTORS`; an even seed's `variation`
     unchanged."""
-    if arrows and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, "arrow", "arrow", "arrow"))
-    if everyday and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, "star", "star", "check", "clock"))
-    if crossings and seed % 2:
-        variation = variation.only(kinds=(*variation.kinds, *["crossing"] * crossings))
-    return variation
+    if seed % 2 == 0:
+        return variation
+    extra = ["arrow"] * 3 * arrows + ["star", "star", "check", "clock"] * everyday + ["crossing"] * crossings
+    return variation.only(kinds=(*variation.kinds, *extra)) if extra else variation
 
 
 def harvest(
