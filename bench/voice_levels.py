@@ -18,6 +18,9 @@ level, so a quieter voice is also a noisier one) and fed to the service's path i
 - `file`: the clip alone, scaled, with the same hiss, straight to the engine (what `voice_bench` measures): set
   beside `stream`, it says whether a loss is the VAD's (no segment) or the recogniser's.
 
+`--dc` adds a microphone's DC offset to both paths (the stream's high-pass, `--highpass`, takes it out; the file
+path has none, as the service's files have none).
+
 Per level: commands heard right (for "go", at least the reasoner's `^min-confidence`), "stop", other words taken
 for a command, false walks, and for `stream` how many words no segment covered.
 
@@ -45,6 +48,7 @@ from bench.voice_bench import (  # noqa: E402,F401
     Item,
     Policy,
     add_lift_options,
+    early_look_arg,
     heldout_items,
     lift_settings,
     through_mic,
@@ -70,9 +74,9 @@ def in_room(speech: np.ndarray, floor_db: float, rng: np.random.Generator) -> np
 
 
 def run_files(engine: Engine, clips: list[Item], peak_db: float, floor_db: float, gain_db: float, policy: Policy,
-              seed: int, mic_rate: int | None = None) -> dict[str, object]:
+              seed: int, mic_rate: int | None = None, dc: float = 0.0) -> dict[str, object]:
     """The clip alone at the level, with 0.2 s of the room's hiss either side, through the gain (and a microphone at
-    `mic_rate`: `through_mic`), straight to the engine."""
+    `mic_rate`: `through_mic`, with its DC offset `dc`), straight to the engine."""
     rng = np.random.default_rng(seed)
     heard: Counter[str] = Counter()
     total: Counter[str] = Counter()
@@ -83,7 +87,7 @@ def run_files(engine: Engine, clips: list[Item], peak_db: float, floor_db: float
         speech = at_level(np.frombuffer(it.pcm, "<i2") / 32768.0, peak_db)
         x = rng.normal(0.0, 10 ** (floor_db / 20), speech.size + 2 * pad)
         x[pad : pad + speech.size] += speech
-        rec = engine.recognise(to_pcm(through_mic(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20), mic_rate)))
+        rec = engine.recognise(to_pcm(through_mic(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20), mic_rate) + dc))
         taken = policy.takes(rec.command, rec.confidence)
         if it.label < OTHER:
             word = WORDS[it.label]
@@ -123,28 +127,32 @@ def main() -> int:
     add_lift_options(ap)
     ap.add_argument("--mic-rate", type=int, help="both paths through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
+    ap.add_argument("--dc", type=float, default=0.0, help="the microphone's DC offset, a fraction of full scale added "
+                                                          "to what it hands over (0.03: -30 dBFS; voice README)")
+    ap.add_argument("--highpass", type=early_look_arg, default=SegmenterConfig.highpass_hz,
+                    help="the stream's high-pass (Hz), or off (SegmenterConfig.highpass_hz; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig(**lift_settings(args))
+    config = SegmenterConfig(**lift_settings(args), highpass_hz=args.highpass)
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
             if path == "stream":
                 def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
                     x = np.clip(in_room(at_level(speech, peak), args.floor, rng), -1.0, 1.0) * 10 ** (args.gain / 20)
-                    return through_mic(x, args.mic_rate)
+                    return through_mic(x, args.mic_rate) + args.dc
 
                 row = run_streams(engine, clips, build, config, policy, args.seed)
             elif path == "file":
-                row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed, args.mic_rate)
+                row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed, args.mic_rate, args.dc)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
             rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, **lift_settings(args),
-                         "mic_rate": args.mic_rate, **row})
+                         "mic_rate": args.mic_rate, "dc": args.dc, "highpass_hz": args.highpass, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")
@@ -152,7 +160,8 @@ def main() -> int:
         label = f"{r['peak_dbfs']:+.0f} dBFS" + (" (clipped)" if r["peak_dbfs"] > 0 else "")
         print(f"{label:14} {r['path']:6} {r['command_accuracy']:7.3f} {r['stop']:>7} {r['oov_accepted']:7.3f} "
               f"{r['false_walks']:11d} {r.get('no_segment_over_word', '-')!s:>6}")
-    print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB, VAD lift {args.vad_lift or 'off'}; {rows[0]['n']['commands'] if rows else 0} commands and "
+    print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB, VAD lift {args.vad_lift or 'off'}, DC offset "
+          f"{args.dc:g}, high-pass {args.highpass or 'off'}; {rows[0]['n']['commands'] if rows else 0} commands and "
           f"{rows[0]['n']['oov'] if rows else 0} other words per row; held-out seed {args.seed})")
     if args.json:
         args.json.write_text(json.dumps({"floor_dbfs": args.floor, "gain_db": args.gain, "seed": args.seed, "rows": rows}, indent=1))

@@ -100,6 +100,12 @@ VadLiftOption = Annotated[
                  help="live stream (Silero): the peak (dBFS) a quiet stream's loudest moment is lifted to for a second "
                       "VAD, up to 24 dB, so that a far voice is found; or 'off' [default: -20; round voice37d]"),
 ]
+HighpassOption = Annotated[
+    str | None,
+    typer.Option("--highpass", envvar="HRI_VOICE_HIGHPASS",
+                 help="live stream: a high-pass (Hz, 1 to 300) switched on once the stream shows a DC offset, which "
+                      "it takes out (30 for a microphone `level` finds an offset on); or 'off' [default: off; rounds voice41 and 41b]"),
+]
 GainOption = Annotated[
     str | None,
     typer.Option("--gain", envvar="HRI_VOICE_GAIN",
@@ -137,7 +143,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
-         gain: GainOption = None, mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None) -> None:
+         highpass: HighpassOption = None, gain: GainOption = None, mic_rate: MicRateOption = None,
+         mic_channels: MicChannelsOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -145,7 +152,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
-                             vad_lift=vad_lift, gain=gain, mic_rate=mic_rate, mic_channels=mic_channels)
+                             vad_lift=vad_lift, highpass=highpass, gain=gain, mic_rate=mic_rate,
+                             mic_channels=mic_channels)
     try:
         check_settings(settings)
     except EngineError as exc:
@@ -199,6 +207,7 @@ def level(
     gain: GainOption = None,
     vad: VadOption = "silero",
     vad_lift: VadLiftOption = None,
+    highpass: HighpassOption = None,
     mic_rate: MicRateOption = None,
     mic_channels: MicChannelsOption = None,
 ) -> None:
@@ -213,7 +222,8 @@ def level(
     try:
         gain_db = gain_from(gain)
         spec = SourceSpec.parse(source or "mic")
-        settings = VoiceSettings(vad=vad, vad_lift=vad_lift, mic_rate=mic_rate, mic_channels=mic_channels)
+        settings = VoiceSettings(vad=vad, vad_lift=vad_lift, highpass=highpass, mic_rate=mic_rate,
+                                 mic_channels=mic_channels)
         segmenter, mic = settings.segmenter(), settings.mic()
     except (LevelError, SourceError, EngineError) as exc:
         typer.echo(f"error: {exc}", err=True)
@@ -238,9 +248,10 @@ def level(
         raise typer.Exit(1) from None
     d = meter.detail()
     if "input_peak_dbfs" in d:
-        typer.echo(f"stream: loudest {d['input_peak_dbfs']} dBFS, floor {d['input_floor_dbfs']} dBFS; "
+        typer.echo(f"stream: loudest {d['input_peak_dbfs']} dBFS, floor {d['input_floor_dbfs']} dBFS, DC offset "
+                   f"{d['input_offset_dbfs']} dBFS; "
                    f"{len(found)} utterance(s)" + (f"; gain {gain_db:g} dB" if gain_db else ""))
-    typer.echo(verdict(meter, found, gain_db))
+    typer.echo(verdict(meter, found, gain_db, highpass=segmenter.highpass_hz is not None))
 
 
 @app.command()

@@ -32,6 +32,10 @@ for commands at about 29 dB by this estimate (speech peaking at -26 dBFS in a qu
 about 23 dB (-32 dBFS), 11 % at about 18 dB (-38) and 11.5 % at about 13 dB (-44), and heard fewer commands; a walking
 robot's noise at the walking bench's 20 dB is about 17 dB here. Gain does not mend it: it raises the noise with the
 speech. A microphone nearer the person does."""
+OFFSET_DBFS = -50.0
+"""A stream whose samples' mean sits this far from zero or further (dBFS) carries a microphone's DC offset, which the
+segmenter takes for the room's noise unless `HRI_VOICE_HIGHPASS` takes it out (voice README, "A microphone's DC
+offset"; the level at which `SegmenterConfig.highpass_from_dbfs` switches the high-pass on)."""
 CLIPPED_SHARE = 0.001
 """An utterance with more than this share of its samples at full scale counts as clipped."""
 MAX_GAIN_DB = 40.0
@@ -140,6 +144,7 @@ class Meter:
     report_s: float = 2.0
     _peaks: deque[float] = field(default_factory=deque)
     _rms: deque[float] = field(default_factory=deque)
+    _means: deque[float] = field(default_factory=deque)
     utterances: int = 0
     quiet: int = 0
     clipped: int = 0
@@ -152,11 +157,13 @@ class Meter:
         if not x.size:
             return
         keep = max(1, round(self.window_s / self.chunk_s))
-        self._peaks.append(float(np.abs(x).max()))
-        self._rms.append(float(np.sqrt(np.mean(x * x))))
+        self._peaks.append(float(np.abs(x).max()))  # as it came: how near full scale the sound card is
+        self._rms.append(float(np.std(x)))  # a microphone's DC offset is no noise (the segmenter's high-pass takes it out)
+        self._means.append(float(x.mean()))
         while len(self._peaks) > keep:
             self._peaks.popleft()
             self._rms.popleft()
+            self._means.popleft()
         self._fed += 1
         if self.report is not None and self._fed % max(1, round(self.report_s / self.chunk_s)) == 0:
             self.report(self.detail())
@@ -183,14 +190,20 @@ class Meter:
         if self._peaks:
             out["input_peak_dbfs"] = round(dbfs(max(self._peaks)), 1)
             out["input_floor_dbfs"] = round(dbfs(float(np.percentile(self._rms, 10))), 1)
+            out["input_offset_dbfs"] = round(dbfs(abs(float(np.median(self._means)))), 1)
         if self.last is not None:
             out["last_peak_dbfs"] = round(self.last.peak_dbfs, 1)
         return out
 
 
-def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0) -> str:
+def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0, highpass: bool = False) -> str:
     """`python -m services.voice level`'s last line: what to change, judged on the utterances the VAD found, or, when
-    it found none, on the loudest moment of the stream over its floor."""
+    it found none, on the loudest moment of the stream over its floor; first of all, a DC offset the high-pass
+    (`highpass`: on) is not taking out."""
+    offset = meter.detail().get("input_offset_dbfs")
+    if not highpass and isinstance(offset, float) and offset >= OFFSET_DBFS:
+        return (f"the microphone hands its samples over with a DC offset ({offset:.0f} dBFS), which the VAD takes for "
+                f"noise: set HRI_VOICE_HIGHPASS=30 to take it out, then check again")
     clipped = [lv for lv in levels if lv.is_clipped]
     if clipped:
         return clipped[0].advice(gain_db) or ""

@@ -18,7 +18,13 @@ The VAD's lift (Silero; on by default since round voice37d): a second Silero hea
 as it came. The first's utterances are the segments, as without the lift. An utterance of the second counts only where
 the first heard nothing: no utterance of the first overlaps it, and the first is not in one when it ends nor
 `vad_lift_hold_s` after. So a far voice, too quiet for the first, is found (0.5 s later than a near one), and where
-the voice is loud enough for the first, nothing changes. The utterance's audio is as it came.
+the voice is loud enough for the first, nothing changes. The utterance's audio is as it came (high-passed, below).
+
+The high-pass (`highpass_hz`, off by default; 30 Hz for a microphone with a DC offset): once the stream's mean outside utterances shows a DC offset
+(`highpass_from_dbfs`), the segmenter hears the rest of it through a high-pass that takes the offset out, which it would
+otherwise take for the room's noise (`highpass.py`); the levels it keeps, both VADs and the utterances' audio are after
+it. A stream without an offset is heard as it came. Files are trimmed without it (`sources.TRIM_CONFIG`), as the
+spotter's training clips were.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from pocketsphinx import Endpointer
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
 from services.voice.engine import Recognition
+from services.voice.highpass import HighPass
 from services.voice.vad import FRAME_SAMPLES, SileroEndpointer
 
 VADS = ("silero", "webrtc")
@@ -46,6 +53,18 @@ class SegmenterConfig:
     """`silero` (`vad.SileroEndpointer`) or `webrtc` (pocketsphinx's `Endpointer`). In a stream where noise
     never stops (a walking robot's servos, steady noise 10 dB under the voice) WebRTC's VAD stays in "speech"
     until the 6 s cut and no command is heard (`bench/voice_walking.py`)."""
+    highpass_hz: float | None = None
+    """The stream goes through a high-pass at this frequency (`highpass.HighPass`) before the VAD, the levels the
+    segmenter keeps and the utterances' audio, once it carries a DC offset (`highpass_from_dbfs`); None: never
+    (`HRI_VOICE_HIGHPASS`; off by default: rounds voice41 and 41b did not pass their rules). A microphone's offset of
+    -30 dBFS otherwise hides quiet speech from the VAD (voice README, "A microphone's DC offset": held-out speech at
+    -38 dBFS, 0.16-0.18 of the commands heard with the offset, 0.77-0.83 with the high-pass at 30 Hz)."""
+    highpass_from_dbfs: float | None = -50.0
+    """With `highpass_hz`: the high-pass is switched on, for the rest of the stream, once the mean of the stream's last
+    `noise_floor_s` outside utterances (at least half of it heard) is this far from zero (dBFS: -50 is about 100 of
+    16-bit's 32,768); until then the stream is heard as it came. None: on from the first sample. Round voice41 (always
+    on) lost 4 of 119 held-out commands said at -44 dBFS with no offset; a stream with no offset is heard exactly as
+    without the option."""
     threshold: float = 0.4
     """Silero: speech probability that starts an utterance. 0.5 is Silero's documented default; 0.4 with the end
     threshold kept at 0.35 (round 18) found 17 more of 68 held-out words in 10 dB of walking noise and heard 3 more
@@ -167,8 +186,11 @@ class Segmenter:
         self._spans: deque[tuple[float, float]] = deque(maxlen=16)  # with it: this VAD's recent utterances (s)
         self._waiting: list[tuple[Segment, float]] = []  # with it: the second's utterances held, and when they count
         lifted = self.config.vad_lift_dbfs is not None and self.config.vad == "silero"
-        if lifted and self.config.vad_lift_second:
-            self._second = Segmenter(replace(self.config, vad_lift_second=False, early_quiet_s=None))
+        self._highpass = HighPass(self.config.highpass_hz) if self.config.highpass_hz is not None else None
+        self._offset_on = self.config.highpass_from_dbfs is None  # the high-pass is switched on (a DC offset seen)
+        self._offset: deque[tuple[float, int]] = deque()  # outside utterances: (sum of samples, samples) per chunk
+        if lifted and self.config.vad_lift_second:  # fed the audio this one hears, already high-passed
+            self._second = Segmenter(replace(self.config, vad_lift_second=False, early_quiet_s=None, highpass_hz=None))
         elif lifted:
             self._peaks = deque(maxlen=max(1, round(self.config.vad_peak_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._speech_power = 0.0  # sum of the current utterance's speech frames' mean square
@@ -197,8 +219,32 @@ class Segmenter:
         return bool(self._speech)
 
     def feed(self, pcm: bytes) -> list[Segment]:
+        if self._highpass is not None and (self._offset_on or self._offset_seen(pcm)):
+            pcm = self._highpass(pcm)
         out = self._heard(pcm)
         return out if self._second is None else self._with_second(out, self._second.feed(pcm))
+
+    def _offset_seen(self, pcm: bytes) -> bool:
+        """`highpass_from_dbfs`: whether the stream's mean outside utterances, over the last `noise_floor_s` with
+        this chunk, has reached it (then the high-pass stays on)."""
+        assert self.config.highpass_from_dbfs is not None
+        x = np.frombuffer(pcm[: len(pcm) // SAMPLE_WIDTH * SAMPLE_WIDTH], "<i2")
+        if self.in_speech or self._ep.in_speech or not x.size:
+            return False
+        self._offset.append((float(x.sum(dtype=np.int64)), int(x.size)))
+        window = self.config.noise_floor_s * SAMPLE_RATE
+        while sum(n for _, n in self._offset) - self._offset[0][1] >= window:
+            self._offset.popleft()
+        total = sum(n for _, n in self._offset)
+        mean = abs(sum(v for v, _ in self._offset)) / max(1, total) / 32768.0
+        self._offset_on = total >= window / 2 and mean >= 10 ** (self.config.highpass_from_dbfs / 20)
+        if self._offset_on:  # the levels kept so far were the offset's: start them again on the high-passed stream
+            for seg in (self, self._second):
+                if seg is not None:
+                    seg._floor.clear()
+                    if seg._peaks is not None:
+                        seg._peaks.clear()
+        return self._offset_on
 
     def _with_second(self, mine: list[Segment], second: list[Segment], final: bool = False) -> list[Segment]:
         """This VAD's utterances, and those of the second (lifted) VAD that no utterance of this one overlaps and

@@ -80,6 +80,9 @@ class VoiceSettings:
     vad_lift: str | None = None
     """`HRI_VOICE_VAD_LIFT`: the peak (dBFS) a quiet live stream is lifted to for the second VAD
     (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default (-20)."""
+    highpass: str | None = None
+    """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
+    offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (off)."""
     gain: str | None = None
     """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
     mic_rate: str | None = None
@@ -108,6 +111,7 @@ class VoiceSettings:
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
             vad_lift=os.environ.get("HRI_VOICE_VAD_LIFT") or None,
+            highpass=os.environ.get("HRI_VOICE_HIGHPASS") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
             mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
@@ -122,7 +126,7 @@ class VoiceSettings:
 
     def segmenter(self) -> SegmenterConfig:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
-        seconds shorter than the end window."""
+        seconds shorter than the end window, a VAD lift or a high-pass out of its range."""
         base = SegmenterConfig(vad=self.vad)
 
         def quiet_s(value: float) -> bool:
@@ -136,7 +140,9 @@ class VoiceSettings:
                                              base.clear_quiet_s),
                        vad_lift_dbfs=_off_or(lambda v: -40.0 <= v <= 0.0, "the peak level (dBFS) a quiet stream is "
                                              "lifted to for the VAD, from -40 to 0", "HRI_VOICE_VAD_LIFT",
-                                             self.vad_lift, base.vad_lift_dbfs))
+                                             self.vad_lift, base.vad_lift_dbfs),
+                       highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
+                                           "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 
 
 def _off_or(ok: Callable[[float], bool], what: str, variable: str, raw: str | None,
@@ -238,7 +244,8 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       gain_db=gain_from(settings.gain),
                       early_look_s=segmenter.early_quiet_s,
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None,
-                      vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None)
+                      vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None,
+                      highpass_hz=segmenter.highpass_hz)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
     listener = ctx.thread(lambda: _listen(ctx, settings), "listen")

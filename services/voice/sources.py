@@ -108,9 +108,9 @@ def stream_utterances(
         yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db, start_s=s.start_s)
 
 
-TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9)
-"""Trimming a file is not latency-bound: a longer VAD window; WebRTC's VAD, as the spotter's training clips
-were trimmed (its held-out figures are measured on clips trimmed so)."""
+TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9, highpass_hz=None)
+"""Trimming a file is not latency-bound: a longer VAD window; WebRTC's VAD and no high-pass, as the spotter's
+training clips were trimmed (its held-out figures are measured on clips trimmed so)."""
 
 
 def trim_to_speech(pcm: bytes, config: SegmenterConfig | None = None) -> bytes:
