@@ -18,13 +18,13 @@ The VAD's lift (Silero; on by default since round voice37d): a second Silero hea
 as it came. The first's utterances are the segments, as without the lift. An utterance of the second counts only where
 the first heard nothing: no utterance of the first overlaps it, and the first is not in one when it ends nor
 `vad_lift_hold_s` after. So a far voice, too quiet for the first, is found (0.5 s later than a near one), and where
-the voice is loud enough for the first, nothing changes. The utterance's audio is as it came (high-passed, below).
+the voice is loud enough for the first, nothing changes. The utterance's audio is as it came (or high-passed, below).
 
-The high-pass (`highpass_hz`, off by default; 30 Hz for a microphone with a DC offset): once the stream's mean outside utterances shows a DC offset
-(`highpass_from_dbfs`), the segmenter hears the rest of it through a high-pass that takes the offset out, which it would
-otherwise take for the room's noise (`highpass.py`); the levels it keeps, both VADs and the utterances' audio are after
-it. A stream without an offset is heard as it came. Files are trimmed without it (`sources.TRIM_CONFIG`), as the
-spotter's training clips were.
+The high-pass (`highpass_hz`; off by default, 30 Hz for a microphone with a DC offset): once the stream's mean outside
+utterances shows an offset (`highpass_from_dbfs`), the segmenter hears the rest of it through a high-pass that takes
+the offset out, which it would otherwise take for the room's noise (`highpass.py`); the levels it keeps, both VADs and
+the utterances' audio are after it. A stream without an offset is heard as it came. Files are trimmed without it
+(`sources.TRIM_CONFIG`), as the spotter's training clips were.
 """
 
 from __future__ import annotations
