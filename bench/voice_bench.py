@@ -438,8 +438,8 @@ def early_look_arg(text: str) -> float | None:
 
 
 def add_lift_options(ap: argparse.ArgumentParser) -> None:
-    """The live stream's VAD lift (`SegmenterConfig.vad_lift_*`), for the benches that run the service's segmenter;
-    each defaults to the service's."""
+    """The live stream's VAD lift (`SegmenterConfig.vad_lift_*`) and high-pass (`highpass_hz`), for the benches that run
+    the service's segmenter; each defaults to the service's."""
     ap.add_argument("--vad-lift", type=early_look_arg, default=SegmenterConfig.vad_lift_dbfs,
                     help="Silero: the peak the VAD hears the loudest frame lifted to, dBFS, or off (default: the service's)")
     ap.add_argument("--vad-lift-floor", type=early_look_arg, default=SegmenterConfig.vad_lift_floor_dbfs,
@@ -451,12 +451,16 @@ def add_lift_options(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--vad-lift-hold", type=float, default=SegmenterConfig.vad_lift_hold_s,
                     help="with --vad-lift-second: seconds the second VAD's utterance waits, dropped if the first starts "
                          "one meanwhile (default: the service's)")
+    ap.add_argument("--highpass", type=early_look_arg, default=SegmenterConfig.highpass_hz,
+                    help="the stream's high-pass (Hz), switched on by a DC offset, or off (SegmenterConfig.highpass_hz; "
+                         "default: the service's)")
 
 
 def lift_settings(args: argparse.Namespace) -> dict[str, Any]:
     """`add_lift_options`' values as `SegmenterConfig` keywords."""
     return {"vad_lift_dbfs": args.vad_lift, "vad_lift_floor_dbfs": args.vad_lift_floor,
-            "vad_lift_second": args.vad_lift_second, "vad_lift_hold_s": args.vad_lift_hold}
+            "vad_lift_second": args.vad_lift_second, "vad_lift_hold_s": args.vad_lift_hold,
+            "highpass_hz": args.highpass}
 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:

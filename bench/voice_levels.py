@@ -48,7 +48,6 @@ from bench.voice_bench import (  # noqa: E402,F401
     Item,
     Policy,
     add_lift_options,
-    early_look_arg,
     heldout_items,
     lift_settings,
     through_mic,
@@ -129,15 +128,13 @@ def main() -> int:
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--dc", type=float, default=0.0, help="the microphone's DC offset, a fraction of full scale added "
                                                           "to what it hands over (0.03: -30 dBFS; voice README)")
-    ap.add_argument("--highpass", type=early_look_arg, default=SegmenterConfig.highpass_hz,
-                    help="the stream's high-pass (Hz), or off (SegmenterConfig.highpass_hz; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
-    config = SegmenterConfig(**lift_settings(args), highpass_hz=args.highpass)
+    config = SegmenterConfig(**lift_settings(args))
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -152,7 +149,7 @@ def main() -> int:
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
             rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, **lift_settings(args),
-                         "mic_rate": args.mic_rate, "dc": args.dc, "highpass_hz": args.highpass, **row})
+                         "mic_rate": args.mic_rate, "dc": args.dc, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
     print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6}")

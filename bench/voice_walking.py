@@ -228,8 +228,6 @@ def main() -> int:
     ap.add_argument("--clear-window", type=early_look_arg, default=SegmenterConfig.clear_quiet_s,
                     help="the end window in a clear stream: seconds of quiet, or off (default: the service's)")
     add_lift_options(ap)
-    ap.add_argument("--highpass", type=early_look_arg, default=SegmenterConfig.highpass_hz,
-                    help="the stream's high-pass (Hz), or off (SegmenterConfig.highpass_hz; default: the service's)")
     ap.add_argument("--mic-rate", type=int, help="every stream through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--workers", type=int, default=2)
@@ -250,7 +248,7 @@ def main() -> int:
     for vad in args.vad.split(","):
         config = SegmenterConfig(vad=vad, threshold=args.silero_threshold, end_threshold=args.silero_end_threshold,
                                  early_quiet_s=args.early_look,
-                                 clear_quiet_s=args.clear_window, highpass_hz=args.highpass, **lift_settings(args))
+                                 clear_quiet_s=args.clear_window, **lift_settings(args))
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
             row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate)
             rows.append(row)
