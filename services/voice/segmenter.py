@@ -229,7 +229,7 @@ class Segmenter:
         this chunk, has reached it (then the high-pass stays on)."""
         assert self.config.highpass_from_dbfs is not None
         x = np.frombuffer(pcm[: len(pcm) // SAMPLE_WIDTH * SAMPLE_WIDTH], "<i2")
-        if self.in_speech or self._ep.in_speech or not x.size:
+        if any(seg.in_speech or seg._ep.in_speech for seg in (self, self._second) if seg is not None) or not x.size:
             return False
         self._offset.append((float(x.sum(dtype=np.int64)), int(x.size)))
         window = self.config.noise_floor_s * SAMPLE_RATE
@@ -238,12 +238,14 @@ class Segmenter:
         total = sum(n for _, n in self._offset)
         mean = abs(sum(v for v, _ in self._offset)) / max(1, total) / 32768.0
         self._offset_on = total >= window / 2 and mean >= 10 ** (self.config.highpass_from_dbfs / 20)
-        if self._offset_on:  # the levels kept so far were the offset's: start them again on the high-passed stream
+        if self._offset_on:  # what was heard so far was the offset's: levels and VADs start again on the high-pass
             for seg in (self, self._second):
                 if seg is not None:
                     seg._floor.clear()
                     if seg._peaks is not None:
                         seg._peaks.clear()
+                    if isinstance(seg._ep, SileroEndpointer):
+                        seg._ep.forget()
         return self._offset_on
 
     def _with_second(self, mine: list[Segment], second: list[Segment], final: bool = False) -> list[Segment]:

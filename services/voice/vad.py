@@ -120,6 +120,16 @@ class SileroEndpointer:
         self.in_speech, self._quiet = False, []
         return b""  # the utterance ended; its quiet tail is not speech
 
+    def forget(self) -> None:
+        """Outside speech: the model's state starts again, as at the start of a stream. The segmenter calls it when
+        what the model heard so far no longer stands for the stream (its high-pass switched on for a DC offset:
+        after half a second of the offset Silero found more words, far words and other words alike, for a second
+        or more; voice README, round voice41c)."""
+        if self.in_speech:
+            raise RuntimeError("the VAD's state is forgotten only outside speech")
+        self._vad.reset()
+        self._onset = []
+
     @property
     def quiet_frames(self) -> int:
         """Quiet frames in a row so far inside the current utterance (held back: not yet handed over)."""
