@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -196,14 +196,23 @@ class Meter:
         return out
 
 
+def offset_advice(detail: Mapping[str, object], highpass: bool) -> str | None:
+    """What to change for a DC offset in the stream (`Meter.detail()`'s `input_offset_dbfs` at `OFFSET_DBFS` or
+    further) that the high-pass (`highpass`: on) is not taking out; None: nothing."""
+    offset = detail.get("input_offset_dbfs")
+    if highpass or not isinstance(offset, float) or offset < OFFSET_DBFS:
+        return None
+    return (f"the microphone hands its samples over with a DC offset ({offset:.0f} dBFS), which the VAD takes for "
+            f"noise: set HRI_VOICE_HIGHPASS=30 to take it out")
+
+
 def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0, highpass: bool = False) -> str:
     """`python -m services.voice level`'s last line: what to change, judged on the utterances the VAD found, or, when
     it found none, on the loudest moment of the stream over its floor; first of all, a DC offset the high-pass
     (`highpass`: on) is not taking out."""
-    offset = meter.detail().get("input_offset_dbfs")
-    if not highpass and isinstance(offset, float) and offset >= OFFSET_DBFS:
-        return (f"the microphone hands its samples over with a DC offset ({offset:.0f} dBFS), which the VAD takes for "
-                f"noise: set HRI_VOICE_HIGHPASS=30 to take it out, then check again")
+    offset = offset_advice(meter.detail(), highpass)
+    if offset is not None:
+        return f"{offset}, then check again"
     clipped = [lv for lv in levels if lv.is_clipped]
     if clipped:
         return clipped[0].advice(gain_db) or ""

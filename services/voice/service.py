@@ -31,7 +31,7 @@ from services.voice.engine import (
     make_engine,
     one_blas_thread,
 )
-from services.voice.level import LevelError, Meter, gain_from
+from services.voice.level import LevelError, Meter, gain_from, offset_advice
 from services.voice.mic import MicError, MicFormat
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
@@ -263,9 +263,23 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     stats = _Stats()
     gain_db = gain_from(settings.gain)
-    # the input's level (health, every 2 s of a live stream), and advice when speech is too quiet or clips
-    meter = Meter(report=lambda detail: ctx.update_detail(**detail))
     advised: dict[str, float] = {}
+    highpass = settings.segmenter().highpass_hz is not None
+
+    def advise(kind: str, advice: str, **fields: object) -> None:
+        """Once a minute at most for each kind: a user who cannot change it now is not flooded."""
+        if time.monotonic() - advised.get(kind, -ADVICE_EVERY_S) >= ADVICE_EVERY_S:
+            advised[kind] = time.monotonic()
+            ctx.log.warning("input level", advice=advice, **fields)
+
+    def on_level(detail: dict[str, object]) -> None:
+        ctx.update_detail(**detail)
+        advice = offset_advice(detail, highpass)  # a DC offset hides quiet speech, and nothing in a word says so
+        if advice is not None:
+            advise("offset", advice)
+
+    # the input's level (health, every 2 s of a live stream), and advice when speech is too quiet or clips
+    meter = Meter(report=on_level)
     mic = settings.mic()
 
     def mic_opened(rate: int, channels: int) -> None:
@@ -304,10 +318,9 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         stats.utterances += 1
         stats.audio_s += rec.audio_s
         level = meter.utterance(utt.pcm, utt.snr_db)
-        advice, kind = level.advice(gain_db), level.kind or ""
-        if advice is not None and time.monotonic() - advised.get(kind, -ADVICE_EVERY_S) >= ADVICE_EVERY_S:
-            advised[kind] = time.monotonic()  # once a minute at most: a user who cannot change it now is not flooded
-            ctx.log.warning("input level", origin=utt.origin, advice=advice)
+        advice = level.advice(gain_db)
+        if advice is not None:
+            advise(level.kind or "", advice, origin=utt.origin)
         if rec.command is None:
             stats.rejected += 1
         else:

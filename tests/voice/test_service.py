@@ -149,3 +149,35 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
         if proc.poll() is None:
             proc.kill()
         log.close()
+
+
+def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceContext, router_endpoint: str,
+                                                                  robot_id: str, tmp_path: Path) -> None:
+    """With the high-pass off (the default), a stream with an offset of 0.03 of full scale gets a warning saying how
+    to take it out (once a minute at most), and health shows the offset: nothing in a word would say so."""
+    from services.voice.audio import from_pcm, to_pcm
+
+    speech = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
+    pcm = to_pcm(from_pcm(speech) + 0.03)
+    log_path = tmp_path / "voice.log"
+    log = open(log_path, "wb")  # noqa: SIM115 - closed below
+    proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
+                            stdout=log, stderr=subprocess.STDOUT,
+                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"))
+    try:
+        assert proc.stdin is not None
+        proc.stdin.write(pcm)
+        proc.stdin.flush()
+        health = wait_for(lambda: (h := bus.query_health("voice")) is not None
+                          and "input_offset_dbfs" in h.detail and h, timeout=30)
+        assert -32.0 < health.detail["input_offset_dbfs"] < -29.0  # 0.03 of full scale: -30.5 dBFS
+        assert health.detail["highpass_hz"] is None
+        wait_for(lambda: "HRI_VOICE_HIGHPASS=30" in log_path.read_text(), timeout=10)
+        text = log_path.read_text()
+        assert text.count("with a DC offset (") == 1  # not again within the minute
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        log.close()
