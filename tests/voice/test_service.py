@@ -8,6 +8,8 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -108,6 +110,20 @@ def test_missing_microphone_is_degraded_not_fatal(bus: ServiceContext, start_ser
     json.dumps(h.detail)  # the detail stays JSON
 
 
+@contextmanager
+def stdin_service(env: dict[str, str], log_path: Path) -> Iterator[subprocess.Popen[bytes]]:
+    """The voice service reading its stream from stdin, its output in `log_path`; killed at the end if still running."""
+    with open(log_path, "wb") as log:
+        proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
+                                stdout=log, stderr=subprocess.STDOUT, env=env)
+        try:
+            yield proc
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(5)
+
+
 @pytest.mark.parametrize("early_look", ["", "0.09"])
 def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_endpoint: str, robot_id: str,
                                                   tmp_path: Path, early_look: str) -> None:
@@ -117,14 +133,10 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
     # 0.85 asked). "en-us" at 150, used until stop 38, sat on the knot: it passed on earlier machines and gave 0.848
     # and 0.849 on stop 38's (AVX2, no AVX-512; other package releases too), where no word was taken
     pcm = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
-    log = open(tmp_path / "voice.log", "wb")  # noqa: SIM115 - closed below
-    proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
-                            stdout=log, stderr=subprocess.STDOUT,
-                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin",
-                                            HRI_VOICE_EARLY_LOOK=early_look,
-                                            # the early look alone: the clear window would end these words first
-                                            HRI_VOICE_CLEAR_WINDOW="off" if early_look else ""))
-    try:
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_EARLY_LOOK=early_look,
+                      # the early look alone: the clear window would end these words first
+                      HRI_VOICE_CLEAR_WINDOW="off" if early_look else "")
+    with stdin_service(env, tmp_path / "voice.log") as proc:
         assert proc.stdin is not None
         proc.stdin.write(pcm)
         proc.stdin.flush()  # the pipe stays open: the service must not wait for EOF to stop
@@ -145,10 +157,6 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
             assert health.detail["early_looks"] >= health.detail["early_taken"] >= 1
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        log.close()
 
 
 def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceContext, router_endpoint: str,
@@ -160,11 +168,7 @@ def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceCo
     speech = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
     pcm = to_pcm(from_pcm(speech) + 0.03)
     log_path = tmp_path / "voice.log"
-    log = open(log_path, "wb")  # noqa: SIM115 - closed below
-    proc = subprocess.Popen([sys.executable, "-m", "services.voice"], cwd=ROOT, stdin=subprocess.PIPE,
-                            stdout=log, stderr=subprocess.STDOUT,
-                            env=service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"))
-    try:
+    with stdin_service(service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"), log_path) as proc:
         assert proc.stdin is not None
         proc.stdin.write(pcm)
         proc.stdin.flush()
@@ -177,7 +181,3 @@ def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceCo
         assert text.count("with a DC offset (") == 1  # not again within the minute
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        log.close()
