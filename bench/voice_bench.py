@@ -60,7 +60,7 @@ sys.path.insert(0, str(ROOT))
 
 from schemas.messages import Command
 from services.voice import synth
-from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
+from services.voice.audio import SAMPLE_RATE, read_wav, rounded_pcm
 from services.voice.engine import Engine, make_engine, one_blas_thread
 from services.voice.mic import CHUNK_S, ToServiceRate
 from services.voice.segmenter import Segmenter, SegmenterConfig
@@ -232,7 +232,7 @@ def through_mic(x: np.ndarray, rate: int | None) -> np.ndarray:
     if rate is None:
         return x
     g = math.gcd(rate, SAMPLE_RATE)
-    pcm = to_pcm(np.clip(resample_poly(x, rate // g, SAMPLE_RATE // g), -1.0, 1.0))
+    pcm = rounded_pcm(np.clip(resample_poly(x, rate // g, SAMPLE_RATE // g), -1.0, 1.0))
     convert, block = ToServiceRate(rate, 1), int(CHUNK_S * rate) * 2
     out = b"".join(c for k in range(0, len(pcm), block) for c in convert(pcm[k : k + block]))
     return np.frombuffer(out, "<i2") / 32768.0
@@ -244,7 +244,7 @@ def mic_pcm(pcm: bytes, rate: int | None) -> bytes:
     if rate is None:
         return pcm
     x = np.concatenate([np.frombuffer(pcm, "<i2") / 32768.0, np.zeros(int(0.1 * SAMPLE_RATE))])
-    return to_pcm(through_mic(x, rate)[: len(pcm) // 2])
+    return rounded_pcm(through_mic(x, rate)[: len(pcm) // 2])
 
 
 def through_mic_items(items: list[Item], rate: int | None) -> list[Item]:
@@ -384,7 +384,7 @@ def stream_latency(engine: Engine, items: list[Item], n: int = 40,
         x = np.concatenate([lead, np.frombuffer(it.pcm, "<i2") / 32768.0, np.zeros(SAMPLE_RATE)])
         x = x + rng.normal(0, 3e-4, x.size)
         speech_end = lead.size / SAMPLE_RATE + speech_end_s(it.pcm)
-        pcm = to_pcm(through_mic(x, mic_rate))
+        pcm = rounded_pcm(through_mic(x, mic_rate))
         seg = Segmenter(config or SegmenterConfig(), recognise=engine.recognise)
         step = int(0.03 * SAMPLE_RATE) * 2
         for k in range(0, len(pcm), step):

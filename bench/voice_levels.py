@@ -53,7 +53,7 @@ from bench.voice_bench import (  # noqa: E402,F401
     through_mic,
 )
 from bench.voice_walking import LEAD_S, TAIL_S, pick, run_streams  # noqa: E402
-from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, rounded_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
@@ -86,7 +86,7 @@ def run_files(engine: Engine, clips: list[Item], peak_db: float, floor_db: float
         speech = at_level(np.frombuffer(it.pcm, "<i2") / 32768.0, peak_db)
         x = rng.normal(0.0, 10 ** (floor_db / 20), speech.size + 2 * pad)
         x[pad : pad + speech.size] += speech
-        rec = engine.recognise(to_pcm(through_mic(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20), mic_rate) + dc))
+        rec = engine.recognise(rounded_pcm(through_mic(np.clip(x, -1.0, 1.0) * 10 ** (gain_db / 20), mic_rate) + dc))
         taken = policy.takes(rec.command, rec.confidence)
         if it.label < OTHER:
             word = WORDS[it.label]

@@ -52,7 +52,7 @@ from bench.voice_bench import (  # noqa: E402
     through_mic,
 )
 from schemas.messages import Command  # noqa: E402
-from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, read_wav, rounded_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
 from services.voice.training.augment import active_power  # noqa: E402
@@ -87,7 +87,7 @@ def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray
 def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple[float, float, float, Command | None, float]]:
     """Feed `x` (float, ±1) to a fresh segmenter in 30 ms chunks: (emitted at s, start s, end s, command,
     confidence) per segment."""
-    pcm = to_pcm(x)
+    pcm = rounded_pcm(x)
     seg = Segmenter(config, recognise=engine.recognise)  # the early look, as in the service
     out = []
     for k in range(0, len(pcm), CHUNK):
