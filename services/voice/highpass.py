@@ -9,7 +9,7 @@ peak). A second-order Butterworth high-pass (scipy's `butter` and `sosfilt`, its
 at `hz` removes it; speech has almost nothing under 60 Hz. The segmenter switches it on only once the stream shows an
 offset (`SegmenterConfig.highpass_from_dbfs`): always on, it cost a few far commands on a microphone without one. It
 is off by default (`HRI_VOICE_HIGHPASS=30` turns it on; `python -m services.voice level` says when a microphone
-needs it): none of rounds voice41, 41b and 41c passed its rule (voice README).
+needs it): none of rounds voice41 to 41d passed its rule (voice README).
 """
 
 from __future__ import annotations

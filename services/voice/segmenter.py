@@ -56,7 +56,7 @@ class SegmenterConfig:
     highpass_hz: float | None = None
     """The stream goes through a high-pass at this frequency (`highpass.HighPass`) before the VAD, the levels the
     segmenter keeps and the utterances' audio, once it carries a DC offset (`highpass_from_dbfs`); None: never
-    (`HRI_VOICE_HIGHPASS`; off by default: rounds voice41, 41b and 41c did not pass their rules). A microphone's offset
+    (`HRI_VOICE_HIGHPASS`; off by default: rounds voice41 to 41d did not pass their rules). A microphone's offset
     of -30 dBFS otherwise hides quiet speech from the VAD (voice README, "A microphone's DC offset": held-out speech at
     -38 dBFS, 0.16-0.25 of the commands heard with the offset, 0.77-0.83 with the high-pass at 30 Hz)."""
     highpass_from_dbfs: float | None = -50.0

@@ -19,7 +19,7 @@ from tests.voice.test_level import at_peak
 DC = 0.03
 """A microphone's offset, 0.03 of full scale (-30 dBFS): louder than speech peaking at -38 dBFS."""
 ON = SegmenterConfig(highpass_hz=30.0)
-"""`HRI_VOICE_HIGHPASS=30` (off by default: rounds voice41, 41b and 41c did not pass their rules)."""
+"""`HRI_VOICE_HIGHPASS=30` (off by default: rounds voice41 to 41d did not pass their rules)."""
 
 
 def with_offset(pcm: bytes, offset: float = DC) -> bytes:
