@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, rounded_pcm
 
 CHUNK_S = 0.03
 ALTERNATIVES = "mic, mic:<device>, a WAV file, a folder of WAV files, watch:<dir>, stdin"
@@ -87,7 +87,7 @@ class ToServiceRate:
             x = np.rint(x).astype(np.int16)
         if self._resampler is not None:
             y = self._resampler.resample_chunk(x.astype(np.float32) / np.float32(32768.0))
-            x = np.clip(np.rint(y * 32768.0), -32768, 32767).astype(np.int16)
+            x = np.frombuffer(rounded_pcm(y), "<i2")
         self._out += np.asarray(x, "<i2").tobytes()
         cut = len(self._out) - len(self._out) % self._step
         out = [self._out[i : i + self._step] for i in range(0, cut, self._step)]
