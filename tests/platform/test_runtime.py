@@ -160,7 +160,8 @@ def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_brief
     """Motion goals block rather than drop. A client that stops reading everything (an `hri spy` whose terminal
     is paused; here a process of its own) has its link filled by other traffic (large messages that may drop);
     the router then waits for room before it forwards a goal to anyone, with Zenoh's default for up to 5 s (about
-    5.0 s here), and only then closes that link. Ours waits 0.25 s."""
+    5.0 s here), and only then closes that link. Ours waits 0.25 s; asserted: no goal later than 3 s, room for a
+    loaded machine's own delays and still well short of the default's 5 s."""
     stuck = subprocess.Popen([sys.executable, "-c", STUCK_SUBSCRIBER, router_endpoint, keys.all], cwd=ROOT,
                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     motion, publisher = (zenoh.open(client_config([router_endpoint])) for _ in range(2))
@@ -181,13 +182,15 @@ def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_brief
                 goals.put(f"{time.monotonic():.6f}")
                 sent += 1
             time.sleep(0.002)
-        wait_for(lambda: len(late) == sent, timeout=10)
+        # Generous: on a loaded 2-core machine (the whole suite on two workers) delivery itself can lag; the waiting
+        # returns as soon as every goal is in, and the delay asserted below is what tells 0.25 s from Zenoh's 5 s.
+        wait_for(lambda: len(late) == sent, timeout=30)
     finally:
         stuck.kill()
         stuck.wait()
         motion.close()
         publisher.close()
-    assert max(late) < 1.5, f"a goal waited {max(late):.2f} s for a client that did not read"
+    assert max(late) < 3.0, f"a goal waited {max(late):.2f} s for a client that did not read ({sent} goals)"
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
