@@ -128,6 +128,8 @@ def main() -> int:
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--dc", type=float, default=0.0, help="the microphone's DC offset, a fraction of full scale added "
                                                           "to what it hands over (0.03: -30 dBFS; voice README)")
+    ap.add_argument("--hiss-seed", type=int, help="seed of the room's hiss (default: --seed); another seed is a twin "
+                    "run, the same words in another draw of the same hiss, which shows how much a row moves by chance")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -135,6 +137,7 @@ def main() -> int:
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
     config = SegmenterConfig(**lift_settings(args))
+    hiss_seed = args.seed if args.hiss_seed is None else args.hiss_seed
     rows: list[dict[str, object]] = []
     for peak in levels(args.peaks, args.overdrive):
         for path in args.paths.split(","):
@@ -143,12 +146,12 @@ def main() -> int:
                     x = np.clip(in_room(at_level(speech, peak), args.floor, rng), -1.0, 1.0) * 10 ** (args.gain / 20)
                     return through_mic(x, args.mic_rate) + args.dc
 
-                row = run_streams(engine, clips, build, config, policy, args.seed)
+                row = run_streams(engine, clips, build, config, policy, hiss_seed)
             elif path == "file":
-                row = run_files(engine, clips, peak, args.floor, args.gain, policy, args.seed, args.mic_rate, args.dc)
+                row = run_files(engine, clips, peak, args.floor, args.gain, policy, hiss_seed, args.mic_rate, args.dc)
             else:
                 ap.error(f"--paths: unknown path {path!r} (stream, file)")
-            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, **lift_settings(args),
+            rows.append({"path": path, "peak_dbfs": peak, "gain_db": args.gain, "hiss_seed": hiss_seed, **lift_settings(args),
                          "mic_rate": args.mic_rate, "dc": args.dc, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
@@ -159,7 +162,7 @@ def main() -> int:
               f"{r['false_walks']:11d} {r.get('no_segment_over_word', '-')!s:>6}")
     print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB, VAD lift {args.vad_lift or 'off'}, DC offset "
           f"{args.dc:g}, high-pass {args.highpass or 'off'}; {rows[0]['n']['commands'] if rows else 0} commands and "
-          f"{rows[0]['n']['oov'] if rows else 0} other words per row; held-out seed {args.seed})")
+          f"{rows[0]['n']['oov'] if rows else 0} other words per row; held-out seed {args.seed}, hiss seed {hiss_seed})")
     if args.json:
         args.json.write_text(json.dumps({"floor_dbfs": args.floor, "gain_db": args.gain, "seed": args.seed, "rows": rows}, indent=1))
     return 0
