@@ -8,8 +8,8 @@ because the offset is louder than the speech in every level the segmenter keeps 
 peak). A second-order Butterworth high-pass (scipy's `butter` and `sosfilt`, its state carried from chunk to chunk)
 at `hz` removes it; speech has almost nothing under 60 Hz. The segmenter switches it on only once the stream shows an
 offset (`SegmenterConfig.highpass_from_dbfs`): always on, it cost a few far commands on a microphone without one. It
-is off by default (`HRI_VOICE_HIGHPASS=30` turns it on; `python -m services.voice level` says when a microphone
-needs it): none of rounds voice41 to 41d passed its rule (voice README).
+is on by default since round voice41e, at 30 Hz (`HRI_VOICE_HIGHPASS=off` turns it off; `python -m services.voice
+level` says when a microphone needs it); rounds voice41 to 41d did not pass their rules (voice README).
 """
 
 from __future__ import annotations

@@ -203,7 +203,7 @@ def offset_advice(detail: Mapping[str, object], highpass: bool) -> str | None:
     if highpass or not isinstance(offset, float) or offset < OFFSET_DBFS:
         return None
     return (f"the microphone hands its samples over with a DC offset ({offset:.0f} dBFS), which the VAD takes for "
-            f"noise: set HRI_VOICE_HIGHPASS=30 to take it out")
+            f"noise: set HRI_VOICE_HIGHPASS=30 (the default) to take it out")
 
 
 def verdict(meter: Meter, levels: list[Level], gain_db: float = 0.0, highpass: bool = False) -> str:

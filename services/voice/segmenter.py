@@ -20,7 +20,7 @@ the first heard nothing: no utterance of the first overlaps it, and the first is
 `vad_lift_hold_s` after. So a far voice, too quiet for the first, is found (0.5 s later than a near one), and where
 the voice is loud enough for the first, nothing changes. The utterance's audio is as it came (or high-passed, below).
 
-The high-pass (`highpass_hz`; off by default, 30 Hz for a microphone with a DC offset): once the stream's mean outside
+The high-pass (`highpass_hz`, 30 Hz by default since round voice41e): once the stream's mean outside
 utterances shows an offset (`highpass_from_dbfs`), the segmenter hears the rest of it through a high-pass that takes
 the offset out, which it would otherwise take for the room's noise (`highpass.py`); the levels it keeps, both VADs and
 the utterances' audio are after it. A stream without an offset is heard as it came. Files are trimmed without it
@@ -53,10 +53,11 @@ class SegmenterConfig:
     """`silero` (`vad.SileroEndpointer`) or `webrtc` (pocketsphinx's `Endpointer`). In a stream where noise
     never stops (a walking robot's servos, steady noise 10 dB under the voice) WebRTC's VAD stays in "speech"
     until the 6 s cut and no command is heard (`bench/voice_walking.py`)."""
-    highpass_hz: float | None = None
+    highpass_hz: float | None = 30.0
     """The stream goes through a high-pass at this frequency (`highpass.HighPass`) before the VAD, the levels the
     segmenter keeps and the utterances' audio, once it carries a DC offset (`highpass_from_dbfs`); None: never
-    (`HRI_VOICE_HIGHPASS`; off by default: rounds voice41 to 41d did not pass their rules). A microphone's offset
+    (`HRI_VOICE_HIGHPASS`; on since round voice41e, which passed its rule where rounds voice41 to 41d had not). A
+    microphone's offset
     of -30 dBFS otherwise hides quiet speech from the VAD (voice README, "A microphone's DC offset": held-out speech at
     -38 dBFS, 0.16-0.25 of the commands heard with the offset, 0.77-0.83 with the high-pass at 30 Hz)."""
     highpass_from_dbfs: float | None = -50.0

@@ -82,7 +82,7 @@ class VoiceSettings:
     (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default (-20)."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
-    offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (off)."""
+    offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
     gain: str | None = None
     """`HRI_VOICE_GAIN`: dB of gain on the source's audio before the VAD (`level.gain_from`); None: 0."""
     mic_rate: str | None = None

@@ -19,7 +19,9 @@ from tests.voice.test_level import at_peak
 DC = 0.03
 """A microphone's offset, 0.03 of full scale (-30 dBFS): louder than speech peaking at -38 dBFS."""
 ON = SegmenterConfig(highpass_hz=30.0)
-"""`HRI_VOICE_HIGHPASS=30` (off by default: rounds voice41 to 41d did not pass their rules)."""
+"""`HRI_VOICE_HIGHPASS=30`, the default since round voice41e."""
+OFF = SegmenterConfig(highpass_hz=None)
+"""`HRI_VOICE_HIGHPASS=off`."""
 
 
 def with_offset(pcm: bytes, offset: float = DC) -> bytes:
@@ -66,7 +68,7 @@ def test_highpass_setting() -> None:
     from services.voice.engine import EngineError
     from services.voice.service import VoiceSettings
 
-    assert VoiceSettings().segmenter().highpass_hz is SegmenterConfig.highpass_hz is None
+    assert VoiceSettings().segmenter().highpass_hz == SegmenterConfig.highpass_hz == 30.0
     assert VoiceSettings(highpass="off").segmenter().highpass_hz is None
     assert VoiceSettings(highpass="30").segmenter().highpass_hz == 30.0
     assert VoiceSettings(highpass="60").segmenter().highpass_hz == 60.0
@@ -88,7 +90,7 @@ def test_speech_over_an_offset_is_cut_and_measured_as_without_it() -> None:
         # levels and the VADs start anew at the switch
         assert a.snr_db is not None and b.snr_db is not None and abs(a.snr_db - b.snr_db) < 1.0 and a.snr_db > 10
         assert abs(float(from_pcm(b.pcm).mean())) < 1e-3  # the utterance comes without the offset
-    raw = [s for _, s in emitted(with_offset(pcm), SegmenterConfig())]
+    raw = [s for _, s in emitted(with_offset(pcm), OFF)]
     assert raw and all(s.snr_db is not None and s.snr_db < 3 for s in raw)
 
 
@@ -97,7 +99,7 @@ def test_speech_over_an_offset_is_cut_and_measured_as_without_it() -> None:
 def test_a_stream_without_an_offset_is_heard_exactly_as_without_the_high_pass(peak: float) -> None:
     pcm = at_peak(word_stream("stop", "yes", "no"), peak)
     on = [(t, s.pcm, s.start_s, s.end_s, s.snr_db) for t, s in emitted(pcm, ON)]
-    off = [(t, s.pcm, s.start_s, s.end_s, s.snr_db) for t, s in emitted(pcm, SegmenterConfig())]
+    off = [(t, s.pcm, s.start_s, s.end_s, s.snr_db) for t, s in emitted(pcm, OFF)]
     assert on and on == off
 
 

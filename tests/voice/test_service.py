@@ -161,14 +161,15 @@ def test_stdin_stream_then_sigterm_with_pipe_open(bus: ServiceContext, router_en
 
 def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceContext, router_endpoint: str,
                                                                   robot_id: str, tmp_path: Path) -> None:
-    """With the high-pass off (the default), a stream with an offset of 0.03 of full scale gets a warning saying how
+    """With the high-pass off (`HRI_VOICE_HIGHPASS=off`), a stream with an offset of 0.03 of full scale gets a warning saying how
     to take it out (once a minute at most), and health shows the offset: nothing in a word would say so."""
     from services.voice.audio import from_pcm, to_pcm
 
     speech = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
     pcm = to_pcm(from_pcm(speech) + 0.03)
     log_path = tmp_path / "voice.log"
-    with stdin_service(service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"), log_path) as proc:
+    with stdin_service(service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_HIGHPASS="off"),
+                        log_path) as proc:
         assert proc.stdin is not None
         proc.stdin.write(pcm)
         proc.stdin.flush()
