@@ -57,9 +57,9 @@ class SegmenterConfig:
     """The stream goes through a high-pass at this frequency (`highpass.HighPass`) before the VAD, the levels the
     segmenter keeps and the utterances' audio, once it carries a DC offset (`highpass_from_dbfs`); None: never
     (`HRI_VOICE_HIGHPASS`; on since round voice41e, which passed its rule where rounds voice41 to 41d had not). A
-    microphone's offset
-    of -30 dBFS otherwise hides quiet speech from the VAD (voice README, "A microphone's DC offset": held-out speech at
-    -38 dBFS, 0.16-0.25 of the commands heard with the offset, 0.77-0.83 with the high-pass at 30 Hz)."""
+    microphone's offset of -30 dBFS otherwise hides quiet speech from the VAD (voice README, "A microphone's DC
+    offset": held-out speech at -38 dBFS, 0.16-0.25 of the commands heard with the offset, 0.77-0.83 with the
+    high-pass at 30 Hz; round voice41e's seed 9959: 0.22 and 0.79-0.81)."""
     highpass_from_dbfs: float | None = -50.0
     """With `highpass_hz`: the high-pass is switched on, for the rest of the stream, once the mean of the stream's last
     `noise_floor_s` outside utterances (at least half of it heard) is this far from zero (dBFS: -50 is about 100 of
