@@ -104,7 +104,7 @@ HighpassOption = Annotated[
     str | None,
     typer.Option("--highpass", envvar="HRI_VOICE_HIGHPASS",
                  help="live stream: a high-pass (Hz, 1 to 300) switched on once the stream shows a DC offset, which "
-                      "it takes out (30 for a microphone `level` finds an offset on); or 'off' [default: 30; round voice41e]"),
+                      "it takes out; a stream without one is heard as it came; or 'off' [default: 30; round voice41e]"),
 ]
 GainOption = Annotated[
     str | None,
