@@ -132,8 +132,11 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
                 config: SegmenterConfig, policy: Policy, seed: int) -> dict[str, object]:
     """Each clip's speech (float, ±1) made into a stream by `build` (the speech `LEAD_S` in), clipped to full scale
     as a sound card does, and fed to the segmenter and the engine (`stream`): commands heard, other words taken,
-    false walks, segments, end of speech -> segment."""
+    false walks, segments, end of speech -> segment; and each word's outcome in the clips' order (`commands_heard_each`,
+    `others_taken_each`: "1" heard / taken, "0" not), so that two runs on the same clips can be compared word for word
+    (`paired`)."""
     rng = np.random.default_rng(seed)
+    each: dict[str, list[str]] = {"commands_heard_each": [], "others_taken_each": []}
     heard = Counter()
     total = Counter()
     oov_taken = 0
@@ -159,6 +162,7 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
             total[word] += 1
             ok = cmd is not None and cmd.value == word and policy.takes(cmd, conf) is not None
             heard[word] += ok
+            each["commands_heard_each"].append("01"[ok])
             if ok and emit is not None:
                 latency.append(emit - (word_start + speech_end_s(it.pcm)))
             if not ok:
@@ -167,6 +171,7 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
             oov += 1
             taken = policy.takes(cmd, conf)
             oov_taken += taken is not None
+            each["others_taken_each"].append("01"[taken is not None])
             if taken == WALK:  # the reasoner walks without asking
                 walked_on[it.text] += 1
     commands = sum(total.values())
@@ -186,7 +191,17 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
         "end_of_speech_to_segment_ms_p50_p90": [round(float(np.percentile(lat, q)), 1) for q in (50, 90)],
         "top_errors": dict(errors.most_common(6)),
         "n": {"commands": commands, "oov": oov},
+        **{key: "".join(marks) for key, marks in each.items()},
     }
+
+
+def paired(before: str, after: str) -> tuple[int, int]:
+    """Two runs' `commands_heard_each` (or `others_taken_each`) on the same clips: the words the first run counted
+    and the second did not (lost), and the reverse (gained)."""
+    if len(before) != len(after):
+        raise ValueError(f"not the same clips: {len(before)} and {len(after)} words")
+    lost = sum(a == "1" and b == "0" for a, b in zip(before, after, strict=True))
+    return lost, sum(a == "0" and b == "1" for a, b in zip(before, after, strict=True))
 
 
 def speech_power(clips: list[Item]) -> float:

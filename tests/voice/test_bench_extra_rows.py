@@ -1,5 +1,6 @@
 """bench/voice_bench.py's rows of `corpus.HELDOUT_EXTRA`: adding the neural voices left every earlier voice's clips as
-they were (so their rows compare with earlier runs), and a neural voice's words come at several speeds."""
+they were (so their rows compare with earlier runs), and a neural voice's words come at several speeds; and the stream
+benches' rows compared word for word (`voice_walking.paired`)."""
 
 from __future__ import annotations
 
@@ -22,3 +23,12 @@ def test_the_neural_voices_come_last_and_leave_the_earlier_voices_clips_unchange
     per_voice = len(neural) // len(corpus.HELDOUT_NEURAL)
     assert per_voice == len(before) // len(earlier) * len(voice_bench.NEURAL_CONDITIONS) // len(voice_bench.EXTRA_CONDITIONS)
     assert {r.speed for r, _ in neural} == {0.85, 1.0, 1.15}
+
+
+def test_paired_counts_the_words_each_run_counted_and_the_other_did_not() -> None:
+    from bench.voice_walking import paired
+
+    assert paired("1100", "1010") == (1, 1)
+    assert paired("111", "111") == (0, 0)
+    with pytest.raises(ValueError, match="not the same clips"):
+        paired("10", "100")

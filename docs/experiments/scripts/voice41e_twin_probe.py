@@ -24,16 +24,35 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from voice37_tune import tune_items  # noqa: E402
 
-from bench.voice_bench import Policy  # noqa: E402
+from bench.voice_bench import Item, Policy  # noqa: E402
 from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
-from bench.voice_walking import LEAD_S, OTHER, WORDS, stream  # noqa: E402
-from services.voice.audio import SAMPLE_RATE  # noqa: E402
-from services.voice.engine import make_engine  # noqa: E402
+from bench.voice_walking import paired, run_streams  # noqa: E402
+from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 CASES = {"clean": (0.0, None, 37), "clean_twin": (0.0, None, 1037), "latched": (0.03, 30.0, 37),
          "latched_twin": (0.03, 30.0, 1037)}  # name: (offset, high-pass Hz, hiss seed)
 PAIRS = [("clean", "clean_twin"), ("clean", "latched"), ("clean_twin", "latched_twin"), ("latched", "latched_twin")]
+
+
+def hear(items: list[Item], engine: Engine, policy: Policy, peak: float, dc: float, config: SegmenterConfig,
+         seed: int) -> tuple[list[bool], int]:
+    """Each item in its own stream at `peak` dBFS in -70 dBFS hiss (drawn from `seed`), through a 48 kHz
+    microphone's path, plus `dc` (of full scale) (`voice_walking.run_streams`): for each command whether it was heard,
+    and how many other words were taken for commands."""
+
+    def build(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return through_mic(in_room(at_level(speech, peak), -70.0, rng), 48000) + dc
+
+    row = run_streams(engine, items, build, config, policy, seed)
+    return [c == "1" for c in str(row["commands_heard_each"])], str(row["others_taken_each"]).count("1")
+
+
+def compare(heard: dict[str, list[bool]], pairs: list[tuple[str, str]]) -> None:
+    """For each pair of cases, the commands the first heard and the second did not (lost), and the reverse."""
+    for a, b in pairs:
+        lost, gained = paired("".join("01"[x] for x in heard[a]), "".join("01"[x] for x in heard[b]))
+        print(f"{a} -> {b}: commands lost {lost}, gained {gained}", flush=True)
 
 
 def main() -> int:
@@ -45,25 +64,9 @@ def main() -> int:
     engine, policy = make_engine("spotter"), Policy.from_knowledge()
     heard: dict[str, list[bool]] = {}
     for name, (dc, hz, seed) in CASES.items():
-        rng = np.random.default_rng(seed)
-        config = SegmenterConfig(highpass_hz=hz)
-        heard[name] = []
-        taken = 0
-        for it in items:
-            speech = np.frombuffer(it.pcm, "<i2") / 32768.0
-            x = np.clip(through_mic(in_room(at_level(speech, args.peak), -70.0, rng), 48000) + dc, -1.0, 1.0)
-            start, end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
-            over = [s for s in stream(engine, x, config) if s[1] < end and s[2] > start]
-            cmd, conf = next(((c, f) for _, _, _, c, f in over if c is not None), (None, 0.0))
-            if it.label < OTHER:
-                heard[name].append(cmd is not None and cmd.value == WORDS[it.label] and policy.takes(cmd, conf) is not None)
-            else:
-                taken += policy.takes(cmd, conf) is not None
+        heard[name], taken = hear(items, engine, policy, args.peak, dc, SegmenterConfig(highpass_hz=hz), seed)
         print(f"{name:13} commands heard {sum(heard[name])}/{len(heard[name])}, other words taken {taken}", flush=True)
-    for a, b in PAIRS:
-        lost = sum(x and not y for x, y in zip(heard[a], heard[b], strict=True))
-        gained = sum(y and not x for x, y in zip(heard[a], heard[b], strict=True))
-        print(f"{a} -> {b}: commands lost {lost}, gained {gained}")
+    compare(heard, PAIRS)
     return 0
 
 
