@@ -454,13 +454,16 @@ def add_lift_options(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--highpass", type=early_look_arg, default=SegmenterConfig.highpass_hz,
                     help="the stream's high-pass (Hz), switched on by a DC offset, or off (SegmenterConfig.highpass_hz; "
                          "default: the service's)")
+    ap.add_argument("--highpass-dc-share", type=float, default=SegmenterConfig.highpass_dc_share,
+                    help="with --highpass: the share of the power outside utterances a DC offset must carry to switch "
+                         "it on (SegmenterConfig.highpass_dc_share; 0: its mean alone; default: the service's)")
 
 
 def lift_settings(args: argparse.Namespace) -> dict[str, Any]:
     """`add_lift_options`' values as `SegmenterConfig` keywords."""
     return {"vad_lift_dbfs": args.vad_lift, "vad_lift_floor_dbfs": args.vad_lift_floor,
             "vad_lift_second": args.vad_lift_second, "vad_lift_hold_s": args.vad_lift_hold,
-            "highpass_hz": args.highpass}
+            "highpass_hz": args.highpass, "highpass_dc_share": args.highpass_dc_share}
 
 
 def enrol_figure(items: list[Item], head_path: str | None, voice: str = "flite:slt") -> dict[str, object]:

@@ -84,9 +84,10 @@ def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray
     return unit_rms(np.resize(recording[start:], n))
 
 
-def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple[float, float, float, Command | None, float]]:
+def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig,
+           switched: Counter[str] | None = None) -> list[tuple[float, float, float, Command | None, float]]:
     """Feed `x` (float, ±1) to a fresh segmenter in 30 ms chunks: (emitted at s, start s, end s, command,
-    confidence) per segment."""
+    confidence) per segment. `switched`: counts the stream under "highpass_on" if the high-pass was switched on."""
     pcm = rounded_pcm(x)
     seg = Segmenter(config, recognise=engine.recognise)  # the early look, as in the service
     out = []
@@ -97,6 +98,8 @@ def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig) -> list[tuple
     for s in seg.flush():
         rec = engine.recognise(s.pcm)
         out.append((len(pcm) / 2 / SAMPLE_RATE, s.start_s, s.end_s, rec.command, rec.confidence))
+    if switched is not None:
+        switched["highpass_on"] += seg.highpass_on
     return out
 
 
@@ -105,12 +108,13 @@ Noise = Callable[[float, np.random.Generator], np.ndarray]
 
 
 def run_ratio(engine: Engine, clips: list[Item], snr: float | None, config: SegmenterConfig, policy: Policy, seed: int,
-              noise: Noise, mic_rate: int | None = None) -> dict[str, object]:
+              noise: Noise, mic_rate: int | None = None, dc: float = 0.0) -> dict[str, object]:
     """Each clip `LEAD_S` into `noise` at `snr` dB (None: a faint hiss), then `TAIL_S` more: `run_streams`' row.
-    `mic_rate`: each stream as a microphone at that rate would hand it to the service (`through_mic`)."""
+    `mic_rate`: each stream as a microphone at that rate would hand it to the service (`through_mic`), with its DC
+    offset `dc` (a fraction of full scale)."""
 
     def build(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        return through_mic(heard(speech, rng), mic_rate)
+        return through_mic(heard(speech, rng), mic_rate) + dc
 
     def heard(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         at = int(LEAD_S * SAMPLE_RATE)
@@ -146,11 +150,12 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
     missed_segment = 0
     errors: Counter[str] = Counter()
     walked_on: Counter[str] = Counter()
+    switched: Counter[str] = Counter()
     for it in clips:
         speech = np.frombuffer(it.pcm, "<i2") / 32768.0
         x = np.clip(build(speech, rng), -1.0, 1.0)
         word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
-        segs = stream(engine, x, config)
+        segs = stream(engine, x, config, switched)
         lengths += [end - start for _, start, end, _, _ in segs]
         over = [s for s in segs if s[1] < word_end and s[2] > word_start]
         if not over:
@@ -179,6 +184,8 @@ def run_streams(engine: Engine, clips: list[Item], build: Callable[[np.ndarray, 
     return {
         "vad": config.vad,
         "highpass_hz": config.highpass_hz,
+        "highpass_dc_share": config.highpass_dc_share,
+        "highpass_switched_on": switched["highpass_on"],  # streams whose DC offset switched the high-pass on
         "command_accuracy": round(sum(heard.values()) / max(1, commands), 3),
         "stop": f"{heard['stop']}/{total['stop']}",
         "by_command": {w: round(heard[w] / max(1, total[w]), 2) for w in WORDS},
@@ -210,10 +217,11 @@ def speech_power(clips: list[Item]) -> float:
 
 
 def noise_only(engine: Engine, seconds: float, level_rms: float, config: SegmenterConfig, policy: Policy, seed: int,
-               noise: Noise, mic_rate: int | None = None) -> dict[str, object]:
-    """The robot's noise alone at `level_rms`, no one speaking: what the robot hears in it."""
+               noise: Noise, mic_rate: int | None = None, dc: float = 0.0) -> dict[str, object]:
+    """The robot's noise alone at `level_rms`, no one speaking: what the robot hears in it (through a microphone
+    with the DC offset `dc`)."""
     rng = np.random.default_rng(seed + 1)
-    x = through_mic(noise(seconds, rng) * level_rms, mic_rate)
+    x = through_mic(noise(seconds, rng) * level_rms, mic_rate) + dc
     segs = stream(engine, x, config)
     heard = Counter(cmd.value for _, _, _, cmd, conf in segs if cmd is not None and policy.takes(cmd, conf))
     return {"vad": config.vad, "seconds": seconds, "level_rms": round(level_rms, 4), "segments": len(segs), "commands_heard": dict(heard),
@@ -245,6 +253,8 @@ def main() -> int:
     add_lift_options(ap)
     ap.add_argument("--mic-rate", type=int, help="every stream through a microphone at this rate, resampled by the "
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
+    ap.add_argument("--dc", type=float, default=0.0, help="the microphone's DC offset, a fraction of full scale added "
+                                                          "to every stream (0.03: -30 dBFS; voice README)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -265,10 +275,11 @@ def main() -> int:
                                  early_quiet_s=args.early_look,
                                  clear_quiet_s=args.clear_window, **lift_settings(args))
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
-            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate)
+            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate, args.dc)
             rows.append(row)
             print(json.dumps(row), flush=True)
-        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise, args.mic_rate))
+        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise, args.mic_rate,
+                                args.dc))
         print(json.dumps({"noise_only": alone[-1]}), flush=True)
     print()
     print(f"{'VAD':7} {'SNR dB':>6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'no seg':>6} {'seg/clip':>8} {'seg s p90':>9} {'EoS->seg p50':>12}")

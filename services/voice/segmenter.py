@@ -66,6 +66,10 @@ class SegmenterConfig:
     16-bit's 32,768); until then the stream is heard as it came. None: on from the first sample. Round voice41 (always
     on) lost 4 of 119 held-out commands said at -44 dBFS with no offset; a stream with no offset is heard exactly as
     without the option."""
+    highpass_dc_share: float = 0.0
+    """With `highpass_from_dbfs`: the offset must also carry at least this share of the power of those samples (the
+    squared mean over the mean square). An offset is steady; the edges of loud words heard outside utterances can leave
+    a mean as far from zero with far more power around it."""
     threshold: float = 0.4
     """Silero: speech probability that starts an utterance. 0.5 is Silero's documented default; 0.4 with the end
     threshold kept at 0.35 (round 18) found 17 more of 68 held-out words in 10 dB of walking noise and heard 3 more
@@ -189,7 +193,8 @@ class Segmenter:
         lifted = self.config.vad_lift_dbfs is not None and self.config.vad == "silero"
         self._highpass = HighPass(self.config.highpass_hz) if self.config.highpass_hz is not None else None
         self._offset_on = self.config.highpass_from_dbfs is None  # the high-pass is switched on (a DC offset seen)
-        self._offset: deque[tuple[float, int]] = deque()  # outside utterances: (sum of samples, samples) per chunk
+        # outside utterances, per chunk: (sum of samples, sum of their squares, samples)
+        self._offset: deque[tuple[float, float, int]] = deque()
         if lifted and self.config.vad_lift_second:  # fed the audio this one hears, already high-passed
             self._second = Segmenter(replace(self.config, vad_lift_second=False, early_quiet_s=None, highpass_hz=None))
         elif lifted:
@@ -219,6 +224,11 @@ class Segmenter:
     def in_speech(self) -> bool:
         return bool(self._speech)
 
+    @property
+    def highpass_on(self) -> bool:
+        """Whether the stream is heard through the high-pass (`highpass_hz`, switched on by `highpass_from_dbfs`)."""
+        return self._highpass is not None and self._offset_on
+
     def feed(self, pcm: bytes) -> list[Segment]:
         if self._highpass is not None and (self._offset_on or self._offset_seen(pcm)):
             pcm = self._highpass(pcm)
@@ -232,13 +242,14 @@ class Segmenter:
         x = np.frombuffer(pcm[: len(pcm) // SAMPLE_WIDTH * SAMPLE_WIDTH], "<i2")
         if any(seg.in_speech or seg._ep.in_speech for seg in (self, self._second) if seg is not None) or not x.size:
             return False
-        self._offset.append((float(x.sum(dtype=np.int64)), int(x.size)))
+        x64 = x.astype(np.int64)
+        self._offset.append((float(x64.sum()), float((x64 * x64).sum()), int(x.size)))
         window = self.config.noise_floor_s * SAMPLE_RATE
-        while sum(n for _, n in self._offset) - self._offset[0][1] >= window:
+        while sum(n for *_, n in self._offset) - self._offset[0][2] >= window:
             self._offset.popleft()
-        total = sum(n for _, n in self._offset)
-        mean = abs(sum(v for v, _ in self._offset)) / max(1, total) / 32768.0
-        self._offset_on = total >= window / 2 and mean >= 10 ** (self.config.highpass_from_dbfs / 20)
+        total, mean, share = self.offset_seen_so_far()
+        self._offset_on = (total >= window / 2 and mean >= 10 ** (self.config.highpass_from_dbfs / 20)
+                           and share >= self.config.highpass_dc_share)
         if self._offset_on:  # what was heard so far was the offset's: levels and VADs start again on the high-pass
             for seg in (self, self._second):
                 if seg is not None:
@@ -248,6 +259,16 @@ class Segmenter:
                     if isinstance(seg._ep, SileroEndpointer):
                         seg._ep.forget()
         return self._offset_on
+
+    def offset_seen_so_far(self) -> tuple[int, float, float]:
+        """Over the samples `_offset_seen` keeps (the last `noise_floor_s` outside utterances): how many, the size of
+        their mean (full scale 1.0), and the share of their power that mean carries (0 to 1)."""
+        total = sum(n for *_, n in self._offset)
+        if not total:
+            return 0, 0.0, 0.0
+        mean = sum(v for v, _, _ in self._offset) / total
+        square = sum(q for _, q, _ in self._offset) / total
+        return total, abs(mean) / 32768.0, mean * mean / square if square > 0 else 0.0
 
     def _with_second(self, mine: list[Segment], second: list[Segment], final: bool = False) -> list[Segment]:
         """This VAD's utterances, and those of the second (lifted) VAD that no utterance of this one overlaps and

@@ -110,13 +110,32 @@ def test_the_high_pass_is_switched_on_by_an_offset_and_not_by_a_walking_robot() 
         seg, pcm = Segmenter(ON), to_pcm(x)
         for k in range(0, len(pcm), 960):
             seg.feed(pcm[k : k + 960])
-        return seg._offset_on
+        return seg.highpass_on
 
     hiss = np.random.default_rng(5).normal(0.0, 3e-4, 2 * SAMPLE_RATE)
     assert not switched(hiss)
     assert switched(hiss + 0.005)  # -46 dBFS
     assert not switched(hiss + 0.002)  # -54 dBFS: under `highpass_from_dbfs`
     assert not switched(0.1 * ego_noise(6.0, np.random.default_rng(1), EgoNoiseModel()))  # -20 dBFS RMS of servos
+
+
+def test_a_knock_is_not_an_offset() -> None:
+    """Round voice43: a short loud push one way (a knock on the robot, a plosive's pop, the edge of a loud word heard
+    outside an utterance) leaves the last second's mean as far from zero as an offset would, with far more power
+    around it; the switch asks that the mean carry `highpass_dc_share` of the power, as a steady offset does."""
+    rng = np.random.default_rng(5)
+    n = SAMPLE_RATE // 20
+    knock = 0.2 * np.sin(np.pi * np.arange(n) / n)  # 50 ms
+    x = np.concatenate([rng.normal(0.0, 3e-4, SAMPLE_RATE), knock, rng.normal(0.0, 3e-4, SAMPLE_RATE)])
+
+    def switched(config: SegmenterConfig) -> bool:
+        seg, pcm = Segmenter(config), to_pcm(x)
+        for k in range(0, len(pcm), 960):
+            seg.feed(pcm[k : k + 960])
+        return seg.highpass_on
+
+    assert switched(SegmenterConfig(highpass_dc_share=0.0))  # the mean alone: the rule before round voice43
+    assert not switched(ON)
 
 
 def test_both_vads_start_again_when_the_high_pass_switches_on() -> None:
@@ -126,7 +145,7 @@ def test_both_vads_start_again_when_the_high_pass_switches_on() -> None:
     rng = np.random.default_rng(7)
     seg, pcm = Segmenter(ON), to_pcm(rng.normal(0.0, 3e-4, SAMPLE_RATE) + DC)
     k = 0
-    while not seg._offset_on:
+    while not seg.highpass_on:
         seg.feed(pcm[k : k + 960])
         k += 960
     assert seg._second is not None and 0.4 < k / 2 / SAMPLE_RATE < 0.6

@@ -60,7 +60,7 @@ def main() -> int:
         def subtracted(self: Segmenter, pcm: bytes) -> bool:
             if not seen(self, pcm):
                 return False
-            mean = sum(v for v, _ in self._offset) / sum(n for _, n in self._offset) / 32768.0
+            mean = sum(v for v, *_ in self._offset) / sum(n for *_, n in self._offset) / 32768.0
             self._highpass = lambda chunk: to_pcm(from_pcm(chunk) - mean)  # type: ignore[assignment]
             return True
 

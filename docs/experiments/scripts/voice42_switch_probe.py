@@ -45,7 +45,7 @@ def main() -> int:
             for k in range(0, len(pcm), CHUNK):
                 seg.feed(pcm[k : k + CHUNK])
                 if seg._offset_on:
-                    mean = sum(v for v, _ in seg._offset) / max(1, sum(n for _, n in seg._offset))
+                    mean = sum(v for v, *_ in seg._offset) / max(1, sum(n for *_, n in seg._offset))
                     switched.append((i, round((k + CHUNK) / SAMPLE_WIDTH / SAMPLE_RATE, 2), round(mean)))
                     break
         print(f"{peak:+.0f} dBFS: switched on in {len(switched)} of {len(items)} streams; first (item, s, mean LSB): "
