@@ -7,9 +7,10 @@ scale (-30 dBFS) left the segmenter without a segment over 304 of 480 words peak
 because the offset is louder than the speech in every level the segmenter keeps (its noise floor, the VAD lift's
 peak). A second-order Butterworth high-pass (scipy's `butter` and `sosfilt`, its state carried from chunk to chunk)
 at `hz` removes it; speech has almost nothing under 60 Hz. The segmenter switches it on only once the stream shows an
-offset (`SegmenterConfig.highpass_from_dbfs`, `highpass_dc_share`): always on, it cost a few far commands on a microphone without one. It
-is on by default since round voice41e, at 30 Hz (`HRI_VOICE_HIGHPASS=off` turns it off; `python -m services.voice
-level` says when a microphone needs it); rounds voice41 to 41d did not pass their rules (voice README).
+offset (`SegmenterConfig.highpass_from_dbfs`, `highpass_dc_share`): always on, it cost a few far commands on a
+microphone without one. It is on by default since round voice41e, at 30 Hz (`HRI_VOICE_HIGHPASS=off` turns it off;
+`python -m services.voice level` says when a microphone needs it); rounds voice41 to 41d did not pass their rules
+(voice README).
 """
 
 from __future__ import annotations
