@@ -31,7 +31,7 @@ from services.voice.engine import (
     make_engine,
     one_blas_thread,
 )
-from services.voice.level import LevelError, Meter, gain_from, offset_advice
+from services.voice.level import LevelError, Meter, dbfs, gain_from, offset_advice
 from services.voice.mic import MicError, MicFormat
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
@@ -287,6 +287,12 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         ctx.log.info("microphone opened", source=settings.source, rate_hz=rate, channels=channels,
                      resampled=rate != SAMPLE_RATE or channels != 1)
 
+    def on_highpass(on: bool, offset: float) -> None:
+        ctx.update_detail(highpass_on=on)
+        if on and offset > 0:  # once per stream: the microphone has an offset, and from here it is taken out
+            ctx.log.info("high-pass switched on: the stream has a DC offset",
+                         offset_dbfs=round(dbfs(offset * 32768.0), 1), highpass_hz=settings.segmenter().highpass_hz)
+
     def on_bad_file(path: Path, exc: AudioError) -> None:
         stats.bad_audio += 1
         ctx.log.warning("bad audio skipped", file=str(path), error=str(exc))
@@ -341,7 +347,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
                                   segmenter=settings.segmenter(), recognise=early_look, gain_db=gain_db, meter=meter,
-                                  mic=mic, mic_opened=mic_opened):
+                                  mic=mic, mic_opened=mic_opened, on_highpass=on_highpass):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)

@@ -95,15 +95,28 @@ Recognise = Callable[[bytes], Recognition]
 """The engine's decoder, for the segmenter's early look."""
 
 
+HighpassState = Callable[[bool, float], None]
+"""Told whether a live stream is heard through the high-pass, and the offset that switched it on (full scale 1.0)."""
+
+
 def stream_utterances(
     chunks: Iterator[bytes], origin: str, config: SegmenterConfig | None = None, recognise: Recognise | None = None,
+    on_highpass: HighpassState | None = None,
 ) -> Iterator[Utterance]:
-    """VAD-cut a stream of PCM chunks into utterances (with `recognise`, the segmenter's early look is on)."""
+    """VAD-cut a stream of PCM chunks into utterances (with `recognise`, the segmenter's early look is on).
+    `on_highpass` is told the high-pass's state as the stream starts and again if a DC offset switches it on
+    (`SegmenterConfig.highpass_from_dbfs`)."""
     seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
+    highpass_on = seg.highpass_on
+    if on_highpass is not None:
+        on_highpass(highpass_on, 0.0)
     for chunk in chunks:
         for s in seg.feed(chunk):
             yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
                             start_s=s.start_s)
+        if on_highpass is not None and seg.highpass_on and not highpass_on:
+            highpass_on = True
+            on_highpass(True, seg.offset_seen_so_far()[1])
     for s in seg.flush():
         yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db, start_s=s.start_s)
 
@@ -252,20 +265,21 @@ def utterances(
     on_error: Callable[[Path, AudioError], None] | None = None,
     segmenter: SegmenterConfig | None = None, recognise: Recognise | None = None,
     gain_db: float = 0.0, meter: Meter | None = None, mic: MicFormat | None = None,
-    mic_opened: Callable[[int, int], None] | None = None,
+    mic_opened: Callable[[int, int], None] | None = None, on_highpass: HighpassState | None = None,
 ) -> Iterator[Utterance]:
     """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open.
     `recognise` turns on the segmenter's early look for live streams (microphone, stdin); files and spools
     are not latency-bound and are decoded whole. `gain_db`: the input gain (`level.amplify`), before the VAD;
     `meter`: fed a live stream's chunks after the gain (`level.Meter`); `mic`: the format to open a microphone at
-    (default: 16 kHz mono, or what the device offers), and `mic_opened(rate, channels)` is told what it opened at."""
+    (default: 16 kHz mono, or what the device offers), and `mic_opened(rate, channels)` is told what it opened at;
+    `on_highpass`: a live stream's high-pass state (`stream_utterances`)."""
     if spec.kind in ("mic", "stdin"):
         chunks = (microphone(spec.target, stop, mic, mic_opened) if spec.kind == "mic"
                   else stdin_chunks(stdin or sys.stdin.buffer, stop))
         chunks = amplified(chunks, gain_db)
         if meter is not None:
             chunks = meter.metered(chunks)
-        yield from stream_utterances(chunks, str(spec), segmenter, recognise)
+        yield from stream_utterances(chunks, str(spec), segmenter, recognise, on_highpass)
     elif spec.kind == "file":
         path = Path(spec.target)
         if not path.is_file():

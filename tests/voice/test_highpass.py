@@ -181,3 +181,16 @@ def test_the_level_check_says_when_a_microphone_needs_the_high_pass() -> None:
     assert "HRI_VOICE_HIGHPASS=30" in verdict(offset, [])
     assert "HRI_VOICE_HIGHPASS" not in verdict(offset, [], highpass=True)  # already taking it out
     assert "HRI_VOICE_HIGHPASS" not in verdict(clean, [])
+
+
+def test_the_stream_path_says_when_the_high_pass_switches_on() -> None:
+    """`sources.stream_utterances` tells the service the high-pass's state as a stream starts and when an offset
+    switches it on (the service's log and health, `highpass_on`), with the offset that did."""
+    from services.voice.sources import stream_utterances
+
+    hiss = to_pcm(np.random.default_rng(3).normal(0.0, 3e-4, 2 * SAMPLE_RATE))
+    for pcm, told in ((hiss, [(False, 0.0)]), (with_offset(hiss), [(False, 0.0), (True, pytest.approx(DC, rel=0.02))])):
+        states: list[tuple[bool, float]] = []
+        list(stream_utterances((pcm[k : k + 960] for k in range(0, len(pcm), 960)), "stream", ON,
+                               on_highpass=lambda on, offset, states=states: states.append((on, offset))))
+        assert states == told

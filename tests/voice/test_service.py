@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -180,5 +181,34 @@ def test_a_microphone_dc_offset_is_reported_in_the_log_and_health(bus: ServiceCo
         wait_for(lambda: "HRI_VOICE_HIGHPASS=30" in log_path.read_text(), timeout=10)
         text = log_path.read_text()
         assert text.count("with a DC offset (") == 1  # not again within the minute
+        assert health.detail["highpass_on"] is False
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+
+
+def test_the_log_and_health_say_when_the_high_pass_switches_on(bus: ServiceContext, router_endpoint: str,
+                                                               robot_id: str, tmp_path: Path) -> None:
+    """With the default high-pass, a stream with an offset of 0.03 of full scale switches it on: the log says so once,
+    with the offset, health shows `highpass_on`, no warning asks for it, and the words are heard."""
+    from services.voice.audio import from_pcm, to_pcm
+
+    speech = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
+    pcm = to_pcm(from_pcm(speech) + 0.03)
+    log_path = tmp_path / "voice.log"
+    heard: list[VoiceCommand] = []
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
+    with stdin_service(service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin"), log_path) as proc:
+        assert proc.stdin is not None
+        proc.stdin.write(pcm)
+        proc.stdin.flush()
+        wait_for(lambda: len(heard) >= 2, timeout=30)
+        assert [m.command.value if m.command else None for m in heard[:2]] == ["stop", "yes"]
+        health = wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("highpass_on") and h,
+                          timeout=10)
+        assert health.detail["highpass_hz"] == 30.0
+        text = log_path.read_text()
+        assert text.count("high-pass switched on") == 1
+        assert re.search(r"offset_dbfs=-3[01]\.\d", text)  # 0.03 of full scale: -30.5 dBFS
+        assert "HRI_VOICE_HIGHPASS=30" not in text
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) == 0
