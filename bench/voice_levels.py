@@ -155,13 +155,16 @@ def main() -> int:
                          "mic_rate": args.mic_rate, "dc": args.dc, **row})
             print(json.dumps(rows[-1]), flush=True)
     print()
-    print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6} {'HP on':>5}")
+    print(f"speech peak -> {'path':6} {'cmd acc':>7} {'stop':>7} {'OOV acc':>7} {'false walks':>11} {'no seg':>6} "
+          f"{'HP on':>5}")
     for r in rows:
         label = f"{r['peak_dbfs']:+.0f} dBFS" + (" (clipped)" if r["peak_dbfs"] > 0 else "")
         print(f"{label:14} {r['path']:6} {r['command_accuracy']:7.3f} {r['stop']:>7} {r['oov_accepted']:7.3f} "
-              f"{r['false_walks']:11d} {r.get('no_segment_over_word', '-')!s:>6} {r.get('highpass_switched_on', '-')!s:>5}")
+              f"{r['false_walks']:11d} {r.get('no_segment_over_word', '-')!s:>6} "
+              f"{r.get('highpass_switched_on', '-')!s:>5}")
     print(f"(room hiss {args.floor:.0f} dBFS RMS, gain {args.gain:+.0f} dB, VAD lift {args.vad_lift or 'off'}, DC offset "
-          f"{args.dc:g}, high-pass {args.highpass or 'off'} (HP on: streams it was switched on in); {rows[0]['n']['commands'] if rows else 0} commands and "
+          f"{args.dc:g}, high-pass {args.highpass or 'off'} (HP on: streams it was switched on in); "
+          f"{rows[0]['n']['commands'] if rows else 0} commands and "
           f"{rows[0]['n']['oov'] if rows else 0} other words per row; held-out seed {args.seed}, hiss seed {hiss_seed})")
     if args.json:
         args.json.write_text(json.dumps({"floor_dbfs": args.floor, "gain_db": args.gain, "seed": args.seed, "rows": rows}, indent=1))

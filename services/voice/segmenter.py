@@ -72,9 +72,9 @@ class SegmenterConfig:
     their mean square); 0: the mean alone (the rule before round voice43). An offset is steady and carries nearly all
     of it in a quiet room (0.996 or more on tuning streams, offsets of -46 and -30 dBFS); a step or a knock (a clip
     that starts or ends mid-sound, a knock on the robot) leaves as large a mean with far more power around it (at most
-    0.54 where the mean alone switched 109 of 1,920 tuning streams with no offset, -44 to -3 dBFS). Where the room's or the robot's
-    noise carries most of the power the offset is left in, and matters little: round voice43's walking robot with an
-    offset heard 38 of 133 held-out commands at 10 dB (39 with the high-pass switched on)."""
+    0.54 where the mean alone switched 109 of 1,920 tuning streams with no offset, -44 to -3 dBFS). Where the room's
+    or the robot's noise carries most of the power the offset is left in, and matters little: round voice43's walking
+    robot with an offset heard 38 of 133 held-out commands at 10 dB (39 under the mean alone)."""
     threshold: float = 0.4
     """Silero: speech probability that starts an utterance. 0.5 is Silero's documented default; 0.4 with the end
     threshold kept at 0.35 (round 18) found 17 more of 68 held-out words in 10 dB of walking noise and heard 3 more
