@@ -216,7 +216,7 @@ def level(
     microphone's own gain, or its distance from the person."""
     import time
 
-    from services.voice.level import Level, LevelError, Meter, gain_from, verdict
+    from services.voice.level import Level, LevelError, Meter, dbfs, gain_from, verdict
     from services.voice.sources import SourceError, SourceSpec, utterances
 
     try:
@@ -234,10 +234,16 @@ def level(
     found: list[Level] = []
     if spec.kind == "mic":
         typer.echo(f"listening to {spec} for {seconds:g} s: say a few commands from where you will stand")
+
+    def on_highpass(on: bool, offset: float) -> None:
+        if on and offset > 0:  # as the service logs it: from here on the offset is taken out
+            typer.echo(f"  (high-pass switched on: a DC offset of {dbfs(offset * 32768.0):.1f} dBFS)")
+
     try:
         for utt in utterances(spec, lambda: live and time.monotonic() > end,
                               segmenter=segmenter, gain_db=gain_db, meter=meter, mic=mic,
-                              mic_opened=lambda rate, ch: typer.echo(f"  (opened at {rate} Hz, {ch} channel(s))")):
+                              mic_opened=lambda rate, ch: typer.echo(f"  (opened at {rate} Hz, {ch} channel(s))"),
+                              on_highpass=on_highpass):
             lv = Level.of(utt.pcm, utt.snr_db)
             found.append(lv)
             over = f", {lv.snr_db:.0f} dB over the noise" if lv.snr_db is not None else ""

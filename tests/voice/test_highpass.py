@@ -183,6 +183,26 @@ def test_the_level_check_says_when_a_microphone_needs_the_high_pass() -> None:
     assert "HRI_VOICE_HIGHPASS" not in verdict(clean, [])
 
 
+def test_the_level_check_says_when_the_high_pass_switches_on() -> None:
+    """`python -m services.voice level` (the high-pass on by default) says when a stream's offset switches it on, as
+    the service's log does, and names no variable to set; with `--highpass off` it asks for one instead."""
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    pcm = with_offset(to_pcm(np.random.default_rng(6).normal(0.0, 3e-4, 2 * SAMPLE_RATE)))
+
+    def check(*args: str) -> str:
+        return subprocess.run([sys.executable, "-m", "services.voice", "level", "--source", "stdin", *args], cwd=ROOT,
+                              input=pcm, capture_output=True, check=True, timeout=60).stdout.decode()
+
+    out = check()
+    assert "(high-pass switched on: a DC offset of -30." in out and "HRI_VOICE_HIGHPASS" not in out
+    out = check("--highpass", "off")
+    assert "high-pass switched on" not in out and "HRI_VOICE_HIGHPASS=30" in out
+
+
 def test_the_stream_path_says_when_the_high_pass_switches_on() -> None:
     """`sources.stream_utterances` tells the service the high-pass's state as a stream starts and when an offset
     switches it on (the service's log and health, `highpass_on`), with the offset that did."""
