@@ -120,9 +120,9 @@ def test_the_high_pass_is_switched_on_by_an_offset_and_not_by_a_walking_robot() 
 
 
 def test_a_knock_is_not_an_offset() -> None:
-    """Round voice43: a short loud push one way (a knock on the robot, a plosive's pop, the edge of a loud word heard
-    outside an utterance) leaves the last second's mean as far from zero as an offset would, with far more power
-    around it; the switch asks that the mean carry `highpass_dc_share` of the power, as a steady offset does."""
+    """Round voice43: a short loud push one way (a knock on the robot, a microphone's pop, a recording that starts or
+    ends mid-sound) leaves the last second's mean as far from zero as an offset would, with far more power around it;
+    the switch asks that the mean carry `highpass_dc_share` of the power, as a steady offset does."""
     rng = np.random.default_rng(5)
     n = SAMPLE_RATE // 20
     knock = 0.2 * np.sin(np.pi * np.arange(n) / n)  # 50 ms
