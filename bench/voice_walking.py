@@ -16,7 +16,9 @@ at least the reasoner's `^min-confidence`), "stop" on its own (what a walking ro
 words taken for a command (false walks: for a "go" sure enough that the reasoner walks unasked), how many
 segments the stream gave and how long they were (a VAD stuck in "speech" cuts at
 `SegmenterConfig.max_utterance_s`, and the spotter refuses utterances over its limit), end of speech ->
-segment emitted, and commands heard in the noise alone (`--noise-only` seconds of it, no speech).
+segment emitted, and commands heard in the noise alone (`--noise-only` seconds of it, no speech). `--dc` adds a
+microphone's DC offset to every stream; `--noise-seed` draws the noise again over the same words (a twin run, to see
+how far a row moves by chance; `voice_walking.paired` counts the words two runs disagree on).
 
     nice -n 10 .venv/bin/python bench/voice_walking.py                      # 20, 10, 5, 0 dB and quiet
     .venv/bin/python bench/voice_walking.py --snr 10 --per-family 40 --json out.json
@@ -255,6 +257,8 @@ def main() -> int:
                                                    "service (`mic.ToServiceRate`; default: 16 kHz as it is)")
     ap.add_argument("--dc", type=float, default=0.0, help="the microphone's DC offset, a fraction of full scale added "
                                                           "to every stream (0.03: -30 dBFS; voice README)")
+    ap.add_argument("--noise-seed", type=int, help="seed of the robot's noise and the room's hiss (default: --seed); "
+                                                   "another seed is a twin draw over the same words")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -266,6 +270,7 @@ def main() -> int:
         return noise_source(seconds, rng, recording, model)
 
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
+    noise_seed = args.seed if args.noise_seed is None else args.noise_seed
     engine = make_engine(args.engine, head_path=args.head if args.engine == "spotter" else None)
     rows: list[dict[str, object]] = []
     alone: list[dict[str, object]] = []
@@ -275,10 +280,11 @@ def main() -> int:
                                  early_quiet_s=args.early_look,
                                  clear_quiet_s=args.clear_window, **lift_settings(args))
         for snr in [None, *(float(s) for s in args.snr.split(",") if s)]:
-            row = run_ratio(engine, clips, snr, config, policy, args.seed, noise, args.mic_rate, args.dc)
+            row = {**run_ratio(engine, clips, snr, config, policy, noise_seed, noise, args.mic_rate, args.dc),
+                   "noise_seed": noise_seed}
             rows.append(row)
             print(json.dumps(row), flush=True)
-        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, args.seed, noise, args.mic_rate,
+        alone.append(noise_only(engine, args.noise_only, float(level), config, policy, noise_seed, noise, args.mic_rate,
                                 args.dc))
         print(json.dumps({"noise_only": alone[-1]}), flush=True)
     print()
