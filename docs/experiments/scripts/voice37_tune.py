@@ -31,6 +31,13 @@ from services.voice.engine import make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 
+def tuning_stream(speech: np.ndarray, peak: float, rng: np.random.Generator, dc: float = 0.0,
+                  mic_rate: int | None = 48000) -> np.ndarray:
+    """One tuning word (float, ±1) as the probes hear it: at `peak` dBFS, `LEAD_S` into a quiet room's -70 dBFS hiss
+    (drawn from `rng`), through a microphone at `mic_rate` (None: 16 kHz as it is), plus its DC offset `dc`."""
+    return through_mic(in_room(at_level(speech, peak), -70.0, rng), mic_rate) + dc
+
+
 def tune_items(cache: Path, per_command: int, others: int, seed: int) -> list[Item]:
     """Round voice36's tune clips (rendered by its script into `cache` when missing), `per_command` of each command and
     `others` other words."""
@@ -85,7 +92,7 @@ def main() -> int:
                                                   "end_of_speech_to_segment_ms_p50_p90")}), flush=True)
         for peak in levels(args.peaks, ""):
             def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak) -> np.ndarray:
-                return through_mic(in_room(at_level(speech, peak), -70.0, rng), args.mic_rate)
+                return tuning_stream(speech, peak, rng, mic_rate=args.mic_rate)
 
             row = {"floor": floor, "lift_floor": args.lift_floor, "mic_rate": args.mic_rate, "peak_dbfs": peak, **run_streams(engine, items, build, config, policy, args.seed)}
             rows.append(row)

@@ -40,7 +40,7 @@ def main() -> int:
     args = ap.parse_args()
     items = tune_items(args.cache, 40, 200, 37)
     engine, policy = make_engine("spotter"), Policy.from_knowledge()
-    config = SegmenterConfig(highpass_hz=args.highpass)
+    config = SegmenterConfig(highpass_hz=args.highpass, highpass_dc_share=0.0)  # the switch before round voice43
     for dc in (float(v) for v in args.dc.split(",")):
         for peak in (float(v) for v in args.peaks.split(",")):
             def build(speech: np.ndarray, rng: np.random.Generator, peak: float = peak, dc: float = dc) -> np.ndarray:

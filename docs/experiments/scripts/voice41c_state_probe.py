@@ -30,11 +30,10 @@ ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice37_tune import tune_items  # noqa: E402
+from voice37_tune import tune_items, tuning_stream  # noqa: E402
 
 from bench import voice_levels, voice_walking  # noqa: E402
 from bench.voice_bench import Policy  # noqa: E402
-from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
 from bench.voice_walking import run_streams  # noqa: E402
 from services.voice.audio import from_pcm, to_pcm  # noqa: E402
 from services.voice.engine import make_engine  # noqa: E402
@@ -70,11 +69,12 @@ def main() -> int:
     for case in args.cases:
         name, dc_text, hz, start = case.split(":")
         config = SegmenterConfig(highpass_hz=None if hz == "off" else float(hz),
-                                 highpass_from_dbfs=None if start == "none" else float(start))
+                                 highpass_from_dbfs=None if start == "none" else float(start),
+                                 highpass_dc_share=0.0)  # the switch as it was before round voice43
         dc = float(dc_text)
 
         def build(speech: np.ndarray, rng: np.random.Generator, dc: float = dc) -> np.ndarray:
-            return through_mic(in_room(at_level(speech, args.peak), -70.0, rng), 48000) + dc
+            return tuning_stream(speech, args.peak, rng, dc)
 
         row = run_streams(engine, items, build, config, policy, 37)
         print(json.dumps({"case": name, "peak_dbfs": args.peak, "vad_restart": not args.keep_vad_state,

@@ -22,10 +22,9 @@ ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice37_tune import tune_items  # noqa: E402
+from voice37_tune import tune_items, tuning_stream  # noqa: E402
 
 from bench.voice_bench import Item, Policy  # noqa: E402
-from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
 from bench.voice_walking import paired, run_streams  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
@@ -42,7 +41,7 @@ def hear(items: list[Item], engine: Engine, policy: Policy, peak: float, dc: flo
     and how many other words were taken for commands."""
 
     def build(speech: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        return through_mic(in_room(at_level(speech, peak), -70.0, rng), 48000) + dc
+        return tuning_stream(speech, peak, rng, dc)
 
     row = run_streams(engine, items, build, config, policy, seed)
     return [c == "1" for c in str(row["commands_heard_each"])], str(row["others_taken_each"]).count("1")
@@ -64,7 +63,8 @@ def main() -> int:
     engine, policy = make_engine("spotter"), Policy.from_knowledge()
     heard: dict[str, list[bool]] = {}
     for name, (dc, hz, seed) in CASES.items():
-        heard[name], taken = hear(items, engine, policy, args.peak, dc, SegmenterConfig(highpass_hz=hz), seed)
+        config = SegmenterConfig(highpass_hz=hz, highpass_dc_share=0.0)  # the switch as it was before round voice43
+        heard[name], taken = hear(items, engine, policy, args.peak, dc, config, seed)
         print(f"{name:13} commands heard {sum(heard[name])}/{len(heard[name])}, other words taken {taken}", flush=True)
     compare(heard, PAIRS)
     return 0

@@ -3,8 +3,9 @@
 `SegmenterConfig.highpass_from_dbfs` switches the high-pass on once the mean of the stream's last `noise_floor_s`
 outside utterances is -50 dBFS (about 100 of 32,768) or more from zero. Round 37's 280 tune commands and 200 other
 words, each 1.2 s into its own stream in a quiet room's -70 dBFS hiss (seed 37), through a 48 kHz microphone's path,
-no offset, fed to the default segmenter: at each peak level, how many streams switched it on, and when (stream
-seconds) and at what mean (LSB), for the first few.
+no offset, fed to the segmenter as it was at stop 83 (`highpass_dc_share` 0: the mean alone; round voice43 added
+the share): at each peak level, how many streams switched it on, and when (stream seconds) and at what mean (LSB),
+for the first few.
 
     PYTHONPATH=. .venv/bin/python docs/experiments/scripts/voice42_switch_probe.py --cache /tmp/s83/tune.pickle
 """
@@ -21,9 +22,8 @@ ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice37_tune import tune_items  # noqa: E402
+from voice37_tune import tune_items, tuning_stream  # noqa: E402
 
-from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
 from bench.voice_walking import CHUNK, rounded_pcm  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH  # noqa: E402
 from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
@@ -40,8 +40,8 @@ def main() -> int:
         switched: list[tuple[int, float, int]] = []
         for i, it in enumerate(items):
             speech = np.frombuffer(it.pcm, "<i2") / 32768.0
-            pcm = rounded_pcm(np.clip(through_mic(in_room(at_level(speech, peak), -70.0, rng), 48000), -1.0, 1.0))
-            seg = Segmenter(SegmenterConfig())
+            pcm = rounded_pcm(np.clip(tuning_stream(speech, peak, rng), -1.0, 1.0))
+            seg = Segmenter(SegmenterConfig(highpass_dc_share=0.0))  # the switch as it was at stop 83
             for k in range(0, len(pcm), CHUNK):
                 seg.feed(pcm[k : k + CHUNK])
                 if seg._offset_on:

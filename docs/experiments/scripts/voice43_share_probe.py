@@ -24,9 +24,8 @@ ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice37_tune import tune_items  # noqa: E402
+from voice37_tune import tune_items, tuning_stream  # noqa: E402
 
-from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
 from bench.voice_walking import CHUNK, rounded_pcm  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH  # noqa: E402
 from services.voice.segmenter import Segmenter, SegmenterConfig  # noqa: E402
@@ -51,7 +50,7 @@ def main() -> int:
             first: dict[float, list[float]] = {c: [] for c in CANDIDATES}  # per candidate: first switch times
             for it in items:
                 speech = np.frombuffer(it.pcm, "<i2") / 32768.0
-                x = through_mic(in_room(at_level(speech, peak), -70.0, rng), 48000) + dc
+                x = tuning_stream(speech, peak, rng, dc)
                 pcm = rounded_pcm(np.clip(x, -1.0, 1.0))
                 seg = Segmenter(config)
                 shares: list[tuple[float, float]] = []  # (stream s, share) where the other conditions hold

@@ -24,10 +24,9 @@ ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from voice37_tune import tune_items  # noqa: E402
+from voice37_tune import tune_items, tuning_stream  # noqa: E402
 
 from bench.voice_bench import OTHER, WORDS, Policy  # noqa: E402
-from bench.voice_levels import at_level, in_room, through_mic  # noqa: E402
 from bench.voice_walking import CHUNK, LEAD_S, rounded_pcm  # noqa: E402
 from services.voice.audio import SAMPLE_RATE  # noqa: E402
 from services.voice.engine import make_engine  # noqa: E402
@@ -44,7 +43,8 @@ def main() -> int:
 
     def heard(word: str, pcm: bytes) -> bool:
         rec = engine.recognise(pcm)
-        return rec.command is not None and rec.command.value == word and policy.takes(rec.command, rec.confidence) is not None
+        return (rec.command is not None and rec.command.value == word
+                and policy.takes(rec.command, rec.confidence) is not None)
 
     draws: list[list[tuple[bytes, tuple[float, float] | None, bool]]] = []
     for seed in (37, 1037):
@@ -52,7 +52,7 @@ def main() -> int:
         out = []
         for it in items:
             speech = np.frombuffer(it.pcm, "<i2") / 32768.0
-            x = np.clip(through_mic(in_room(at_level(speech, args.peak), -70.0, rng), 48000), -1.0, 1.0)
+            x = np.clip(tuning_stream(speech, args.peak, rng), -1.0, 1.0)
             pcm = rounded_pcm(x)
             word_start, word_end = LEAD_S, LEAD_S + speech.size / SAMPLE_RATE
             seg = Segmenter(SegmenterConfig())
@@ -74,12 +74,13 @@ def main() -> int:
         pcm = draws[1][i][0]
         a, b = round(cut[0] * SAMPLE_RATE) * 2, round(cut[1] * SAMPLE_RATE) * 2
         same_cut += heard(WORDS[items[i].label], pcm[a:b]) != draws[0][i][2]
-    shifts = [abs(draws[0][i][1][0] - draws[1][i][1][0]) + abs(draws[0][i][1][1] - draws[1][i][1][1])
-              for i in range(len(items)) if draws[0][i][1] and draws[1][i][1]]
-    print(f"words that flip: {len(flips)}; of them cut differently by the VAD: {len(moved)}; flips left when the second "
-          f"draw is cut where the first was: {same_cut}; words cut differently overall: "
-          f"{sum(s > 0 for s in shifts)}/{len(shifts)} (median shift of those {np.median([s for s in shifts if s > 0]) if any(shifts) else 0:.3f} s)",
-          flush=True)
+    shifts = [abs(a[0] - b[0]) + abs(a[1] - b[1])
+              for a, b in ((draws[0][i][1], draws[1][i][1]) for i in range(len(items))) if a and b]
+    moved_by = [s for s in shifts if s > 0]
+    median = float(np.median(moved_by)) if moved_by else 0.0
+    print(f"words that flip: {len(flips)}; of them cut differently by the VAD: {len(moved)}; flips left when the "
+          f"second draw is cut where the first was: {same_cut}; words cut differently overall: "
+          f"{len(moved_by)}/{len(shifts)} (median shift of those {median:.3f} s)", flush=True)
     return 0
 
 
