@@ -70,7 +70,7 @@ ACCESS: tuple[Access, ...] = (
     Access("motion/state", Kind.TOPIC, ("motion",), ("reasoner",)),
     Access("motion/joints", Kind.TOPIC, ("motion",)),
     Access("speech/say", Kind.TOPIC, ("reasoner",), ("speech",)),
-    Access("speech/state", Kind.TOPIC, ("speech",), ("reasoner",)),
+    Access("speech/state", Kind.TOPIC, ("speech",), ("reasoner", "voice")),  # voice: not to answer its own voice
     # the observer and the operator read every topic of the robot
     Access("**", Kind.TOPIC, (), READERS),
     # queryables: the Soar command line can change the agent, so only the operator asks it

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from schemas.messages import HealthStatus, VoiceCommand
+from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice.audio import SAMPLE_RATE, AudioError
 from services.voice.engine import (
@@ -33,6 +33,7 @@ from services.voice.engine import (
 )
 from services.voice.level import LevelError, Meter, dbfs, gain_from, offset_advice
 from services.voice.mic import MicError, MicFormat
+from services.voice.own_voice import OwnVoice, OwnVoiceError, tail_from
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 from services.voice.vad import VadError, silero_model_path
@@ -89,6 +90,9 @@ class VoiceSettings:
     """`HRI_VOICE_MIC_RATE`: the rate (Hz) to open a microphone at (`mic.MicFormat`); None: 16 kHz, or the device's."""
     mic_channels: str | None = None
     """`HRI_VOICE_MIC_CHANNELS`: the channels to open a microphone with, mixed down to one; None: 1, or else 2."""
+    own_voice: str | None = None
+    """`HRI_VOICE_OWN_VOICE`: a live source's utterances that overlap the robot's own voice are not published, "stop"
+    excepted (`own_voice.tail_from`: `ignore`, `hear`, or the tail in seconds); None: `ignore`."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -115,6 +119,7 @@ class VoiceSettings:
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
             mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
+            own_voice=os.environ.get("HRI_VOICE_OWN_VOICE") or None,
         )
 
     def mic(self) -> MicFormat:
@@ -172,7 +177,8 @@ def check_settings(settings: VoiceSettings) -> None:
     settings.mic()
     try:
         gain_from(settings.gain)
-    except LevelError as exc:
+        tail_from(settings.own_voice)
+    except (LevelError, OwnVoiceError) as exc:
         raise EngineError(str(exc)) from None
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
         try:
@@ -225,6 +231,8 @@ class _Stats:
     """Utterances decoded at the segmenter's early look (each also counts in `decode_s`)."""
     early_taken: int = 0
     """Of them, the utterances that ended there (a command accepted confidently enough)."""
+    own_voice: int = 0
+    """Utterances not published: they overlapped the robot's own voice (`own_voice.OwnVoice`)."""
     decode_s: float = 0.0
     audio_s: float = 0.0
 
@@ -232,6 +240,7 @@ class _Stats:
         return {
             "utterances": self.utterances, "accepted": self.accepted, "rejected_speech": self.rejected,
             "bad_audio": self.bad_audio, "early_looks": self.early_looks, "early_taken": self.early_taken,
+            "own_voice_dropped": self.own_voice,
             "real_time_factor": round(self.decode_s / self.audio_s, 4) if self.audio_s else None,
         }
 
@@ -263,6 +272,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     stats = _Stats()
     gain_db = gain_from(settings.gain)
+    own = _own_voice(ctx, settings)
+    pre_roll_s = settings.segmenter().pre_roll_s
     advised: dict[str, float] = {}
     highpass = settings.segmenter().highpass_hz is not None
 
@@ -327,6 +338,16 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         advice = level.advice(gain_db)
         if advice is not None:
             advise(level.kind or "", advice, origin=utt.origin)
+        # the utterance from its speech's onset (its audio begins `pre_roll_s` before) to when it was cut, wall clock
+        ago = utt.ago_s if utt.ago_s is not None else utt.seconds
+        if own is not None and rec.command is not Command.STOP and own.overlaps(
+                utt.stamp - max(ago - pre_roll_s, 0.0), utt.stamp):
+            stats.own_voice += 1  # the robot's own voice, most likely: publishing it would make the robot answer itself
+            ctx.log.info("heard while the robot spoke: not published", origin=utt.origin,
+                         command=rec.command.value if rec.command else None, text=rec.text,
+                         confidence=round(rec.confidence, 3))
+            ctx.update_detail(**stats.as_detail())
+            return
         if rec.command is None:
             stats.rejected += 1
         else:
@@ -367,6 +388,23 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
             ctx.log.info("source finished", source=settings.source)
             ctx.update_detail(source_state="finished")
             ctx.stopping.wait()
+
+
+def _own_voice(ctx: ServiceContext, settings: VoiceSettings) -> OwnVoice | None:
+    """For a live source (a microphone, a stream on stdin), the robot's own voice as the speech service reports it;
+    None for recordings (files, folders, a spool), which cannot hear the robot, and with `HRI_VOICE_OWN_VOICE=hear`."""
+    tail = tail_from(settings.own_voice)
+    try:
+        live = SourceSpec.parse(settings.source).kind in ("mic", "stdin")
+    except SourceError:
+        live = False  # the listener reports the bad source
+    if tail is None or not live:
+        ctx.update_detail(own_voice="heard" if tail is None else "not a live source")
+        return None
+    own = OwnVoice(tail_s=tail)
+    ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: own.heard(state.speaking))
+    ctx.update_detail(own_voice="ignored", own_voice_tail_s=tail)
+    return own
 
 
 def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine | None:

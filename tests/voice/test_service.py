@@ -88,6 +88,7 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert h.detail["spotter_stop_in_long"] is DEFAULT_STOP_IN_LONG  # and within a longer utterance
     assert h.detail["spotter_warped_look"] is DEFAULT_WARPED_LOOK  # the second look at other speeds
     assert h.detail["spotter_down_in_phrase"] is DEFAULT_DOWN_IN_PHRASE  # "down" within a phrase
+    assert h.detail["own_voice"] == "not a live source"  # a spool's recordings cannot hear the robot (own_voice.py)
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(15) == 0
 

@@ -1,0 +1,160 @@
+"""What the robot hears of its own voice (prints figures; not a test).
+
+On the OP2 the loudspeaker and the microphones are in the same head. Every sentence the robot says ("Sorry, I cannot
+do it.", "Shall I walk forward?", the answers to "why") reaches its own microphone a few centimetres away, louder
+than any person. This bench says what the voice service would make of it: each sentence the reasoner can say (the
+agent's spoken strings, `services/reasoner/agent/*.soar`, and every explanation, `reasoner.explain.TEMPLATES`, filled
+with each command word and mark) is synthesised by the speech service's own engine and settings (espeak-ng, its
+default voice, rate and volume), brought to each `--peaks` level (dBFS peak at the microphone), placed in a quiet
+room's hiss and fed to the service's stream path (`Segmenter` in 30 ms chunks, then the engine), with the robot's
+speech state ignored: as the service would hear it if it did not know the robot was talking (`HRI_VOICE_OWN_VOICE=hear`;
+by default it publishes none of it but "stop", `services/voice/own_voice.py`).
+
+`--room`: each sentence through a room drawn as in `voice_room.py` (its reverberation time from `--rt60`), the
+loudspeaker 0.1 m from the microphone; the rows then also say how late after the robot's voice ended an utterance
+began (the echo), against the service's tail (`own_voice.TAIL_S`).
+
+Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
+makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a
+command (which ones, and those the reasoner would act on), and "go"s that would walk the robot or make it ask.
+
+    .venv/bin/python bench/voice_own.py
+    .venv/bin/python bench/voice_own.py --peaks -20 --mic-rate 48000 --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import fftconvolve, resample_poly
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.voice_bench import ASK, WALK, Policy, through_mic  # noqa: E402
+from bench.voice_levels import at_level, in_room  # noqa: E402
+from bench.voice_room import Room, draw_room, responses  # noqa: E402
+from bench.voice_walking import LEAD_S, stream  # noqa: E402
+from services.reasoner.explain import MARK_NAMES, TEMPLATES  # noqa: E402
+from services.reasoner.explain import WORDS as EXPLAINED_WORDS  # noqa: E402
+from services.speech.config import DEFAULT_RATE, DEFAULT_VOICE, DEFAULT_VOLUME  # noqa: E402
+from services.speech.tts import EspeakNg  # noqa: E402
+from services.voice.audio import SAMPLE_RATE  # noqa: E402
+from services.voice.engine import make_engine  # noqa: E402
+from services.voice.own_voice import TAIL_S  # noqa: E402
+from services.voice.segmenter import SegmenterConfig  # noqa: E402
+
+AGENT = ROOT / "services" / "reasoner" / "agent"
+WORDS = ("stand", "down", "yes", "no", "go", "stop", "why")
+
+
+def agent_sentences(folder: Path = AGENT) -> list[str]:
+    """The sentences written into the Soar agent (`|...|` strings with a space, ending in . ? or !)."""
+    found = {m for path in sorted(folder.glob("*.soar")) for m in re.findall(r"\|([^|]+ [^|]+[.?!])\|", path.read_text())}
+    return sorted(found)
+
+
+def explanation_sentences() -> list[str]:
+    """Every explanation, filled as `reasoner.explain.render` fills it: with each command word (after "told me to",
+    as the robot reads it), each mark or "a danger sign", and "just now" or "3 seconds ago"."""
+    out: set[str] = set()
+    for name, template in TEMPLATES.items():
+        for word in (*WORDS, "that"):
+            for mark in (*MARK_NAMES.values(), "a danger sign"):
+                for ago in ("just now", "3 seconds ago"):
+                    out.add(template.format(word=EXPLAINED_WORDS.get(word, word) if name == "obeyed" else word,
+                                            mark=mark, ago=ago, cause_ago=ago))
+        out.update(f"I was not sure I heard '{word}'." for word in WORDS)
+    return sorted(out)
+
+
+def spoken(text: str, engine: EspeakNg, folder: Path) -> np.ndarray:
+    """`text` as the speech service says it, at 16 kHz (float, ±1)."""
+    import wave
+
+    path = folder / "say.wav"
+    engine.synthesize(text, path)
+    with wave.open(str(path), "rb") as w:
+        rate = w.getframerate()
+        x = np.frombuffer(w.readframes(w.getnframes()), "<i2") / 32768.0
+    g = np.gcd(rate, SAMPLE_RATE)
+    return resample_poly(x, SAMPLE_RATE // g, rate // g)
+
+
+def own_room(rng: np.random.Generator, rt60: tuple[float, float]) -> Room:
+    """A room drawn as `voice_room.draw_room` draws one, the robot's loudspeaker 0.1 m from its microphone."""
+    room = draw_room(rng, [1.0], rt60)
+    x, y, z = room.mic
+    return Room(room.size, room.rt60, room.mic, ((x + 0.1, y, z),))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--engine", default="spotter")
+    ap.add_argument("--peaks", default="-26,-12,-3", help="the robot's voice at its own microphone, dBFS peak")
+    ap.add_argument("--floor", type=float, default=-70.0, help="the room's hiss through the microphone, dBFS RMS")
+    ap.add_argument("--mic-rate", type=int, help="through a microphone at this rate, resampled by the service")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the hiss and the rooms")
+    ap.add_argument("--room", action="store_true", help="each sentence through a room, the loudspeaker 0.1 m away")
+    ap.add_argument("--rt60", default="0.25,0.6", help="with --room: the reverberation time's range (Sabine), s")
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    sentences = agent_sentences() + explanation_sentences()
+    tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
+    with tempfile.TemporaryDirectory(prefix="hri-own-voice-") as tmp:
+        voices = [spoken(s, tts, Path(tmp)) for s in sentences]
+    ends = [LEAD_S + v.size / SAMPLE_RATE for v in voices]  # where the loudspeaker falls silent, stream seconds
+    if args.room:
+        rng = np.random.default_rng(args.seed)
+        rt60 = (float(args.rt60.split(",")[0]), float(args.rt60.split(",")[1]))
+        voices = [fftconvolve(v, responses(own_room(rng, rt60))[0]) for v in voices]
+    engine, policy, config = make_engine(args.engine), Policy.from_knowledge(), SegmenterConfig()
+    rows = []
+    for peak in [float(p) for p in args.peaks.split(",") if p]:
+        rng = np.random.default_rng(args.seed)
+        heard = commanded = 0
+        acted: Counter[str] = Counter()
+        said: dict[str, list[str]] = {}
+        late: list[float] = []  # each utterance's onset after the loudspeaker fell silent, s
+        escaped: list[str] = []  # sentences of which an utterance began after the tail: published though the robot's
+        for text, voice, end in zip(sentences, voices, ends, strict=True):
+            x = through_mic(np.clip(in_room(at_level(voice, peak), args.floor, rng), -1.0, 1.0), args.mic_rate)
+            segs = stream(engine, x, config)
+            heard += bool(segs)
+            late += [start + config.pre_roll_s - end for _, start, _, _, _ in segs]
+            escaped += [text for _, start, _, _, _ in segs if start + config.pre_roll_s - end > TAIL_S][:1]
+            taken = [policy.takes(cmd, conf) for _, _, _, cmd, conf in segs]
+            commanded += any(cmd is not None for *_, cmd, _ in segs)
+            for what in filter(None, taken):
+                acted[what] += 1
+                said.setdefault(what, []).append(text)
+        rows.append({"peak_dbfs": peak, "sentences": len(sentences), "heard_as_speech": heard,
+                     "heard_as_a_command": commanded, "acted_on": dict(acted), "walks": acted[WALK], "asks": acted[ASK],
+                     "sentences_per_command": said, "onset_after_voice_s_max": round(max(late), 3) if late else None,
+                     "utterances_after_voice": sum(t > 0 for t in late), "escaped_the_tail": escaped})
+        print(json.dumps(rows[-1]), flush=True)
+    print()
+    print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
+          f"{'past tail':>9}  acted on")
+    for r in rows:
+        print(f"{r['peak_dbfs']:+6.0f} dBFS {r['heard_as_speech']:4d}/{r['sentences']:<4d} {r['heard_as_a_command']:9d} "
+              f"{r['walks']:4d} {r['asks']:4d} {r['onset_after_voice_s_max']:+11.2f}s {len(r['escaped_the_tail']):9d}  "
+              f"{r['acted_on']}")
+    print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
+          f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
+          f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "
+          f"loudspeaker fell silent; past tail: sentences with one after the {TAIL_S} s tail)")
+    if args.json:
+        args.json.write_text(json.dumps({"rows": rows}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
