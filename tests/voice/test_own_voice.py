@@ -4,8 +4,10 @@ robot is talking, or just after, is not published, "stop" excepted; recordings a
 from __future__ import annotations
 
 import subprocess
+import threading
 import time
 import wave
+from collections import deque
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -13,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.signal import resample_poly
 
-from schemas.messages import SpeechRequest, SpeechState, VoiceCommand
+from schemas.messages import Decision, SpeechRequest, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
@@ -180,3 +182,83 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
         else:
             assert words[-2:] == ["stop", "yes"] and len(words) > 2  # the robot's words, published
             assert health.detail["own_voice_dropped"] == 0 and "not published" not in log
+
+
+class HeadMicrophone:
+    """The robot's microphone in its own head: a faint hiss, what the test says into it, and every sentence the speech
+    service says, from the moment it says it (its WAV); handed to the voice service's stdin at a microphone's pace."""
+
+    def __init__(self, proc: subprocess.Popen[bytes], said: Path) -> None:
+        self.proc, self.said = proc, said
+        self.pending: deque[np.ndarray] = deque()
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def say(self, x: np.ndarray) -> None:
+        with self.lock:
+            self.pending.append(x)
+
+    def on_state(self, state: SpeechState) -> None:
+        if state.speaking and state.id is not None:
+            self.say(_pcm16k(self.said / f"{state.id}.wav"))
+
+    def _run(self) -> None:
+        assert self.proc.stdin is not None
+        rng, block, start = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic()
+        sound, k = np.zeros(0), 0
+        while not self.stop.is_set():
+            if sound.size == 0:
+                with self.lock:
+                    sound = self.pending.popleft() if self.pending else np.zeros(0)
+            x = rng.normal(0.0, 10 ** (-70 / 20), block)
+            x[: min(block, sound.size)] += sound[:block]
+            sound = sound[block:]
+            try:
+                self.proc.stdin.write(to_pcm(x))
+                self.proc.stdin.flush()
+            except (BrokenPipeError, ValueError):
+                return
+            k += 1
+            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+@pytest.mark.parametrize("own_voice", ["", "hear"])
+def test_a_robot_that_hears_itself_does_not_talk_to_itself(bus: ServiceContext, router_endpoint: str, robot_id: str,
+                                                           start_service, tmp_path: Path, own_voice: str) -> None:
+    """The reasoner, the speech service and the voice service, its microphone hearing the robot's loudspeaker. A
+    person says something that is no command: the robot says "Sorry, I did not understand." once. Told to hear its own
+    voice (`HRI_VOICE_OWN_VOICE=hear`), it hears that sentence, does not understand it either, and says so again."""
+    decisions: list[Decision] = []
+    states: list[SpeechState] = []
+    bus.subscribe(bus.keys.reasoner_decision, Decision, decisions.append)
+    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
+    said = tmp_path / "said"
+    reasoner = start_service("reasoner")
+    wait_for(lambda: (h := bus.query_health("reasoner")) is not None and h.detail.get("ready"), timeout=30)
+    start_service("speech", env={"HRI_SPEECH_OUT": str(said)})
+    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
+    with stdin_service(env, tmp_path / "voice.log") as proc:
+        mic = HeadMicrophone(proc, said)
+        bus.subscribe(bus.keys.speech_state, SpeechState, mic.on_state)
+        try:
+            wait_for(lambda: (h := bus.query_health("voice")) is not None and "own_voice" in h.detail, timeout=60)
+            mic.say(_word("what a lovely morning"))
+            wait_for(lambda: decisions, timeout=20)
+            time.sleep(10.0)  # two rounds of the robot's answer, heard and answered, if it hears itself
+        finally:
+            mic.close()
+    assert reasoner.poll() is None
+    sorry = [d for d in decisions if d.reason == "not_understood"]
+    assert sorry and all(d.say == "Sorry, I did not understand." for d in sorry)
+    if own_voice == "":
+        assert len(decisions) == 1  # the person's words, answered once
+    else:
+        assert len(sorry) >= 3  # its own answer, answered again and again
