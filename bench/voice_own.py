@@ -14,6 +14,11 @@ by default it publishes none of it but "stop", `services/voice/own_voice.py`).
 loudspeaker 0.1 m from the microphone; the rows then also say how late after the robot's voice ended an utterance
 began (the echo), against the service's tail (`own_voice.TAIL_S`).
 
+`--over SEED`: a person's "stop" said over the robot's voice, the one word the service still publishes then: the clean
+held-out "stop"s of `voice_bench`'s seed (other voices and engines), each placed at a random moment within one of the
+sentences, peaking at `--person` dBFS (-26: a person about a metre away), against the same "stop"s with no robot
+voice under them. A "stop" counts when an utterance that overlaps it is heard as "stop".
+
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
 makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a
 command (which ones, and those the reasoner would act on), and "go"s that would walk the robot or make it ask.
@@ -38,21 +43,21 @@ from scipy.signal import fftconvolve, resample_poly
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.voice_bench import ASK, WALK, Policy, through_mic  # noqa: E402
+from bench.voice_bench import ASK, WALK, WORDS, Policy, heldout_items, through_mic  # noqa: E402
 from bench.voice_levels import at_level, in_room  # noqa: E402
 from bench.voice_room import Room, draw_room, responses  # noqa: E402
 from bench.voice_walking import LEAD_S, stream  # noqa: E402
+from schemas.messages import Command  # noqa: E402
 from services.reasoner.explain import MARK_NAMES, TEMPLATES  # noqa: E402
 from services.reasoner.explain import WORDS as EXPLAINED_WORDS  # noqa: E402
 from services.speech.config import DEFAULT_RATE, DEFAULT_VOICE, DEFAULT_VOLUME  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
 from services.voice.audio import SAMPLE_RATE  # noqa: E402
-from services.voice.engine import make_engine  # noqa: E402
+from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.own_voice import TAIL_S  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 
 AGENT = ROOT / "services" / "reasoner" / "agent"
-WORDS = ("stand", "down", "yes", "no", "go", "stop", "why")
 
 
 def agent_sentences(folder: Path = AGENT) -> list[str]:
@@ -95,6 +100,25 @@ def own_room(rng: np.random.Generator, rt60: tuple[float, float]) -> Room:
     return Room(room.size, room.rt60, room.mic, ((x + 0.1, y, z),))
 
 
+def stop_over_voice(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
+                    peak: float | None, person: float, floor: float, mic_rate: int | None,
+                    rng: np.random.Generator) -> int:
+    """How many of `stops` (at `person` dBFS peak) are heard as "stop" said over the robot's voices (at `peak` dBFS
+    peak, in turn; None: no robot voice)."""
+    heard = 0
+    for k, stop in enumerate(stops):
+        stop = at_level(stop, person)
+        voice = at_level(voices[k % len(voices)], peak if peak is not None else 0.0) * (peak is not None)
+        at = int(rng.uniform(0.2, max(0.3, voice.size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
+        x = np.zeros(max(voice.size, at + stop.size))
+        x[: voice.size] += voice
+        x[at : at + stop.size] += stop
+        segs = stream(engine, through_mic(np.clip(in_room(x, floor, rng), -1.0, 1.0), mic_rate), config)
+        begin, end = LEAD_S + at / SAMPLE_RATE, LEAD_S + (at + stop.size) / SAMPLE_RATE
+        heard += any(cmd is Command.STOP and s < end and e > begin for _, s, e, cmd, _ in segs)
+    return heard
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engine", default="spotter")
@@ -104,6 +128,9 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=1, help="seed of the hiss and the rooms")
     ap.add_argument("--room", action="store_true", help="each sentence through a room, the loudspeaker 0.1 m away")
     ap.add_argument("--rt60", default="0.25,0.6", help="with --room: the reverberation time's range (Sabine), s")
+    ap.add_argument("--over", type=int, help="voice_bench's held-out seed: its people's \"stop\" said over the robot")
+    ap.add_argument("--person", type=float, default=-26.0, help="with --over: the person's \"stop\", dBFS peak")
+    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     sentences = agent_sentences() + explanation_sentences()
@@ -140,6 +167,16 @@ def main() -> int:
                      "sentences_per_command": said, "onset_after_voice_s_max": round(max(late), 3) if late else None,
                      "utterances_after_voice": sum(t > 0 for t in late), "escaped_the_tail": escaped})
         print(json.dumps(rows[-1]), flush=True)
+    if args.over is not None:
+        stops = [np.frombuffer(it.pcm, "<i2") / 32768.0 for it in heldout_items(args.over, args.workers)
+                 if it.label == WORDS.index("stop") and it.condition == "clean" and it.family != "noise"]
+        alone = stop_over_voice(engine, config, voices, stops, None, args.person, args.floor, args.mic_rate,
+                                np.random.default_rng(args.seed))
+        for row in rows:
+            row["stop_over_voice"] = stop_over_voice(engine, config, voices, stops, row["peak_dbfs"], args.person,
+                                                     args.floor, args.mic_rate, np.random.default_rng(args.seed))
+            row["stop_alone"], row["stops"] = alone, len(stops)
+            print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops")}), flush=True)
     print()
     print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
           f"{'past tail':>9}  acted on")
@@ -147,6 +184,10 @@ def main() -> int:
         print(f"{r['peak_dbfs']:+6.0f} dBFS {r['heard_as_speech']:4d}/{r['sentences']:<4d} {r['heard_as_a_command']:9d} "
               f"{r['walks']:4d} {r['asks']:4d} {r['onset_after_voice_s_max']:+11.2f}s {len(r['escaped_the_tail']):9d}  "
               f"{r['acted_on']}")
+    if args.over is not None:
+        print(f"a person's \"stop\" at {args.person:.0f} dBFS over the robot's voice (held-out seed {args.over}): "
+              + ", ".join(f"{r['stop_over_voice']}/{r['stops']} over {r['peak_dbfs']:.0f} dBFS" for r in rows)
+              + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
           f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
           f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "
