@@ -339,9 +339,9 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
         if advice is not None:
             advise(level.kind or "", advice, origin=utt.origin)
         # the utterance from its speech's onset (its audio begins `pre_roll_s` before) to when it was cut, wall clock
-        ago = utt.ago_s if utt.ago_s is not None else utt.seconds
+        began = utt.began if utt.began is not None else utt.stamp - utt.seconds
         if own is not None and rec.command is not Command.STOP and own.overlaps(
-                utt.stamp - max(ago - pre_roll_s, 0.0), utt.stamp):
+                min(began + pre_roll_s, utt.stamp), utt.stamp):
             stats.own_voice += 1  # the robot's own voice, most likely: publishing it would make the robot answer itself
             ctx.log.info("heard while the robot spoke: not published", origin=utt.origin,
                          command=rec.command.value if rec.command else None, text=rec.text,

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import BinaryIO, Literal
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
+from services.voice.clock import StreamClock
 from services.voice.engine import Recognition
 from services.voice.level import Meter, amplified, amplify
 from services.voice.mic import ALTERNATIVES, CHUNK_S, MicError, MicFormat, Stop, mic_chunks
@@ -53,9 +54,9 @@ class Utterance:
     """Streams with Silero: the speech level over the noise floor before it (`Segment.snr_db`)."""
     start_s: float | None = None
     """Streams: where the utterance starts, seconds from the stream's start (`Segment.start_s`)."""
-    ago_s: float | None = None
-    """Streams: how long before it was yielded its audio began, by the stream's own clock (the stream heard so far,
-    less `start_s`): the utterance's wall-clock start is `stamp - ago_s` however long the segmenter held it."""
+    began: float | None = None
+    """Live streams: when its audio began (UNIX seconds, `clock.StreamClock`), however long it waited to be read and
+    the segmenter held it; recordings read faster than they play have no meaningful one."""
 
     @property
     def seconds(self) -> float:
@@ -113,18 +114,19 @@ def stream_utterances(
     highpass_on = seg.highpass_on
     if on_highpass is not None:
         on_highpass(highpass_on, 0.0)
-    heard_s = 0.0
+    heard_s, clock = 0.0, StreamClock()
     for chunk in chunks:
         heard_s += len(chunk) / (SAMPLE_RATE * SAMPLE_WIDTH)
+        clock.heard(heard_s)
         for s in seg.feed(chunk):
             yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
-                            start_s=s.start_s, ago_s=heard_s - s.start_s)
+                            start_s=s.start_s, began=clock.wall(s.start_s))
         if on_highpass is not None and seg.highpass_on and not highpass_on:
             highpass_on = True
             on_highpass(True, seg.offset_seen_so_far()[1])
     for s in seg.flush():
         yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db, start_s=s.start_s,
-                        ago_s=heard_s - s.start_s)
+                        began=clock.wall(s.start_s))
 
 
 TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9, highpass_hz=None)

@@ -9,6 +9,7 @@ import time
 import wave
 from collections import deque
 from collections.abc import Iterator
+from contextlib import closing
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from schemas.messages import Decision, SpeechRequest, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
+from services.voice.clock import StreamClock
 from services.voice.engine import EngineError
 from services.voice.own_voice import LONGEST_S, TAIL_S, OwnVoice, OwnVoiceError, tail_from
 from services.voice.service import VoiceSettings, check_settings
@@ -88,24 +90,51 @@ def test_a_bad_setting_is_refused_at_start_naming_the_variable(raw: str) -> None
         check_settings(VoiceSettings(source="stdin", own_voice=raw))
 
 
-@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
-def test_a_streams_utterance_says_how_long_ago_its_audio_began() -> None:
-    """`Utterance.ago_s`, by the stream's clock: the service places the utterance on the wall clock with it, however
-    long the segmenter held the utterance after it ended (the end window, the second VAD's 0.5 s)."""
-    pcm = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
-    fed: list[int] = []
+def test_the_stream_clock_is_the_least_delayed_block_of_the_window() -> None:
+    """Blocks of 30 ms captured in real time from t=1000 and read 5 ms later, but for one second in which the listener
+    fell 2 s behind and read them in a burst: the capture time of every sample stays right."""
+    now = [0.0]
+    clock = StreamClock(window_s=10.0, clock=lambda: now[0])
+    for k in range(1, 300):  # 9 s of blocks
+        lag = 2.0 if 100 <= k < 133 else 0.005
+        now[0] = 1000.0 + 0.03 * k + lag
+        clock.heard(0.03 * k)
+        assert clock.wall(0.03 * k - 0.5) == pytest.approx(1000.0 + 0.03 * k - 0.5 + 0.005)
+    assert StreamClock().wall(1.0) is None
 
-    def chunks() -> Iterator[bytes]:
-        for at in range(0, len(pcm), 960):
-            fed.append(min(at + 960, len(pcm)))
+
+def test_the_stream_clock_follows_a_drift_and_starts_again_after_a_gap() -> None:
+    now = [0.0]
+    clock = StreamClock(window_s=2.0, clock=lambda: now[0])
+    for k in range(1, 200):  # a sound card 1 % slow: its stream falls behind the wall clock
+        now[0] = 500.0 + 0.03 * k * 1.01
+        clock.heard(0.03 * k)
+    assert clock.wall(0.03 * 199) == pytest.approx(now[0], abs=0.025)  # not 60 ms off, as from the first block
+    now[0] += 30.0  # a paused pipe: nothing read for 30 s, then a block
+    clock.heard(0.03 * 200)
+    now[0] += 0.03
+    clock.heard(0.03 * 201)
+    assert clock.wall(0.03 * 201) == pytest.approx(now[0], abs=0.035)
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_live_streams_utterance_says_when_its_audio_began() -> None:
+    """`Utterance.began`, from the stream's clock: the service places the utterance on the wall clock with it, however
+    long the segmenter held it after it ended (the end window, the second VAD's 0.5 s)."""
+    pcm = synth.recording([synth.speech_clip(w, "en", 130) for w in ("stop", "yes")], gap_s=1.0)
+    t0 = time.time()
+
+    def chunks() -> Iterator[bytes]:  # at a microphone's pace
+        for k, at in enumerate(range(0, len(pcm), 960)):
+            time.sleep(max(0.0, t0 + (k + 1) * 0.03 - time.time()))
             yield pcm[at : at + 960]
 
-    seen = [(utt, fed[-1]) for utt in stream_utterances(chunks(), "test")]
+    seen = list(stream_utterances(chunks(), "test"))
     assert len(seen) == 2
-    for utt, heard in seen:
-        assert utt.start_s is not None and utt.ago_s is not None
-        assert utt.ago_s == pytest.approx(heard / (2 * SAMPLE_RATE) - utt.start_s)
-        assert utt.ago_s >= utt.seconds - 1e-6  # cut once its audio had ended
+    for utt in seen:
+        assert utt.start_s is not None and utt.began is not None
+        assert utt.began == pytest.approx(t0 + utt.start_s, abs=0.03)
+        assert utt.began + utt.seconds <= utt.stamp  # cut once its audio had ended
 
 
 def _pcm16k(path: Path) -> np.ndarray:
@@ -116,22 +145,62 @@ def _pcm16k(path: Path) -> np.ndarray:
     return resample_poly(x, SAMPLE_RATE // g, rate // g)
 
 
-def _play(proc: subprocess.Popen[bytes], *parts: np.ndarray, gap_s: float = 0.3) -> None:
-    """The parts with `gap_s` of a faint hiss before each and after the last (and 0.5 s more), handed to the service
-    in 30 ms blocks at the pace of a microphone."""
-    gap = np.zeros(int(gap_s * SAMPLE_RATE))
-    x = np.concatenate([p for part in parts for p in (gap, part)] + [gap, np.zeros(SAMPLE_RATE // 2)])
-    pcm = to_pcm(x + np.random.default_rng(0).normal(0.0, 10 ** (-70 / 20), x.size))
-    assert proc.stdin is not None
-    block, start = int(0.03 * SAMPLE_RATE) * 2, time.monotonic()
-    for k, at in enumerate(range(0, len(pcm), block)):
-        proc.stdin.write(pcm[at : at + block])
-        proc.stdin.flush()
-        time.sleep(max(0.0, start + (k + 1) * 0.03 - time.monotonic()))
-
-
 def _word(text: str) -> np.ndarray:
     return np.frombuffer(read_wav(synth.speech_clip(text, "en", 130).path), "<i2") / 32768.0
+
+
+class HeadMicrophone:
+    """The robot's microphone in its own head, never silent: a faint hiss, what the test says into it, and (with
+    `on_state` subscribed) every sentence the speech service says, from the moment it says it (its WAV); handed to the
+    voice service's stdin in 30 ms blocks at a microphone's pace."""
+
+    def __init__(self, proc: subprocess.Popen[bytes], said: Path) -> None:
+        self.proc, self.said = proc, said
+        self.pending: deque[np.ndarray] = deque()
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.playing = 0
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def say(self, *parts: np.ndarray, gap_s: float = 0.3) -> None:
+        """`parts`, `gap_s` of the hiss between them, after what is already to be said."""
+        gap = np.zeros(int(gap_s * SAMPLE_RATE))
+        with self.lock:
+            self.pending.append(np.concatenate([p for part in parts for p in (part, gap)][:-1]))
+
+    def idle(self) -> bool:
+        """Nothing left to say (the hiss goes on)."""
+        with self.lock:
+            return not self.pending and self.playing == 0
+
+    def on_state(self, state: SpeechState) -> None:
+        if state.speaking and state.id is not None:
+            self.say(_pcm16k(self.said / f"{state.id}.wav"))
+
+    def _run(self) -> None:
+        assert self.proc.stdin is not None
+        rng, block, start = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic()
+        sound, k = np.zeros(0), 0
+        while not self.stop.is_set():
+            with self.lock:
+                if sound.size == 0 and self.pending:
+                    sound = self.pending.popleft()
+                self.playing = sound.size
+            x = rng.normal(0.0, 10 ** (-70 / 20), block)
+            x[: min(block, sound.size)] += sound[:block]
+            sound = sound[block:]
+            try:
+                self.proc.stdin.write(to_pcm(x))
+                self.proc.stdin.flush()
+            except (BrokenPipeError, ValueError):
+                return
+            k += 1
+            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
 
 
 LONG = ("I saw an X mark 3 seconds ago, and no O since. Show me an O and I will walk. "
@@ -158,7 +227,7 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
     start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
     wait_for(lambda: any(s.id is None for s in states), timeout=20)  # its start-up "not speaking"
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
-    with stdin_service(env, tmp_path / "voice.log") as proc:
+    with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, out)) as mic:
         expected = "ignored" if own_voice == "" else "heard"
         wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("own_voice") == expected,
                  timeout=60)
@@ -166,10 +235,11 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
         wait_for(lambda: any(s.id == "long" and s.speaking for s in states), timeout=10)
         robot = _pcm16k(out / "long.wav")
         assert robot.size > 6.0 * SAMPLE_RATE
-        _play(proc, robot[: int(1.5 * SAMPLE_RATE)], _word("stop"))
+        mic.say(robot[: int(1.5 * SAMPLE_RATE)], _word("stop"))
+        wait_for(mic.idle, timeout=10)
         assert not any(s.id == "long" and not s.speaking for s in states)  # all of it while the robot spoke
-        wait_for(lambda: any(s.id == "long" and not s.speaking for s in states), timeout=10)
-        _play(proc, np.zeros(int(TAIL_S * SAMPLE_RATE)), _word("yes"))
+        wait_for(lambda: any(s.id == "long" and not s.speaking for s in states), timeout=15)
+        mic.say(np.zeros(int(TAIL_S * SAMPLE_RATE)), _word("yes"))
         wait_for(lambda: any(m.command is not None and m.command.value == "yes" for m in heard), timeout=20)
         words = [m.command.value if m.command else None for m in heard]
         health = bus.query_health("voice")
@@ -182,50 +252,6 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
         else:
             assert words[-2:] == ["stop", "yes"] and len(words) > 2  # the robot's words, published
             assert health.detail["own_voice_dropped"] == 0 and "not published" not in log
-
-
-class HeadMicrophone:
-    """The robot's microphone in its own head: a faint hiss, what the test says into it, and every sentence the speech
-    service says, from the moment it says it (its WAV); handed to the voice service's stdin at a microphone's pace."""
-
-    def __init__(self, proc: subprocess.Popen[bytes], said: Path) -> None:
-        self.proc, self.said = proc, said
-        self.pending: deque[np.ndarray] = deque()
-        self.lock = threading.Lock()
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def say(self, x: np.ndarray) -> None:
-        with self.lock:
-            self.pending.append(x)
-
-    def on_state(self, state: SpeechState) -> None:
-        if state.speaking and state.id is not None:
-            self.say(_pcm16k(self.said / f"{state.id}.wav"))
-
-    def _run(self) -> None:
-        assert self.proc.stdin is not None
-        rng, block, start = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic()
-        sound, k = np.zeros(0), 0
-        while not self.stop.is_set():
-            if sound.size == 0:
-                with self.lock:
-                    sound = self.pending.popleft() if self.pending else np.zeros(0)
-            x = rng.normal(0.0, 10 ** (-70 / 20), block)
-            x[: min(block, sound.size)] += sound[:block]
-            sound = sound[block:]
-            try:
-                self.proc.stdin.write(to_pcm(x))
-                self.proc.stdin.flush()
-            except (BrokenPipeError, ValueError):
-                return
-            k += 1
-            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
 
 
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
