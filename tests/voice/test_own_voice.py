@@ -214,8 +214,8 @@ microphone's 3.5 s below end well within it on a busy machine."""
 def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_endpoint: str, robot_id: str,
                                                  start_service, tmp_path: Path, own_voice: str) -> None:
     """The real speech service says two long sentences. While it speaks, the microphone (the voice service reading stdin
-    at a microphone's pace) hears the sentence's first 1.5 s as the speech service wrote it, then a person's "stop"
-    over the rest; once the robot has finished, a "yes". By default the robot's words are not published (a sentence
+    at a microphone's pace) hears their first 1.5 s as the speech service wrote them, then a person's "stop" over the
+    rest; once the robot has finished, a "yes". By default the robot's words are not published (a sentence
     that matched no command makes the reasoner say "Sorry, I did not understand.", heard again without end) and
     "stop" and "yes" are; with `HRI_VOICE_OWN_VOICE=hear` the robot's words are published too."""
     states: list[SpeechState] = []
@@ -271,16 +271,12 @@ def test_a_robot_that_hears_itself_does_not_talk_to_itself(bus: ServiceContext, 
     start_service("speech", env={"HRI_SPEECH_OUT": str(said)})
     wait_for(lambda: any(s.id is None for s in states), timeout=20)
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
-    with stdin_service(env, tmp_path / "voice.log") as proc:
-        mic = HeadMicrophone(proc, said)
+    with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, said)) as mic:
         bus.subscribe(bus.keys.speech_state, SpeechState, mic.on_state)
-        try:
-            wait_for(lambda: (h := bus.query_health("voice")) is not None and "own_voice" in h.detail, timeout=60)
-            mic.say(_word("what a lovely morning"))
-            wait_for(lambda: decisions, timeout=20)
-            time.sleep(10.0)  # two rounds of the robot's answer, heard and answered, if it hears itself
-        finally:
-            mic.close()
+        wait_for(lambda: (h := bus.query_health("voice")) is not None and "own_voice" in h.detail, timeout=60)
+        mic.say(_word("what a lovely morning"))
+        wait_for(lambda: decisions, timeout=20)
+        time.sleep(10.0)  # several rounds of the robot's answer, heard and answered, if it hears itself
     assert reasoner.poll() is None
     sorry = [d for d in decisions if d.reason == "not_understood"]
     assert sorry and all(d.say == "Sorry, I did not understand." for d in sorry)
