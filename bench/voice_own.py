@@ -108,7 +108,8 @@ def stop_over_voice(engine: Engine, config: SegmenterConfig, voices: list[np.nda
     heard = 0
     for k, stop in enumerate(stops):
         stop = at_level(stop, person)
-        voice = at_level(voices[k % len(voices)], peak if peak is not None else 0.0) * (peak is not None)
+        voice = voices[k % len(voices)]
+        voice = at_level(voice, peak) if peak is not None else np.zeros_like(voice)
         at = int(rng.uniform(0.2, max(0.3, voice.size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
         x = np.zeros(max(voice.size, at + stop.size))
         x[: voice.size] += voice
