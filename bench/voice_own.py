@@ -38,7 +38,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import fftconvolve, resample_poly
+from scipy.signal import fftconvolve
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -56,6 +56,7 @@ from services.voice.audio import SAMPLE_RATE  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.own_voice import TAIL_S  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
+from services.voice.training.tts import wav_samples  # noqa: E402
 
 AGENT = ROOT / "services" / "reasoner" / "agent"
 
@@ -82,15 +83,9 @@ def explanation_sentences() -> list[str]:
 
 def spoken(text: str, engine: EspeakNg, folder: Path) -> np.ndarray:
     """`text` as the speech service says it, at 16 kHz (float, ±1)."""
-    import wave
-
     path = folder / "say.wav"
     engine.synthesize(text, path)
-    with wave.open(str(path), "rb") as w:
-        rate = w.getframerate()
-        x = np.frombuffer(w.readframes(w.getnframes()), "<i2") / 32768.0
-    g = np.gcd(rate, SAMPLE_RATE)
-    return resample_poly(x, SAMPLE_RATE // g, rate // g)
+    return wav_samples(path.read_bytes())
 
 
 def own_room(rng: np.random.Generator, rt60: tuple[float, float]) -> Room:

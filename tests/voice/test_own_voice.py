@@ -6,7 +6,6 @@ from __future__ import annotations
 import subprocess
 import threading
 import time
-import wave
 from collections import deque
 from collections.abc import Iterator
 from contextlib import closing
@@ -14,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.signal import resample_poly
 
 from schemas.messages import Decision, SpeechRequest, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
@@ -25,6 +23,7 @@ from services.voice.engine import EngineError
 from services.voice.own_voice import LONGEST_S, TAIL_S, OwnVoice, OwnVoiceError, tail_from
 from services.voice.service import VoiceSettings, check_settings
 from services.voice.sources import stream_utterances
+from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
 from tests.voice.test_service import stdin_service
 
@@ -138,11 +137,7 @@ def test_a_live_streams_utterance_says_when_its_audio_began() -> None:
 
 
 def _pcm16k(path: Path) -> np.ndarray:
-    with wave.open(str(path), "rb") as w:
-        rate = w.getframerate()
-        x = np.frombuffer(w.readframes(w.getnframes()), "<i2") / 32768.0
-    g = np.gcd(rate, SAMPLE_RATE)
-    return resample_poly(x, SAMPLE_RATE // g, rate // g)
+    return wav_samples(path.read_bytes())
 
 
 def _word(text: str) -> np.ndarray:
