@@ -45,7 +45,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench.voice_bench import ASK, WALK, WORDS, Policy, heldout_items, through_mic  # noqa: E402
 from bench.voice_levels import at_level, in_room  # noqa: E402
-from bench.voice_room import Room, draw_room, responses  # noqa: E402
+from bench.voice_room import Room, draw_room, responses, rt60_range  # noqa: E402
 from bench.voice_walking import LEAD_S, stream  # noqa: E402
 from schemas.messages import Command  # noqa: E402
 from services.reasoner.explain import MARK_NAMES, TEMPLATES  # noqa: E402
@@ -129,6 +129,10 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
+    try:
+        rt60 = rt60_range(args.rt60)
+    except ValueError as exc:
+        ap.error(str(exc))
     sentences = agent_sentences() + explanation_sentences()
     tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
     with tempfile.TemporaryDirectory(prefix="hri-own-voice-") as tmp:
@@ -136,7 +140,6 @@ def main() -> int:
     ends = [LEAD_S + v.size / SAMPLE_RATE for v in voices]  # where the loudspeaker falls silent, stream seconds
     if args.room:
         rng = np.random.default_rng(args.seed)
-        rt60 = (float(args.rt60.split(",")[0]), float(args.rt60.split(",")[1]))
         voices = [fftconvolve(v, responses(own_room(rng, rt60))[0]) for v in voices]
     engine, policy, config = make_engine(args.engine), Policy.from_knowledge(), SegmenterConfig()
     rows = []

@@ -73,6 +73,21 @@ class Room:
     mic: tuple[float, float, float]
     mouths: tuple[tuple[float, float, float], ...]
 
+    def distances(self) -> list[float]:
+        """From each mouth to the microphone, through the air (m)."""
+        return [float(np.linalg.norm(np.subtract(mouth, self.mic))) for mouth in self.mouths]
+
+
+def rt60_range(raw: str) -> tuple[float, float]:
+    """`--rt60`: two reverberation times in seconds, low then high; ValueError otherwise."""
+    try:
+        low, high = (float(t) for t in raw.split(","))
+    except ValueError:
+        low = high = -1.0
+    if not 0.05 <= low <= high:
+        raise ValueError(f"--rt60: two times in seconds, low then high (got {raw!r})")
+    return low, high
+
 
 def draw_room(rng: np.random.Generator, distances: list[float], rt60: tuple[float, float]) -> Room:
     """A room, the robot's place in it, and a direction from the robot along which the person stands at every one of
@@ -105,8 +120,8 @@ def responses(room: Room) -> list[np.ndarray]:
     shoebox.compute_rir()
     delay = pra.constants.get("frac_delay_length") // 2  # the fractional-delay filter's own delay, samples
     out = []
-    for k, mouth in enumerate(room.mouths):
-        direct = int(round(np.linalg.norm(np.subtract(mouth, room.mic)) / SPEED_OF_SOUND * SAMPLE_RATE)) + delay
+    for k, distance in enumerate(room.distances()):
+        direct = int(round(distance / SPEED_OF_SOUND * SAMPLE_RATE)) + delay
         out.append(np.asarray(shoebox.rir[k][0][direct - DIRECT_AT :], dtype=np.float64))
     return out
 
@@ -114,9 +129,9 @@ def responses(room: Room) -> list[np.ndarray]:
 def free_field(room: Room) -> list[np.ndarray]:
     """The direct sound alone at each distance (as outdoors): a gain of 1/distance, at sample `DIRECT_AT`."""
     out = []
-    for mouth in room.mouths:
+    for distance in room.distances():
         h = np.zeros(DIRECT_AT + 1)
-        h[DIRECT_AT] = 1.0 / float(np.linalg.norm(np.subtract(mouth, room.mic)))
+        h[DIRECT_AT] = 1.0 / distance
         out.append(h)
     return out
 
@@ -164,9 +179,10 @@ def main() -> int:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     distances = [float(d) for d in args.distances.split(",") if d]
-    rt60 = tuple(float(t) for t in args.rt60.split(","))
-    if len(rt60) != 2 or not 0.05 <= rt60[0] <= rt60[1]:
-        ap.error(f"--rt60: two times in seconds, low then high (got {args.rt60!r})")
+    try:
+        rt60 = rt60_range(args.rt60)
+    except ValueError as exc:
+        ap.error(str(exc))
     policy = Policy.from_knowledge()
     clips = pick(heldout_items(args.seed, args.workers), args.per_family, args.seed)
     engine = make_engine(args.engine)

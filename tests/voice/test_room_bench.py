@@ -17,6 +17,7 @@ from bench.voice_room import (
     free_field,
     responses,
     ringing_s,
+    rt60_range,
 )
 from bench.voice_walking import LEAD_S, TAIL_S
 from services.voice.audio import SAMPLE_RATE
@@ -74,3 +75,10 @@ def test_the_speaker_puts_each_clip_through_its_own_response_in_the_quiet_room()
     assert 20 * np.log10(np.max(np.abs(second)) / np.max(np.abs(first))) == pytest.approx(-6.02, abs=0.1)
     with pytest.raises(StopIteration):  # one response per clip: a third clip is a mistake in the caller
         speaker(speech, rng)
+
+
+@pytest.mark.parametrize("raw", ["0.6,0.3", "0.3", "a,b", "0.01,0.2", "0.2,0.3,0.4"])
+def test_a_bad_reverberation_range_is_refused(raw: str) -> None:
+    with pytest.raises(ValueError, match="--rt60"):
+        rt60_range(raw)
+    assert rt60_range("0.25,0.6") == (0.25, 0.6)
