@@ -188,10 +188,13 @@ class SpeechService:
         self.log.info("speaking", id=utt.id, text=utt.text, duration_s=round(audio.duration_s, 3),
                       ready_ms=round(ready_ms, 1), synth_ms=round(audio.synth_s * 1000, 1),
                       out=output.describe(), file=str(audio.path) if output is self.fallback else None)
+        # In health too: a listener that subscribes mid-sentence (the voice service starting) asks for it.
+        self.ctx.update_detail(speaking=True, speaking_id=utt.id)
         self.state.put(SpeechState(speaking=True, id=utt.id, text=utt.text))
         try:
             finished = self._play(output, audio, utt)
         finally:
+            self.ctx.update_detail(speaking=False, speaking_id=None)
             self.state.put(SpeechState(speaking=False, id=utt.id, text=utt.text))
         self.stats.bump("spoken" if finished else "interrupted")
         if not finished:
@@ -216,6 +219,7 @@ class SpeechService:
                       note="folder output: speaking lasts the WAV's duration after it is written")
         worker = self.ctx.thread(self.speak_queue, "speak")
         self.ctx.subscribe(self.ctx.keys.speech_say, SpeechRequest, self.on_request)
+        self.ctx.update_detail(speaking=False, speaking_id=None)
         self.state.put(SpeechState(speaking=False))  # listening now; and "not speaking" after a restart
         next_engine = time.monotonic() + ENGINE_RETRY_S
         next_output = time.monotonic() + OUTPUT_RETRY_S

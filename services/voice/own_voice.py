@@ -9,6 +9,8 @@ The speech service says when it talks (`SpeechState.speaking`). `OwnVoice` keeps
 own clock (when each state arrived: no clock shared across machines is needed) and answers whether an utterance
 overlapped one or the `tail_s` after it. The service does not publish such an utterance, except "stop": a person's
 "stop" said over the robot's voice must still stop it, and a stop the robot gave itself is the safe mistake.
+A sentence already under way when the voice service subscribed sends no state until it ends: the service asks the
+speech service's health once at start-up (`speaking`) and `assume`s what it answers.
 """
 
 from __future__ import annotations
@@ -60,6 +62,8 @@ class OwnVoice:
     clock: Callable[[], float] = field(default=time.time, repr=False)
     """Seconds, the same clock as the utterances' stamps."""
     _since: float | None = None
+    _told = False
+    """Whether a state has arrived: from then on the states, newer than any answer to a query, decide."""
     _spans: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=32))
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
@@ -67,11 +71,21 @@ class OwnVoice:
         """The speech service's state, as it arrives."""
         now = self.clock()
         with self._lock:
+            self._told = True
             if speaking and self._since is None:
                 self._since = now
             elif not speaking and self._since is not None:
                 self._spans.append((self._since, now))
                 self._since = None
+
+    def assume(self, speaking: bool) -> None:
+        """What the speech service answered when asked at start-up (its health's `speaking`): a sentence it began
+        before this process subscribed sends no state until it ends. Ignored once a state has arrived, as a state
+        published after the answer may arrive before it; a sentence assumed to be under way is taken to have begun
+        now."""
+        with self._lock:
+            if speaking and not self._told and self._since is None:
+                self._since = self.clock()
 
     def speaking(self) -> bool:
         with self._lock:

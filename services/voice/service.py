@@ -41,6 +41,8 @@ from services.voice.vad import VadError, silero_model_path
 NAME = "voice"
 ADVICE_EVERY_S = 60.0
 """The input level's advice (too quiet, clipped) is logged at most this often for each kind."""
+SPEECH_ASK_S = 2.0
+"""How long the start-up question to the speech service (is the robot talking?) waits for an answer."""
 
 
 @dataclass(frozen=True)
@@ -255,15 +257,17 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None,
                       vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None,
                       highpass_hz=segmenter.highpass_hz)
+    # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
+    own = _own_voice(ctx, settings)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
-    listener = ctx.thread(lambda: _listen(ctx, settings), "listen")
+    listener = ctx.thread(lambda: _listen(ctx, settings, own), "listen")
     ctx.on_close(lambda: listener.join(timeout=3.0))
     while not ctx.wait(1.0):
         pass
 
 
-def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
+def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) -> None:
     engine = _engine_until_ready(ctx, settings)
     if engine is None:
         return
@@ -272,7 +276,6 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings) -> None:
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     stats = _Stats()
     gain_db = gain_from(settings.gain)
-    own = _own_voice(ctx, settings)
     pre_roll_s = settings.segmenter().pre_roll_s
     advised: dict[str, float] = {}
     highpass = settings.segmenter().highpass_hz is not None
@@ -404,7 +407,17 @@ def _own_voice(ctx: ServiceContext, settings: VoiceSettings) -> OwnVoice | None:
     own = OwnVoice(tail_s=tail)
     ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: own.heard(state.speaking))
     ctx.update_detail(own_voice="ignored", own_voice_tail_s=tail)
+    ctx.thread(lambda: _ask_speaking(ctx, own), "own-voice")
     return own
+
+
+def _ask_speaking(ctx: ServiceContext, own: OwnVoice) -> None:
+    """Once, just after subscribing: is the robot in the middle of a sentence (the speech service's health)? Its
+    `speaking=True` went out before this process listened. No answer (no speech service yet) is "not speaking"."""
+    health = ctx.query_health("speech", timeout=SPEECH_ASK_S)
+    speaking = health is not None and health.detail.get("speaking") is True
+    own.assume(speaking)
+    ctx.update_detail(own_voice_asked="no answer" if health is None else "speaking" if speaking else "silent")
 
 
 def _engine_until_ready(ctx: ServiceContext, settings: VoiceSettings) -> Engine | None:

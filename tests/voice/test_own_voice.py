@@ -75,6 +75,29 @@ def test_not_speaking_alone_is_no_span() -> None:
     assert not own.speaking() and not own.overlaps(0.0, 1e9)
 
 
+def test_a_sentence_under_way_at_start_up_is_assumed_until_a_state_says_otherwise() -> None:
+    clock = Clock()
+    own = OwnVoice(clock=clock)
+    clock.now = 105.0
+    own.assume(True)  # the speech service's health: speaking, and no state heard since subscribing
+    assert own.speaking() and own.overlaps(105.5, 106.0) and not own.overlaps(104.0, 104.9)
+    clock.now = 107.0
+    own.heard(False)  # the sentence's end
+    assert not own.speaking() and own.overlaps(106.5, 107.1) and not own.overlaps(107.5, 108.0)
+
+
+def test_a_state_heard_before_the_answer_wins_over_it() -> None:
+    """The speech service's answer was made before a state that overtook it: the state is newer."""
+    clock = Clock()
+    own = OwnVoice(clock=clock)
+    own.heard(False)  # the sentence ended while the question was on its way back
+    own.assume(True)
+    assert not own.speaking() and not own.overlaps(0.0, 1e9)
+    quiet = OwnVoice(clock=clock)
+    quiet.assume(False)
+    assert not quiet.speaking()
+
+
 @pytest.mark.parametrize(("raw", "tail"), [(None, TAIL_S), ("ignore", TAIL_S), ("hear", None), ("HEAR", None),
                                            ("0", 0.0), ("1.5", 1.5)])
 def test_the_setting(raw: str | None, tail: float | None) -> None:
@@ -247,6 +270,44 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
         else:
             assert words[-2:] == ["stop", "yes"] and len(words) > 2  # the robot's words, published
             assert health.detail["own_voice_dropped"] == 0 and "not published" not in log
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_sentence_under_way_when_the_voice_service_starts_is_the_robots(bus: ServiceContext, router_endpoint: str,
+                                                                         robot_id: str, start_service,
+                                                                         tmp_path: Path) -> None:
+    """The speech service is in the middle of a long sentence, its `speaking=True` long sent, when the voice service
+    starts. Asked at start-up, the speech service's health says it is speaking: what the microphone hears of the
+    sentence is not published; a person's "stop" over it is, and a "yes" once it has ended."""
+    states: list[SpeechState] = []
+    heard: list[VoiceCommand] = []
+    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
+    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
+    out = tmp_path / "said"
+    start_service("speech", env={"HRI_SPEECH_OUT": str(out), "HRI_SPEECH_RATE": "110"})
+    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    say.put(SpeechRequest(text=f"{LONG} {LONG}", id="long"))  # about 20 s at 110 words a minute
+    wait_for(lambda: any(s.id == "long" and s.speaking for s in states), timeout=10)
+    robot = _pcm16k(out / "long.wav")
+    assert robot.size > 15.0 * SAMPLE_RATE
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin")
+    with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, out)) as mic:
+        # the engine ready (its embedding in health) and the question answered
+        wait_for(lambda: (h := bus.query_health("voice")) is not None and "spotter_embedding" in h.detail
+                 and "own_voice_asked" in h.detail, timeout=60)
+        health = bus.query_health("voice")
+        assert health is not None and health.detail["own_voice_asked"] == "speaking"
+        ended = lambda: any(s.id == "long" and not s.speaking for s in states)  # noqa: E731
+        assert not ended(), "the voice service took the whole sentence to start: too slow a machine for this test"
+        mic.say(robot[int(8.0 * SAMPLE_RATE) : int(10.0 * SAMPLE_RATE)], _word("stop"))
+        wait_for(mic.idle, timeout=10)
+        assert not ended()
+        wait_for(ended, timeout=40)
+        mic.say(np.zeros(int(TAIL_S * SAMPLE_RATE)), _word("yes"))
+        wait_for(lambda: any(m.command is not None and m.command.value == "yes" for m in heard), timeout=20)
+    assert [m.command.value if m.command else None for m in heard] == ["stop", "yes"]
+    assert "heard while the robot spoke: not published" in (tmp_path / "voice.log").read_text()
 
 
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
