@@ -47,14 +47,18 @@ class Access:
     asked_as: tuple[str, ...] = ()
 
 
+HEALTH_ASKERS: dict[str, tuple[str, ...]] = {"speech": ("voice",)}
+"""Services that ask another's health: the voice service asks the speech service's once at start-up whether the robot
+is in the middle of a sentence (`speaking`), not to answer its own voice."""
+
+
 def _per_service() -> tuple[Access, ...]:
     # A service may also ask after itself: a container's health check (`hri status --service`) runs
     # with the only identity mounted there, the service's own.
     rows: list[Access] = []
     for name in SERVICES:
-        rows.append(
-            Access(f"{name}/health", Kind.QUERYABLE, (name,), (*READERS, name), asked_as=("*/health",))
-        )
+        readers = (*READERS, name, *HEALTH_ASKERS.get(name, ()))
+        rows.append(Access(f"{name}/health", Kind.QUERYABLE, (name,), readers, asked_as=("*/health",)))
         rows.append(Access(f"alive/{name}", Kind.TOKEN, (name,), (name,)))
     return tuple(rows)
 

@@ -373,6 +373,23 @@ def test_observer_reads_everything_and_queries_health(secure_router: tuple[str, 
             s.close()
 
 
+def test_the_voice_service_may_ask_the_speech_services_health_and_no_other(secure_router: tuple[str, str],
+                                                                            keys_dir: Path) -> None:
+    """At start-up the voice service asks whether the robot is in the middle of a sentence (`HEALTH_ASKERS`)."""
+    keys = Keys("sec")
+    tcp = secure_router[0]
+    speech, vision, voice = (open_as(tcp, keys_dir / n) for n in ("speech", "vision", "voice"))
+    try:
+        for name, session in (("speech", speech), ("vision", vision)):
+            key = keys.health(name)
+            session.declare_queryable(key, lambda q, key=key: q.reply(key, b"ok"))
+        wait_for(lambda: [r for r in voice.get(keys.health("speech"), timeout=1) if r.ok], timeout=5)
+        assert [r for r in voice.get(keys.health("vision"), timeout=1) if r.ok] == []
+    finally:
+        for s in (speech, vision, voice):
+            s.close()
+
+
 def test_credentials_still_join_an_open_router(router_endpoint: str, keys_dir: Path) -> None:
     """An open router refuses clients that offer credentials; the runtime then joins it anonymously."""
     from services.runtime import BusSettings, open_session
