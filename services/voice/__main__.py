@@ -131,6 +131,12 @@ OwnVoiceOption = Annotated[
                       "tail after (the speech service's speech/state), 'stop' excepted; or the tail in seconds (0 to "
                       "5); or 'hear' it like anyone's voice [default: ignore, a 0.25 s tail]"),
 ]
+EchoCancelOption = Annotated[
+    str | None,
+    typer.Option("--echo-cancel", envvar="HRI_VOICE_ECHO_CANCEL",
+                 help="a live source: cancel the robot's own voice from the stream, the speech service's sentences "
+                      "rendered again as the reference (on or off) [default: on]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -151,7 +157,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
          highpass: HighpassOption = None, gain: GainOption = None, mic_rate: MicRateOption = None,
-         mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None) -> None:
+         mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
+         echo_cancel: EchoCancelOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -160,7 +167,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
                              vad_lift=vad_lift, highpass=highpass, gain=gain, mic_rate=mic_rate,
-                             mic_channels=mic_channels, own_voice=own_voice)
+                             mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel)
     try:
         check_settings(settings)
     except EngineError as exc:

@@ -22,6 +22,8 @@ from pathlib import Path
 from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
 from services.voice.audio import SAMPLE_RATE, AudioError
+from services.voice.echo import ENV as ECHO_ENV
+from services.voice.echo import EchoCanceller, EchoError, Played, echo_cancel_from
 from services.voice.engine import (
     DEFAULT_ENGINE,
     Engine,
@@ -34,6 +36,7 @@ from services.voice.engine import (
 from services.voice.level import LevelError, Meter, dbfs, gain_from, offset_advice
 from services.voice.mic import MicError, MicFormat
 from services.voice.own_voice import OwnVoice, OwnVoiceError, tail_from
+from services.voice.robot_voice import RobotVoice
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
 from services.voice.vad import VadError, silero_model_path
@@ -95,6 +98,9 @@ class VoiceSettings:
     own_voice: str | None = None
     """`HRI_VOICE_OWN_VOICE`: a live source's utterances that overlap the robot's own voice are not published, "stop"
     excepted (`own_voice.tail_from`: `ignore`, `hear`, or the tail in seconds); None: `ignore`."""
+    echo_cancel: str | None = None
+    """`HRI_VOICE_ECHO_CANCEL`: a live source's stream has the robot's own voice cancelled (`echo.EchoCanceller`),
+    `on` or `off`; None: on."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -122,6 +128,7 @@ class VoiceSettings:
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
             mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
             own_voice=os.environ.get("HRI_VOICE_OWN_VOICE") or None,
+            echo_cancel=os.environ.get(ECHO_ENV) or None,
         )
 
     def mic(self) -> MicFormat:
@@ -180,7 +187,8 @@ def check_settings(settings: VoiceSettings) -> None:
     try:
         gain_from(settings.gain)
         tail_from(settings.own_voice)
-    except (LevelError, OwnVoiceError) as exc:
+        echo_cancel_from(settings.echo_cancel)
+    except (LevelError, OwnVoiceError, EchoError) as exc:
         raise EngineError(str(exc)) from None
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
         try:
@@ -258,16 +266,16 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None,
                       highpass_hz=segmenter.highpass_hz)
     # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
-    own = _own_voice(ctx, settings)
+    own, echo = _robot_voice(ctx, settings)
     # The source may block (stdin, a silent microphone): it runs on its own daemon thread so that
     # SIGTERM always stops the service promptly.
-    listener = ctx.thread(lambda: _listen(ctx, settings, own), "listen")
+    listener = ctx.thread(lambda: _listen(ctx, settings, own, echo), "listen")
     ctx.on_close(lambda: listener.join(timeout=3.0))
     while not ctx.wait(1.0):
         pass
 
 
-def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) -> None:
+def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, echo: _Echo | None) -> None:
     engine = _engine_until_ready(ctx, settings)
     if engine is None:
         return
@@ -287,7 +295,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) 
             ctx.log.warning("input level", advice=advice, **fields)
 
     def on_level(detail: dict[str, object]) -> None:
-        ctx.update_detail(**detail)
+        ctx.update_detail(**detail, **(echo.detail() if echo is not None else {}))  # every 2 s of a live stream
         advice = offset_advice(detail, highpass)  # a DC offset hides quiet speech, and nothing in a word says so
         if advice is not None:
             advise("offset", advice)
@@ -349,7 +357,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) 
             ctx.log.info("heard while the robot spoke: not published", origin=utt.origin,
                          command=rec.command.value if rec.command else None, text=rec.text,
                          confidence=round(rec.confidence, 3))
-            ctx.update_detail(**stats.as_detail())
+            ctx.update_detail(**stats.as_detail(), **(echo.detail() if echo is not None else {}))
             return
         if rec.command is None:
             stats.rejected += 1
@@ -362,7 +370,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) 
                      snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
                      peak_dbfs=round(level.peak_dbfs, 1), **rec.detail)
         # the stream's last speech-to-noise estimate: whether the room counts as clear (`clear_window_s`)
-        ctx.update_detail(**stats.as_detail(), **meter.detail(),
+        ctx.update_detail(**stats.as_detail(), **meter.detail(), **(echo.detail() if echo is not None else {}),
                           **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
 
     delay, last_error = settings.retry_s, ""
@@ -371,7 +379,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) 
             spec = SourceSpec.parse(settings.source)
             for utt in utterances(spec, ctx.stopping.is_set, on_error=on_bad_file,
                                   segmenter=settings.segmenter(), recognise=early_look, gain_db=gain_db, meter=meter,
-                                  mic=mic, mic_opened=mic_opened, on_highpass=on_highpass):
+                                  mic=mic, mic_opened=mic_opened, on_highpass=on_highpass,
+                                  echo=echo.canceller if echo is not None else None):
                 if ctx.status != HealthStatus.OK:
                     ctx.set_status(HealthStatus.OK, source_error=None)
                     ctx.log.info("voice source available", source=settings.source)
@@ -393,22 +402,62 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None) 
             ctx.stopping.wait()
 
 
-def _own_voice(ctx: ServiceContext, settings: VoiceSettings) -> OwnVoice | None:
-    """For a live source (a microphone, a stream on stdin), the robot's own voice as the speech service reports it;
-    None for recordings (files, folders, a spool), which cannot hear the robot, and with `HRI_VOICE_OWN_VOICE=hear`."""
-    tail = tail_from(settings.own_voice)
+@dataclass
+class _Echo:
+    """A live stream's echo canceller and the renderer of its reference."""
+
+    canceller: EchoCanceller
+    voice: RobotVoice
+
+    def detail(self) -> dict[str, object]:
+        c = self.canceller
+        return {"echo_frames": c.frames, "echo_locked": c.locked, "echo_lost": c.lost, "echo_lag_ms_last": c.lag_ms,
+                "echo_erle_db_last": c.erle_db, **self.voice.detail()}
+
+
+def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice | None, _Echo | None]:
+    """For a live source (a microphone, a stream on stdin), the robot's own voice as the speech service reports it
+    (None with `HRI_VOICE_OWN_VOICE=hear`), and its echo canceller (None with `HRI_VOICE_ECHO_CANCEL=off`, or where it
+    cannot run); neither for recordings (files, folders, a spool), which cannot hear the robot. Subscribed at once,
+    before the engine loads: a sentence the robot begins meanwhile is still its own once listening starts."""
+    tail, cancel = tail_from(settings.own_voice), echo_cancel_from(settings.echo_cancel)
     try:
         live = SourceSpec.parse(settings.source).kind in ("mic", "stdin")
     except SourceError:
         live = False  # the listener reports the bad source
-    if tail is None or not live:
-        ctx.update_detail(own_voice="heard" if tail is None else "not a live source")
-        return None
-    own = OwnVoice(tail_s=tail)
-    ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: own.heard(state.speaking))
-    ctx.update_detail(own_voice="ignored", own_voice_tail_s=tail)
-    ctx.thread(lambda: _ask_speaking(ctx, own), "own-voice")
-    return own
+    if not live:
+        ctx.update_detail(own_voice="not a live source", echo_cancel="not a live source")
+        return None, None
+    own = OwnVoice(tail_s=tail) if tail is not None else None
+    echo = None
+    if cancel:
+        try:
+            played = Played()
+            speech_detail = lambda: (h := ctx.query_health("speech", timeout=1.0)) and h.detail  # noqa: E731
+            echo = _Echo(EchoCanceller(played), RobotVoice(played, speech_detail))
+        except EchoError as exc:
+            ctx.update_detail(echo_cancel=f"unavailable: {exc}")
+            ctx.log.warning("echo canceller unavailable: the robot's own voice is not cancelled", error=str(exc))
+    if own is not None or echo is not None:
+        ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: _robot_said(state, own, echo))
+    if echo is not None:
+        ctx.update_detail(echo_cancel="on")
+        ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
+    elif not cancel:
+        ctx.update_detail(echo_cancel="off")
+    if own is None:
+        ctx.update_detail(own_voice="heard")
+    else:
+        ctx.update_detail(own_voice="ignored", own_voice_tail_s=tail)
+        ctx.thread(lambda: _ask_speaking(ctx, own), "own-voice")  # after subscribing: a newer state wins over it
+    return own, echo
+
+
+def _robot_said(state: SpeechState, own: OwnVoice | None, echo: _Echo | None) -> None:
+    if own is not None:
+        own.heard(state.speaking)
+    if echo is not None:
+        echo.voice.heard(state.speaking, state.text)
 
 
 def _ask_speaking(ctx: ServiceContext, own: OwnVoice) -> None:

@@ -101,23 +101,30 @@ Recognise = Callable[[bytes], Recognition]
 
 HighpassState = Callable[[bool, float], None]
 """Told whether a live stream is heard through the high-pass, and the offset that switched it on (full scale 1.0)."""
+Echo = Callable[[bytes, float | None], bytes]
+"""A live stream's chunk and when its first sample was captured (wall clock; None until known) -> the chunk with the
+robot's own voice cancelled (`echo.EchoCanceller`)."""
 
 
 def stream_utterances(
     chunks: Iterator[bytes], origin: str, config: SegmenterConfig | None = None, recognise: Recognise | None = None,
-    on_highpass: HighpassState | None = None,
+    on_highpass: HighpassState | None = None, echo: Echo | None = None,
 ) -> Iterator[Utterance]:
     """VAD-cut a stream of PCM chunks into utterances (with `recognise`, the segmenter's early look is on).
     `on_highpass` is told the high-pass's state as the stream starts and again if a DC offset switches it on
-    (`SegmenterConfig.highpass_from_dbfs`)."""
+    (`SegmenterConfig.highpass_from_dbfs`). `echo` (`echo.EchoCanceller`) takes each chunk, with when it was captured,
+    before the segmenter does."""
     seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
     highpass_on = seg.highpass_on
     if on_highpass is not None:
         on_highpass(highpass_on, 0.0)
     heard_s, clock = 0.0, StreamClock()
     for chunk in chunks:
-        heard_s += len(chunk) / (SAMPLE_RATE * SAMPLE_WIDTH)
+        seconds = len(chunk) / (SAMPLE_RATE * SAMPLE_WIDTH)
+        heard_s += seconds
         clock.heard(heard_s)
+        if echo is not None:
+            chunk = echo(chunk, clock.wall(heard_s - seconds))
         for s in seg.feed(chunk):
             yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
                             start_s=s.start_s, began=clock.wall(s.start_s))
@@ -274,20 +281,21 @@ def utterances(
     segmenter: SegmenterConfig | None = None, recognise: Recognise | None = None,
     gain_db: float = 0.0, meter: Meter | None = None, mic: MicFormat | None = None,
     mic_opened: Callable[[int, int], None] | None = None, on_highpass: HighpassState | None = None,
+    echo: Echo | None = None,
 ) -> Iterator[Utterance]:
     """All utterances of one source until it ends or `stop()`; raises `SourceError` if it cannot open.
     `recognise` turns on the segmenter's early look for live streams (microphone, stdin); files and spools
     are not latency-bound and are decoded whole. `gain_db`: the input gain (`level.amplify`), before the VAD;
     `meter`: fed a live stream's chunks after the gain (`level.Meter`); `mic`: the format to open a microphone at
     (default: 16 kHz mono, or what the device offers), and `mic_opened(rate, channels)` is told what it opened at;
-    `on_highpass`: a live stream's high-pass state (`stream_utterances`)."""
+    `on_highpass`: a live stream's high-pass state, `echo`: its echo canceller (`stream_utterances`)."""
     if spec.kind in ("mic", "stdin"):
         chunks = (microphone(spec.target, stop, mic, mic_opened) if spec.kind == "mic"
                   else stdin_chunks(stdin or sys.stdin.buffer, stop))
         chunks = amplified(chunks, gain_db)
         if meter is not None:
             chunks = meter.metered(chunks)
-        yield from stream_utterances(chunks, str(spec), segmenter, recognise, on_highpass)
+        yield from stream_utterances(chunks, str(spec), segmenter, recognise, on_highpass, echo)
     elif spec.kind == "file":
         path = Path(spec.target)
         if not path.is_file():

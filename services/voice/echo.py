@@ -1,0 +1,252 @@
+"""The robot's own voice taken out of the microphone's stream: echo cancellation, the played sound as the reference.
+
+The microphone in the OP2's head hears the robot's loudspeaker louder than any person, so a person's "stop" said over
+the robot's voice was seldom heard (`bench/voice_own.py --over`: 3-8 of 47). An echo canceller learns the way from
+the loudspeaker to the microphone (the sound card's delay, the loudspeaker, the room) from the sound the robot played
+and subtracts its estimate of that sound from what the microphone heard, leaving the person. It needs the played
+sound sample for sample: the speech service says what it says (`SpeechState.text`) and with which espeak-ng voice and
+rate (its health), and espeak-ng renders the same text to the same samples every time, so the voice process renders
+it again (`robot_voice.RobotVoice`) and places it on the wall clock from when the robot began (`Played`).
+
+The canceller is speexdsp's (its multi-delay block frequency-domain filter, bundled in the `pyaec` wheel), on 10 ms
+frames, with a 256 ms filter: the sound card's delay and the room's first reflections fit in it. It runs on every
+frame of a live stream, so that what it learnt in one sentence is there at the start of the next; where no played
+sound lies within the filter's reach, its output is not used and the stream goes on as the microphone heard it.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from services.runtime.flags import parse_flag
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+
+FRAME = 160
+"""Samples per frame the canceller takes (10 ms at 16 kHz)."""
+FILTER_S = 0.256
+"""The canceller's filter: how long after the played sound its echo may still be learnt."""
+LEAD_S = 0.02
+"""Each sentence's reference is placed this long before its echo was found in the stream: the canceller can only use a
+reference that comes before its echo, and the same lead every sentence keeps what it learnt in place."""
+LOCK_S = 0.3
+"""How much of a sentence is heard before its echo is looked for (`lock`): enough of the robot's voice to find it by
+correlation. That much of each sentence is not cancelled (the own-voice gate still holds it back)."""
+SEARCH_S = (-0.1, 0.3)
+"""Where the echo is looked for, against when the speech service said the sentence began (by the stream's clock): the
+state arrives over the bus after the sound card started, or before it (a player's start-up), and the stream's clock is
+good to a block."""
+MIN_CORRELATION = 0.3
+"""A sentence whose echo correlates less with it (the microphone does not hear the loudspeaker: a headset; a person
+louder than the robot) is not cancelled."""
+KEPT = 8
+"""Sentences kept (the robot speaks one at a time; a few cover any overlap)."""
+INSTALL = "pip install pyaec (speexdsp's echo canceller in a wheel; Linux x86_64)"
+
+
+ENV = "HRI_VOICE_ECHO_CANCEL"
+DEFAULT_ON = True
+
+
+class EchoError(RuntimeError):
+    """The canceller cannot run here (its library is missing), or its setting is not on or off."""
+
+
+def echo_cancel_from(raw: str | None) -> bool:
+    """`HRI_VOICE_ECHO_CANCEL` / `--echo-cancel`: on (the default) or off."""
+    if raw is None or raw.strip() == "":
+        return DEFAULT_ON
+    value = parse_flag(raw)
+    if value is None:
+        raise EchoError(f"{ENV}={raw!r}: on or off")
+    return value
+
+
+@dataclass
+class Sentence:
+    """One sentence the robot played: its samples (float, 16 kHz), when it began (wall clock, UNIX seconds), and once
+    its echo has been found (`EchoCanceller.lock`), where it is placed in the stream (a sample index, fixed, so that
+    the reference runs on sample for sample while the stream's clock estimate moves by a few ms)."""
+
+    began: float
+    samples: np.ndarray
+    at: int | None = None
+    """Where the speech service's state puts it in the stream (set when the canceller first sees it)."""
+    placed: int | None = None
+    """Where its echo was found, less the lead; None until then. (Placing it meanwhile where the last sentence's echo
+    was, after its state, heard fewer "stop"s than not: the sound card's delay and the state's way vary by tens of
+    ms from one sentence to the next, and a reference that far off unlearns the canceller's filter.)"""
+    lost: bool = False
+    """Its echo was looked for and not found: it is not cancelled."""
+
+
+@dataclass
+class Played:
+    """The robot's played sound: sentences added as they begin (`robot_voice.RobotVoice`), read by the canceller."""
+
+    _sentences: deque[Sentence] = field(default_factory=lambda: deque(maxlen=KEPT))
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    def add(self, began: float, samples: np.ndarray) -> None:
+        """`samples` (float, 16 kHz) began at wall-clock `began`."""
+        with self._lock:
+            self._sentences.append(Sentence(began, np.asarray(samples, dtype=np.float32)))
+
+    def sentences(self) -> list[Sentence]:
+        with self._lock:
+            return list(self._sentences)
+
+
+def echo_lag(played: np.ndarray, heard: np.ndarray) -> tuple[int, float]:
+    """Where in `heard` `played` best lines up (its offset in samples) and how well (the normalised correlation of that
+    stretch with it, 0 to 1)."""
+    n = played.size
+    if heard.size < n or not np.any(played):
+        return 0, 0.0
+    size = 1 << int(np.ceil(np.log2(heard.size + n)))
+    corr = np.fft.irfft(np.fft.rfft(heard, size) * np.conj(np.fft.rfft(played, size)), size)[: heard.size - n + 1]
+    energy = np.concatenate([[0.0], np.cumsum(heard.astype(np.float64) ** 2)])
+    window = energy[n:] - energy[:-n]
+    score = np.abs(corr) / (np.sqrt(np.maximum(window, 1e-12)) * np.linalg.norm(played) + 1e-12)
+    best = int(np.argmax(score))
+    return best, float(score[best])
+
+
+def _aec(filter_s: float) -> object:
+    try:
+        from pyaec import Aec  # imported here: only a live stream with the canceller on needs it
+    except (ImportError, AttributeError) as exc:  # pyaec raises AttributeError when its library will not load
+        raise EchoError(f"the echo canceller is not installed ({exc}): {INSTALL}") from None
+    # speex's preprocessor (noise and residual echo suppression) stays off: on a probe it took a person's "stop" away
+    # with the echo (stop 86, `docs/experiments/scripts/voice45_aec_probe.py`)
+    return Aec(FRAME, int(filter_s * SAMPLE_RATE), SAMPLE_RATE, False)
+
+
+@dataclass
+class EchoCanceller:
+    """A live stream's chunks in, the same samples out with the robot's played sound cancelled where there was some.
+    Samples come out in whole frames: up to 9 ms of a chunk waits for the next one."""
+
+    played: Played
+    filter_s: float = FILTER_S
+    lead_s: float = LEAD_S
+    frames: int = 0
+    """Frames the canceller's output was used for (the robot's voice within its reach)."""
+    erle_db: float | None = None
+    """How far the last stretch of the robot's voice was taken down (output over input energy, dB; the echo return
+    loss enhancement): about -20 once the way is learnt, near 0 while it is not or when the reference is wrong."""
+    _aec: object = field(init=False, repr=False)
+    locked: int = 0
+    """Sentences whose echo was found, and so are cancelled."""
+    lost: int = 0
+    """Sentences whose echo was not found (or found too late), not cancelled."""
+    lag_ms: float | None = None
+    """How long after the speech service's state said the last sentence began its echo was heard."""
+    _held: bytes = b""
+    _index: int = 0
+    """Samples of the stream seen so far; the held ones (`_held`) come after them."""
+    _recent: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32), repr=False)
+    _keep_n: int = 4 * SAMPLE_RATE
+    _unplaced: bool = False
+    """A sentence is within reach whose echo has not been found yet."""
+    _energy: tuple[float, float] = (0.0, 0.0)
+    """Input and output energy of the current stretch of the robot's voice."""
+
+    def __post_init__(self) -> None:
+        self._aec = _aec(self.filter_s)
+
+    def __call__(self, chunk: bytes, captured: float | None) -> bytes:
+        """`chunk` (16-bit PCM, 16 kHz) whose first sample was captured at wall-clock `captured` (None: not known
+        yet, passed as it is)."""
+        if captured is None:
+            held, self._held = self._held, b""
+            self._keep(np.frombuffer(held + chunk, "<i2"))
+            return held + chunk
+        first = self._index  # the stream's index of the first held sample, else of the chunk's
+        # the wall clock of the stream's sample 0, as the stream's clock says now
+        origin = captured - (first + len(self._held) // SAMPLE_WIDTH) / SAMPLE_RATE
+        pcm = self._held + chunk
+        whole = len(pcm) - len(pcm) % (FRAME * SAMPLE_WIDTH)
+        self._held = pcm[whole:]
+        mic = np.frombuffer(pcm[:whole], "<i2")
+        if mic.size == 0:
+            return b""
+        self._keep(mic)
+        ref, near = self.reference(first, mic.size, origin)
+        out = mic.copy()
+        refs = np.round(np.clip(ref, -1.0, 1.0) * 32767).astype(np.int16)
+        if self._unplaced:  # not fed: its echo with no reference would unlearn what the canceller learnt
+            self._measure(mic, out, False)
+            return out.tobytes()
+        for k in range(0, mic.size, FRAME):
+            cancelled = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
+            if near:
+                out[k : k + FRAME] = cancelled
+                self.frames += 1
+        self._measure(mic, out, near)
+        return out.tobytes()
+
+    def _keep(self, mic: np.ndarray) -> None:
+        """The stream's recent samples, for finding a sentence's echo in them."""
+        self._recent = np.concatenate([self._recent, mic.astype(np.float32) / 32768.0])[-self._keep_n :]
+        self._index += mic.size
+
+    def reference(self, first: int, n: int, origin: float) -> tuple[np.ndarray, bool]:
+        """The played sound for the stream's samples `first` to `first + n`, and whether any of it lies within the
+        filter's reach of them. Each sentence is placed by `origin` (the wall clock of the stream's sample 0) when
+        first seen, and `lock`ed to its echo once `LOCK_S` of it has been heard; until then the canceller is not fed
+        (`_unplaced`) and the stream passes as heard."""
+        ref = np.zeros(n, dtype=np.float32)
+        reach = int(self.filter_s * SAMPLE_RATE)
+        near = False
+        self._unplaced = False
+        for sentence in self.played.sentences():
+            if sentence.at is None:
+                sentence.at = int(round((sentence.began - origin) * SAMPLE_RATE))
+            if sentence.placed is None and not sentence.lost:
+                self.lock(sentence)
+            if sentence.placed is None or sentence.lost:
+                if sentence.placed is None and not sentence.lost and sentence.at < first + n + reach:
+                    self._unplaced = True  # its echo is in the stream with no reference for it yet
+                continue
+            start, end = sentence.placed, sentence.placed + sentence.samples.size
+            lo, hi = max(first, start), min(first + n, end)
+            if lo < hi:
+                ref[lo - first : hi - first] += sentence.samples[lo - start : hi - start]
+            near = near or (start < first + n and end + reach > first)
+        return ref, near
+
+    def lock(self, sentence: Sentence) -> None:
+        """Once the stream holds the sentence's first `LOCK_S` and the search's reach after it, find its echo there
+        and place the sentence `lead_s` before it; a sentence whose echo is not found is `lost`."""
+        assert sentence.at is not None
+        lock = min(int(LOCK_S * SAMPLE_RATE), sentence.samples.size)
+        lo = sentence.at + int(SEARCH_S[0] * SAMPLE_RATE)
+        hi = sentence.at + int(SEARCH_S[1] * SAMPLE_RATE) + lock
+        if hi > self._index:
+            return  # not heard yet
+        begin = self._index - self._recent.size
+        if lo < begin:  # long gone by the time it was rendered: too late to cancel it
+            sentence.lost = True
+            self.lost += 1
+            return
+        lag, score = echo_lag(sentence.samples[:lock], self._recent[lo - begin : hi - begin])
+        if score < MIN_CORRELATION:
+            sentence.lost = True
+            self.lost += 1
+            return
+        sentence.placed = lo + lag - int(self.lead_s * SAMPLE_RATE)
+        self.locked += 1
+        self.lag_ms = round((lo + lag - sentence.at) / SAMPLE_RATE * 1000.0, 1)
+
+    def _measure(self, mic: np.ndarray, out: np.ndarray, near: bool) -> None:
+        into, left = self._energy
+        if near:
+            self._energy = (into + float(np.sum(mic.astype(np.float64) ** 2)),
+                            left + float(np.sum(out.astype(np.float64) ** 2)))
+        elif into > 0.0:  # a stretch of the robot's voice has ended
+            self.erle_db = round(10.0 * float(np.log10(max(left, 1.0) / into)), 1)
+            self._energy = (0.0, 0.0)

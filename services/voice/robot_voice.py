@@ -1,0 +1,82 @@
+"""The sound the robot is playing, rendered again in the voice process: the echo canceller's reference.
+
+The speech service publishes what it says (`SpeechState.text`, with `speaking=True` as it starts) and keeps its
+espeak-ng voice and rate in its health. espeak-ng renders the same text with the same voice and rate to the same
+samples every time (checked sample for sample against the speech service's WAV in `tests/voice/test_echo.py`), so the
+voice process renders it again and places it on the wall clock from when the state arrived (`echo.Played`). Its
+volume is not needed: the canceller learns the gain from the loudspeaker to the microphone anyway.
+
+A speech service that does not use espeak-ng (its health's `engine` does not name it) or that cannot be asked gives
+no reference: that sentence is not cancelled (counted in `unrendered`), and the own-voice gate still holds.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from services.voice.echo import Played
+from services.voice.synth import SynthError, speak
+
+Render = Callable[[str, str, int], np.ndarray]
+"""(text, espeak-ng voice, words a minute) -> float samples at 16 kHz."""
+Ask = Callable[[], Mapping[str, object] | None]
+"""The speech service's health detail now, or None when it does not answer."""
+
+
+@dataclass
+class RobotVoice:
+    """Fed the speech service's states (`heard`, from the bus's thread); `run` renders each sentence begun onto
+    `played` on its own thread."""
+
+    played: Played
+    ask: Ask
+    render: Render = field(default=speak)
+    clock: Callable[[], float] = field(default=time.time, repr=False)
+    rendered: int = 0
+    unrendered: int = 0
+    last_ms: float | None = None
+    """How long the last sentence took to ask about and render: the canceller has no reference that long into it."""
+    _begun: queue.Queue[tuple[float, str]] = field(default_factory=lambda: queue.Queue(maxsize=8))
+
+    def heard(self, speaking: bool, text: str | None) -> None:
+        """A `SpeechState`, as it arrives."""
+        if speaking and text:
+            try:
+                self._begun.put_nowait((self.clock(), text))
+            except queue.Full:  # the renderer is stuck: that sentence goes without a reference
+                self.unrendered += 1
+
+    def run(self, stopping: threading.Event) -> None:
+        while not stopping.is_set():
+            try:
+                began, text = self._begun.get(timeout=0.25)
+            except queue.Empty:
+                continue
+            try:
+                self.render_one(began, text)
+            except Exception:  # espeak-ng hung or died, or the bus went: this sentence goes without a reference
+                self.unrendered += 1
+
+    def render_one(self, began: float, text: str) -> None:
+        detail = self.ask() or {}
+        engine, voice, rate = str(detail.get("engine") or ""), detail.get("voice"), detail.get("rate")
+        if "espeak" not in engine.lower() or not isinstance(voice, str) or not isinstance(rate, int):
+            self.unrendered += 1
+            return
+        try:
+            samples = self.render(text, voice, rate)
+        except SynthError:
+            self.unrendered += 1
+            return
+        self.played.add(began, samples)
+        self.rendered += 1
+        self.last_ms = round((self.clock() - began) * 1000.0, 1)
+
+    def detail(self) -> dict[str, object]:
+        return {"echo_rendered": self.rendered, "echo_unrendered": self.unrendered, "echo_render_ms_last": self.last_ms}
