@@ -35,6 +35,7 @@ import re
 import sys
 import tempfile
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -52,8 +53,10 @@ from services.reasoner.explain import MARK_NAMES, TEMPLATES  # noqa: E402
 from services.reasoner.explain import WORDS as EXPLAINED_WORDS  # noqa: E402
 from services.speech.config import DEFAULT_RATE, DEFAULT_VOICE, DEFAULT_VOLUME  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
-from services.voice.audio import SAMPLE_RATE  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, rounded_pcm  # noqa: E402
+from services.voice.echo import EchoCanceller, Played  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.mic import CHUNK_S  # noqa: E402
 from services.voice.own_voice import TAIL_S  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 from services.voice.training.tts import wav_samples  # noqa: E402
@@ -115,6 +118,62 @@ def stop_over_voice(engine: Engine, config: SegmenterConfig, voices: list[np.nda
     return heard
 
 
+@dataclass
+class EchoPath:
+    """The way from the robot's loudspeaker to its microphone, for `--cancel`: a room with the loudspeaker 0.1 m away
+    (`own_room`), a small loudspeaker's soft clipping (`tanh`, its drive), and per sentence the sound card's delay
+    (20-60 ms) and how late or early the speech service's state says it began (±30 ms: the bus, the player's start)."""
+
+    response: np.ndarray
+    drive: float
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, rt60: tuple[float, float]) -> EchoPath:
+        return cls(responses(own_room(rng, rt60))[0], float(rng.uniform(0.5, 2.0)))
+
+    def echo(self, voice: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, float]:
+        """The sentence as the microphone hears it (unscaled), and the state's error, s."""
+        delay = np.zeros(int(rng.uniform(0.02, 0.06) * SAMPLE_RATE))
+        bent = np.tanh(self.drive * 0.5 * voice) / np.tanh(self.drive)
+        return fftconvolve(np.concatenate([delay, bent]), self.response), float(rng.uniform(-0.03, 0.03))
+
+
+def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
+                        peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
+                        rng: np.random.Generator, warm: int = 3) -> tuple[int, int]:
+    """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
+    through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone; the stream (through the
+    microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
+    states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s are heard without the canceller
+    and with it, on the same streams."""
+    heard = [0, 0]
+    gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
+    for k, stop in enumerate(stops):
+        path = EchoPath.draw(rng, rt60)
+        said = [voices[(k + j) % len(voices)] for j in range(warm, -1, -1)]
+        echoes = [path.echo(v, rng) for v in said]
+        scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
+        starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
+        x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + SAMPLE_RATE)
+        played = Played()
+        for start, (echo, late), voice in zip(starts, echoes, said, strict=True):
+            x[start : start + echo.size] += echo * scale
+            played.add(t0 + start / SAMPLE_RATE + late, voice)
+        last = int(starts[-1])
+        at = last + int(rng.uniform(0.2, max(0.3, said[-1].size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
+        stop = at_level(stop, person)
+        x[at : at + stop.size] += stop
+        x = through_mic(np.clip(x, -1.0, 1.0), mic_rate)
+        canceller, pcm, block = EchoCanceller(played), rounded_pcm(x), 2 * int(CHUNK_S * SAMPLE_RATE)
+        y = np.frombuffer(b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE)
+                                   for i in range(0, len(pcm), block)), "<i2") / 32768.0
+        begin, end = at / SAMPLE_RATE, (at + stop.size) / SAMPLE_RATE
+        for j, z in enumerate((x, y)):
+            segs = stream(engine, z, config)
+            heard[j] += any(cmd is Command.STOP and s < end and e > begin for _, s, e, cmd, _ in segs)
+    return heard[0], heard[1]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engine", default="spotter")
@@ -126,6 +185,9 @@ def main() -> int:
     ap.add_argument("--rt60", default="0.25,0.6", help="with --room: the reverberation time's range (Sabine), s")
     ap.add_argument("--over", type=int, help="voice_bench's held-out seed: its people's \"stop\" said over the robot")
     ap.add_argument("--person", type=float, default=-26.0, help="with --over: the person's \"stop\", dBFS peak")
+    ap.add_argument("--cancel", action="store_true",
+                    help="with --over: the robot's voice through a room and a small loudspeaker, three sentences "
+                         "before the one the \"stop\" is said over, with and without the service's echo canceller")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -137,6 +199,7 @@ def main() -> int:
     tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
     with tempfile.TemporaryDirectory(prefix="hri-own-voice-") as tmp:
         voices = [spoken(s, tts, Path(tmp)) for s in sentences]
+    dry = list(voices)
     ends = [LEAD_S + v.size / SAMPLE_RATE for v in voices]  # where the loudspeaker falls silent, stream seconds
     if args.room:
         rng = np.random.default_rng(args.seed)
@@ -175,7 +238,13 @@ def main() -> int:
             row["stop_over_voice"] = stop_over_voice(engine, config, voices, stops, row["peak_dbfs"], args.person,
                                                      args.floor, args.mic_rate, np.random.default_rng(args.seed))
             row["stop_alone"], row["stops"] = alone, len(stops)
-            print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops")}), flush=True)
+            if args.cancel:
+                row["stop_over_echo"], row["stop_over_echo_cancelled"] = stop_over_cancelled(
+                    engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor, args.mic_rate, rt60,
+                    np.random.default_rng(args.seed))
+            print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
+                                                  "stop_over_echo", "stop_over_echo_cancelled") if k in row}),
+                  flush=True)
     print()
     print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
           f"{'past tail':>9}  acted on")
@@ -187,6 +256,11 @@ def main() -> int:
         print(f"a person's \"stop\" at {args.person:.0f} dBFS over the robot's voice (held-out seed {args.over}): "
               + ", ".join(f"{r['stop_over_voice']}/{r['stops']} over {r['peak_dbfs']:.0f} dBFS" for r in rows)
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
+    if args.over is not None and args.cancel:
+        print("the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after three sentences), "
+              "without / with the echo canceller: " + ", ".join(
+                  f"{r['stop_over_echo']} / {r['stop_over_echo_cancelled']} of {r['stops']} at {r['peak_dbfs']:.0f} dBFS"
+                  for r in rows))
     print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
           f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
           f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "

@@ -305,3 +305,18 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     else:
         assert health.detail["echo_cancel"] == "off" and "echo_rendered" not in health.detail
         assert "echo_frames" not in health.detail
+
+
+@espeak
+def test_the_bench_hears_more_stops_over_the_robots_voice_with_the_canceller() -> None:
+    """`bench/voice_own.py --over --cancel`'s streams (a room, a small loudspeaker, the state's jitter) with four of
+    espeak-ng's "stop"s said over the robot at -26 dBFS: on the same streams, the canceller hears more of them."""
+    from bench.voice_own import stop_over_cancelled
+    from services.voice.engine import make_engine
+    from services.voice.segmenter import SegmenterConfig
+
+    voices = [synth.speak(s, "en-us", 175) for s in SENTENCES]
+    stops = [synth.speak("stop", v, 140) for v in ("en", "en-us+m3", "en+f2", "en-gb+m1")]
+    without, cancelled = stop_over_cancelled(make_engine("spotter"), SegmenterConfig(), voices, stops, -26.0, -26.0,
+                                             -70.0, None, (0.25, 0.6), np.random.default_rng(1))
+    assert cancelled > without
