@@ -229,7 +229,8 @@ class EchoCanceller:
         if hi > self._index:
             return  # not heard yet
         begin = self._index - self._recent.size
-        if lo < begin:  # long gone by the time it was rendered: too late to cancel it
+        lo = max(lo, begin, 0)  # the stream (or what is kept of it) began within the search's reach
+        if hi - lo < lock:  # long gone by the time it was rendered: too late to cancel it
             sentence.lost = True
             self.lost += 1
             return

@@ -99,6 +99,18 @@ def test_each_sentence_is_placed_where_its_echo_is_heard_and_one_not_heard_is_lo
     assert canceller.lost == 1 and canceller.locked == 0 and canceller.frames == 0
 
 
+@espeak
+def test_a_sentence_begun_as_the_stream_began_is_found_too() -> None:
+    voice = synth.speak(SENTENCES[0], "en-us", 175) * 0.5
+    x = np.random.default_rng(1).normal(0.0, 1e-3, 3 * SAMPLE_RATE)
+    x[480 : 480 + voice.size] += 0.3 * voice
+    played = Played()
+    played.add(100.0, voice)  # the stream's sample 0: the search would begin 0.1 s before it
+    canceller = EchoCanceller(played)
+    _stream(canceller, x)
+    assert canceller.locked == 1 and canceller.lag_ms == pytest.approx(30.0)
+
+
 @pytest.mark.parametrize(("raw", "on"), [(None, True), ("", True), ("on", True), ("off", False), ("0", False)])
 def test_the_setting(raw: str | None, on: bool) -> None:
     assert echo_cancel_from(raw) is on
