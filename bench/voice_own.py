@@ -19,6 +19,11 @@ held-out "stop"s of `voice_bench`'s seed (other voices and engines), each placed
 sentences, peaking at `--person` dBFS (-26: a person about a metre away), against the same "stop"s with no robot
 voice under them. A "stop" counts when an utterance that overlaps it is heard as "stop".
 
+`--cancel` (with `--over`): the service's echo canceller (`services/voice/echo.py`). Each "stop" is said over the last
+of four of the robot's sentences in a row, through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away,
+a small loudspeaker's soft clipping, the sound card's delay and the state's error per sentence); the same streams are
+heard with and without the canceller.
+
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
 makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a
 command (which ones, and those the reasoner would act on), and "go"s that would walk the robot or make it ask.
