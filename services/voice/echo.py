@@ -1,12 +1,13 @@
 """The robot's own voice taken out of the microphone's stream: echo cancellation, the played sound as the reference.
 
 The microphone in the OP2's head hears the robot's loudspeaker louder than any person, so a person's "stop" said over
-the robot's voice was seldom heard (`bench/voice_own.py --over`: 3-8 of 47). An echo canceller learns the way from
+the robot's voice was seldom heard (`bench/voice_own.py --over`: 1-8 of 47). An echo canceller learns the way from
 the loudspeaker to the microphone (the sound card's delay, the loudspeaker, the room) from the sound the robot played
 and subtracts its estimate of that sound from what the microphone heard, leaving the person. It needs the played
 sound sample for sample: the speech service says what it says (`SpeechState.text`) and with which espeak-ng voice and
 rate (its health), and espeak-ng renders the same text to the same samples every time, so the voice process renders
-it again (`robot_voice.RobotVoice`) and places it on the wall clock from when the robot began (`Played`).
+it again (`robot_voice.RobotVoice`, onto `Played`). The state says when the robot began only to within tens of ms,
+so each sentence is placed where its echo is found in the stream (`EchoCanceller.lock`).
 
 The canceller is speexdsp's (its multi-delay block frequency-domain filter, bundled in the `pyaec` wheel), on 10 ms
 frames, with a 256 ms filter: the sound card's delay and the room's first reflections fit in it. It runs on every
@@ -34,7 +35,8 @@ LEAD_S = 0.02
 reference that comes before its echo, and the same lead every sentence keeps what it learnt in place."""
 LOCK_S = 0.3
 """How much of a sentence is heard before its echo is looked for (`lock`): enough of the robot's voice to find it by
-correlation. That much of each sentence is not cancelled (the own-voice gate still holds it back)."""
+correlation. That much of each sentence, and the search's reach after the state, is not cancelled (0.6 s; the own-voice
+gate still holds it back)."""
 SEARCH_S = (-0.1, 0.3)
 """Where the echo is looked for, against when the speech service said the sentence began (by the stream's clock): the
 state arrives over the bus after the sound card started, or before it (a player's start-up), and the stream's clock is
@@ -138,13 +140,13 @@ class EchoCanceller:
     erle_db: float | None = None
     """How far the last stretch of the robot's voice was taken down (output over input energy, dB; the echo return
     loss enhancement): about -20 once the way is learnt, near 0 while it is not or when the reference is wrong."""
-    _aec: object = field(init=False, repr=False)
     locked: int = 0
     """Sentences whose echo was found, and so are cancelled."""
     lost: int = 0
     """Sentences whose echo was not found (or found too late), not cancelled."""
     lag_ms: float | None = None
     """How long after the speech service's state said the last sentence began its echo was heard."""
+    _aec: object = field(init=False, repr=False)
     _held: bytes = b""
     _index: int = 0
     """Samples of the stream seen so far; the held ones (`_held`) come after them."""

@@ -294,8 +294,11 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
             advised[kind] = time.monotonic()
             ctx.log.warning("input level", advice=advice, **fields)
 
+    def echo_detail() -> dict[str, object]:
+        return echo.detail() if echo is not None else {}
+
     def on_level(detail: dict[str, object]) -> None:
-        ctx.update_detail(**detail, **(echo.detail() if echo is not None else {}))  # every 2 s of a live stream
+        ctx.update_detail(**detail, **echo_detail())  # every 2 s of a live stream
         advice = offset_advice(detail, highpass)  # a DC offset hides quiet speech, and nothing in a word says so
         if advice is not None:
             advise("offset", advice)
@@ -357,7 +360,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
             ctx.log.info("heard while the robot spoke: not published", origin=utt.origin,
                          command=rec.command.value if rec.command else None, text=rec.text,
                          confidence=round(rec.confidence, 3))
-            ctx.update_detail(**stats.as_detail(), **(echo.detail() if echo is not None else {}))
+            ctx.update_detail(**stats.as_detail(), **echo_detail())
             return
         if rec.command is None:
             stats.rejected += 1
@@ -370,7 +373,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
                      snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
                      peak_dbfs=round(level.peak_dbfs, 1), **rec.detail)
         # the stream's last speech-to-noise estimate: whether the room counts as clear (`clear_window_s`)
-        ctx.update_detail(**stats.as_detail(), **meter.detail(), **(echo.detail() if echo is not None else {}),
+        ctx.update_detail(**stats.as_detail(), **meter.detail(), **echo_detail(),
                           **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
 
     delay, last_error = settings.retry_s, ""
