@@ -4,7 +4,6 @@ wall clock, speexdsp's canceller on a live stream, and the reference rendered ag
 from __future__ import annotations
 
 import subprocess
-import threading
 import time
 import wave
 from collections.abc import Callable
@@ -20,7 +19,7 @@ from schemas.messages import SpeechRequest, SpeechState
 from services.runtime import ServiceContext
 from services.speech.tts import EspeakNg
 from services.voice import synth
-from services.voice.audio import SAMPLE_RATE, to_pcm
+from services.voice.audio import SAMPLE_RATE
 from services.voice.echo import (
     FRAME,
     LEAD_S,
@@ -35,6 +34,7 @@ from services.voice.echo import (
 from services.voice.robot_voice import RobotVoice
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
+from tests.voice.streams import PacedMicrophone
 from tests.voice.test_service import stdin_service
 
 pytest.importorskip("pyaec")
@@ -231,18 +231,14 @@ def test_each_sentence_begun_is_rendered_where_the_state_arrived() -> None:
     assert voice.unrendered == 2 and voice.rendered == 1 and len(said) == 1
 
 
-class RoomMicrophone:
+class RoomMicrophone(PacedMicrophone):
     """The robot's microphone, never silent, as a room mixes it: a faint hiss, and whatever is `mix`ed in from a moment
-    on (the robot's loudspeaker through `path` from the moment the speech service says it began, a person's word over
-    it), handed to the voice service's stdin in 30 ms blocks at a microphone's pace."""
+    on (the robot's loudspeaker through `path`, from the moment the speech service says it began)."""
 
     def __init__(self, proc: subprocess.Popen[bytes], said: Path, path: Callable[[np.ndarray], np.ndarray]) -> None:
-        self.proc, self.said, self.path = proc, said, path
+        self.said, self.path = said, path
         self.ahead = np.zeros(0)
-        self.lock = threading.Lock()
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
+        super().__init__(proc)
 
     def mix(self, x: np.ndarray, after_s: float = 0.0) -> None:
         at = int(after_s * SAMPLE_RATE)
@@ -253,28 +249,11 @@ class RoomMicrophone:
 
     def on_state(self, state: SpeechState) -> None:
         if state.speaking and state.id is not None:
-            robot = wav_samples((self.said / f"{state.id}.wav").read_bytes())
-            self.mix(self.path(robot))
+            self.mix(self.path(wav_samples((self.said / f"{state.id}.wav").read_bytes())))
 
-    def _run(self) -> None:
-        assert self.proc.stdin is not None
-        rng, block, start, k = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic(), 0
-        while not self.stop.is_set():
-            x = rng.normal(0.0, 10 ** (-70 / 20), block)
-            with self.lock:
-                part, self.ahead = self.ahead[:block], self.ahead[block:]
-            x[: part.size] += part
-            try:
-                self.proc.stdin.write(to_pcm(np.clip(x, -1.0, 1.0)))
-                self.proc.stdin.flush()
-            except (BrokenPipeError, ValueError):
-                return
-            k += 1
-            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
+    def sound(self, n: int) -> np.ndarray:
+        part, self.ahead = self.ahead[:n], self.ahead[n:]
+        return part
 
 
 @espeak

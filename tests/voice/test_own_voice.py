@@ -4,7 +4,6 @@ robot is talking, or just after, is not published, "stop" excepted; recordings a
 from __future__ import annotations
 
 import subprocess
-import threading
 import time
 from collections import deque
 from collections.abc import Iterator
@@ -15,9 +14,9 @@ import numpy as np
 import pytest
 
 from schemas.messages import Decision, SpeechRequest, SpeechState, VoiceCommand
-from services.runtime import ServiceContext
+from services.runtime import ServiceContext, TypedPublisher
 from services.voice import synth
-from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
+from services.voice.audio import SAMPLE_RATE, read_wav
 from services.voice.clock import StreamClock
 from services.voice.engine import EngineError
 from services.voice.own_voice import LONGEST_S, TAIL_S, OwnVoice, OwnVoiceError, tail_from
@@ -25,6 +24,7 @@ from services.voice.service import VoiceSettings, check_settings
 from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
+from tests.voice.streams import PacedMicrophone
 from tests.voice.test_service import stdin_service
 
 
@@ -167,19 +167,16 @@ def _word(text: str) -> np.ndarray:
     return np.frombuffer(read_wav(synth.speech_clip(text, "en", 130).path), "<i2") / 32768.0
 
 
-class HeadMicrophone:
+class HeadMicrophone(PacedMicrophone):
     """The robot's microphone in its own head, never silent: a faint hiss, what the test says into it, and (with
-    `on_state` subscribed) every sentence the speech service says, from the moment it says it (its WAV); handed to the
-    voice service's stdin in 30 ms blocks at a microphone's pace."""
+    `on_state` subscribed) every sentence the speech service says, from the moment it says it (its WAV)."""
 
     def __init__(self, proc: subprocess.Popen[bytes], said: Path) -> None:
-        self.proc, self.said = proc, said
+        self.said = said
         self.pending: deque[np.ndarray] = deque()
-        self.lock = threading.Lock()
-        self.stop = threading.Event()
         self.playing = 0
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
+        self._sound = np.zeros(0)
+        super().__init__(proc)
 
     def say(self, *parts: np.ndarray, gap_s: float = 0.3) -> None:
         """`parts`, `gap_s` of the hiss between them, after what is already to be said."""
@@ -196,29 +193,26 @@ class HeadMicrophone:
         if state.speaking and state.id is not None:
             self.say(_pcm16k(self.said / f"{state.id}.wav"))
 
-    def _run(self) -> None:
-        assert self.proc.stdin is not None
-        rng, block, start = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic()
-        sound, k = np.zeros(0), 0
-        while not self.stop.is_set():
-            with self.lock:
-                if sound.size == 0 and self.pending:
-                    sound = self.pending.popleft()
-                self.playing = sound.size
-            x = rng.normal(0.0, 10 ** (-70 / 20), block)
-            x[: min(block, sound.size)] += sound[:block]
-            sound = sound[block:]
-            try:
-                self.proc.stdin.write(to_pcm(x))
-                self.proc.stdin.flush()
-            except (BrokenPipeError, ValueError):
-                return
-            k += 1
-            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
+    def sound(self, n: int) -> np.ndarray:
+        if self._sound.size == 0 and self.pending:
+            self._sound = self.pending.popleft()
+        self.playing = self._sound.size
+        part, self._sound = self._sound[:n], self._sound[n:]
+        return part
 
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
+
+def speech_service(bus: ServiceContext, start_service, tmp_path: Path, **env: str
+                   ) -> tuple[list[SpeechState], list[VoiceCommand], TypedPublisher[SpeechRequest], Path]:
+    """The real speech service writing what it says to `<tmp_path>/said` (`env`: more of its settings), started and
+    listening; its states and the voice service's commands as they arrive, and a publisher to make it speak."""
+    states: list[SpeechState] = []
+    heard: list[VoiceCommand] = []
+    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
+    out = tmp_path / "said"
+    start_service("speech", env={"HRI_SPEECH_OUT": str(out), **env})
+    wait_for(lambda: any(s.id is None for s in states), timeout=20)  # its start-up "not speaking"
+    return states, heard, bus.publisher(bus.keys.speech_say, SpeechRequest), out
 
 
 LONG = ("I saw an X mark 3 seconds ago, and no O since. Show me an O and I will walk. "
@@ -236,14 +230,7 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
     rest; once the robot has finished, a "yes". By default the robot's words are not published (a sentence
     that matched no command makes the reasoner say "Sorry, I did not understand.", heard again without end) and
     "stop" and "yes" are; with `HRI_VOICE_OWN_VOICE=hear` the robot's words are published too."""
-    states: list[SpeechState] = []
-    heard: list[VoiceCommand] = []
-    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
-    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
-    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
-    out = tmp_path / "said"
-    start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
-    wait_for(lambda: any(s.id is None for s in states), timeout=20)  # its start-up "not speaking"
+    states, heard, say, out = speech_service(bus, start_service, tmp_path)
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, out)) as mic:
         expected = "ignored" if own_voice == "" else "heard"
@@ -279,14 +266,7 @@ def test_a_sentence_under_way_when_the_voice_service_starts_is_the_robots(bus: S
     """The speech service is in the middle of a long sentence, its `speaking=True` long sent, when the voice service
     starts. Asked at start-up, the speech service's health says it is speaking: what the microphone hears of the
     sentence is not published; a person's "stop" over it is, and a "yes" once it has ended."""
-    states: list[SpeechState] = []
-    heard: list[VoiceCommand] = []
-    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
-    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
-    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
-    out = tmp_path / "said"
-    start_service("speech", env={"HRI_SPEECH_OUT": str(out), "HRI_SPEECH_RATE": "110"})
-    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    states, heard, say, out = speech_service(bus, start_service, tmp_path, HRI_SPEECH_RATE="110")
     say.put(SpeechRequest(text=f"{LONG} {LONG}", id="long"))  # about 20 s at 110 words a minute
     wait_for(lambda: any(s.id == "long" and s.speaking for s in states), timeout=10)
     robot = _pcm16k(out / "long.wav")
