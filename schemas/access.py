@@ -48,8 +48,9 @@ class Access:
 
 
 HEALTH_ASKERS: dict[str, tuple[str, ...]] = {"speech": ("voice",)}
-"""Services that ask another's health: the voice service asks the speech service's once at start-up whether the robot
-is in the middle of a sentence (`speaking`), not to answer its own voice."""
+"""Services that ask another's health: the voice service asks the speech service's at start-up whether the robot is in
+the middle of a sentence (`speaking`), not to answer its own voice, and as each sentence begins its espeak-ng voice
+and rate, to render the sentence again as its echo canceller's reference."""
 
 
 def _per_service() -> tuple[Access, ...]:
