@@ -59,7 +59,7 @@ from services.reasoner.explain import WORDS as EXPLAINED_WORDS  # noqa: E402
 from services.speech.config import DEFAULT_RATE, DEFAULT_VOICE, DEFAULT_VOLUME  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, rounded_pcm  # noqa: E402
-from services.voice.echo import EchoCanceller, Played  # noqa: E402
+from services.voice.echo import LOCK_S, SEARCH_S, EchoCanceller, Played  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.mic import CHUNK_S  # noqa: E402
 from services.voice.own_voice import TAIL_S  # noqa: E402
@@ -143,15 +143,35 @@ class EchoPath:
         return fftconvolve(np.concatenate([delay, bent]), self.response), float(rng.uniform(-0.03, 0.03))
 
 
+EARLY_S = LOCK_S + SEARCH_S[1]
+"""A "stop" begun this soon after its sentence's echo (or before) is within what the canceller holds back while it
+looks for that echo (`EchoCanceller.look_back`); without the look-back it is not cancelled."""
+
+
+@dataclass
+class OverEcho:
+    """`--cancel`'s "stop"s heard over the robot's voice: without the canceller, with it cancelling only once each
+    sentence's echo is found (`look_back` off), and with the service's default (held back and cancelled from each
+    sentence's first sample); `early`: those begun within `EARLY_S` of their sentence's echo, and how many of them each
+    heard."""
+
+    stops: int = 0
+    without: int = 0
+    found_on: int = 0
+    look_back: int = 0
+    early: int = 0
+    early_heard: tuple[int, int, int] = (0, 0, 0)
+
+
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
                         peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
-                        rng: np.random.Generator, warm: int = 3) -> tuple[int, int]:
+                        rng: np.random.Generator, warm: int = 3) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone; the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
     states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s are heard without the canceller
-    and with it, on the same streams."""
-    heard = [0, 0]
+    and with it (`OverEcho`), on the same streams."""
+    out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
         path = EchoPath.draw(rng, rt60)
@@ -160,23 +180,41 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
         starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
         x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + SAMPLE_RATE)
-        played = Played()
+        played = []  # each sentence as its (jittered) state says it began
         for start, (echo, late), voice in zip(starts, echoes, said, strict=True):
             x[start : start + echo.size] += echo * scale
-            played.add(t0 + start / SAMPLE_RATE + late, voice)
+            played.append((t0 + start / SAMPLE_RATE + late, voice))
         last = int(starts[-1])
         at = last + int(rng.uniform(0.2, max(0.3, said[-1].size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
         stop = at_level(stop, person)
         x[at : at + stop.size] += stop
         x = through_mic(np.clip(x, -1.0, 1.0), mic_rate)
-        canceller, pcm, block = EchoCanceller(played), rounded_pcm(x), 2 * int(CHUNK_S * SAMPLE_RATE)
-        y = np.frombuffer(b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE)
-                                   for i in range(0, len(pcm), block)), "<i2") / 32768.0
-        begin, end = at / SAMPLE_RATE, (at + stop.size) / SAMPLE_RATE
-        for j, z in enumerate((x, y)):
+        pcm, block = rounded_pcm(x), 2 * int(CHUNK_S * SAMPLE_RATE)
+        heard = []
+        for z in (x, *(_cancelled(played, look_back, pcm, block, t0) for look_back in (False, True))):
             segs = stream(engine, z, config)
-            heard[j] += any(cmd is Command.STOP and s < end and e > begin for _, s, e, cmd, _ in segs)
-    return heard[0], heard[1]
+            heard.append(any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
+                             for _, s, e, cmd, _ in segs))
+        echo_begins = last + int(np.argmax(np.abs(echoes[-1][0]) > 1e-3 * np.max(np.abs(echoes[-1][0]))))
+        early = at - echo_begins < EARLY_S * SAMPLE_RATE
+        out.stops += 1
+        out.without, out.found_on, out.look_back = (n + h for n, h in
+                                                     zip((out.without, out.found_on, out.look_back), heard, strict=True))
+        if early:
+            out.early += 1
+            out.early_heard = tuple(n + h for n, h in zip(out.early_heard, heard, strict=True))  # type: ignore[assignment]
+    return out
+
+
+def _cancelled(said: list[tuple[float, np.ndarray]], look_back: bool, pcm: bytes, block: int, t0: float) -> np.ndarray:
+    """`pcm` through a new `EchoCanceller` told of the sentences `said` (when each began, its samples), in the
+    microphone's blocks (what it holds at the end passed on)."""
+    played = Played()
+    for began, samples in said:
+        played.add(began, samples)
+    canceller = EchoCanceller(played, look_back=look_back)
+    y = b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE) for i in range(0, len(pcm), block))
+    return np.frombuffer(y + canceller(b"", None), "<i2") / 32768.0
 
 
 def main() -> int:
@@ -244,11 +282,15 @@ def main() -> int:
                                                      args.floor, args.mic_rate, np.random.default_rng(args.seed))
             row["stop_alone"], row["stops"] = alone, len(stops)
             if args.cancel:
-                row["stop_over_echo"], row["stop_over_echo_cancelled"] = stop_over_cancelled(
-                    engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor, args.mic_rate, rt60,
-                    np.random.default_rng(args.seed))
+                over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
+                                           args.mic_rate, rt60, np.random.default_rng(args.seed))
+                row.update(stop_over_echo=over.without, stop_over_echo_cancelled=over.look_back,
+                           stop_over_echo_cancelled_once_found=over.found_on, stops_early=over.early,
+                           stops_early_heard=list(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
-                                                  "stop_over_echo", "stop_over_echo_cancelled") if k in row}),
+                                                  "stop_over_echo", "stop_over_echo_cancelled",
+                                                  "stop_over_echo_cancelled_once_found", "stops_early",
+                                                  "stops_early_heard") if k in row}),
                   flush=True)
     print()
     print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
@@ -263,9 +305,11 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print("the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after three sentences), "
-              "without / with the echo canceller: " + ", ".join(
-                  f"{r['stop_over_echo']} / {r['stop_over_echo_cancelled']} of {r['stops']} at {r['peak_dbfs']:.0f} dBFS"
-                  for r in rows))
+              "without the echo canceller / with it once each sentence's echo is found / with it held back and "
+              "cancelled from each sentence's start (the default): " + ", ".join(
+                  f"{r['stop_over_echo']} / {r['stop_over_echo_cancelled_once_found']} / {r['stop_over_echo_cancelled']} "
+                  f"of {r['stops']} at {r['peak_dbfs']:.0f} dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s "
+                  f"of the sentence's echo: {' / '.join(map(str, r['stops_early_heard']))})" for r in rows))
     print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
           f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
           f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "

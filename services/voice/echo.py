@@ -35,8 +35,8 @@ LEAD_S = 0.02
 reference that comes before its echo, and the same lead every sentence keeps what it learnt in place."""
 LOCK_S = 0.3
 """How much of a sentence is heard before its echo is looked for (`lock`): enough of the robot's voice to find it by
-correlation. That much of each sentence, and the search's reach after the state, is not cancelled (0.6 s; the own-voice
-gate still holds it back)."""
+correlation. Until then, with the search's reach after the state (0.6 s in all), the stream is held back and cancelled
+once the echo is found (`EchoCanceller.look_back`), or passed on as heard without it."""
 SEARCH_S = (-0.1, 0.3)
 """Where the echo is looked for, against when the speech service said the sentence began (by the stream's clock): the
 state arrives over the bus after the sound card started, or before it (a player's start-up), and the stream's clock is
@@ -146,6 +146,14 @@ class EchoCanceller:
     """Sentences whose echo was not found (or found too late), not cancelled."""
     lag_ms: float | None = None
     """How long after the speech service's state said the last sentence began its echo was heard."""
+    look_back: bool = True
+    """While a sentence's echo is looked for (from where it may begin until `LOCK_S` and the search's reach after its
+    state: 0.72 s, in whole blocks of the stream), the stream is held back, then cancelled from the sentence's first sample once the echo is
+    found, so that a person's "stop" said over the start of a sentence is cancelled too; what the stream held is then
+    passed on at once, with its place in the stream unchanged. False: the stream goes on as heard meanwhile, uncancelled,
+    and nothing is held."""
+    held_ms: float | None = None
+    """How long the stream was last held back while a sentence's echo was looked for."""
     _aec: object = field(init=False, repr=False)
     _held: bytes = b""
     _index: int = 0
@@ -153,7 +161,9 @@ class EchoCanceller:
     _recent: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32), repr=False)
     _keep_n: int = 4 * SAMPLE_RATE
     _unplaced: bool = False
-    """A sentence is within reach whose echo has not been found yet."""
+    """A sentence's echo may have begun and has not been found yet."""
+    _pending: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int16), repr=False)
+    """The stream held back (`look_back`): the samples just before `_index`'s held ones."""
     _energy: tuple[float, float] = (0.0, 0.0)
     """Input and output energy of the current stretch of the robot's voice."""
 
@@ -162,22 +172,30 @@ class EchoCanceller:
 
     def __call__(self, chunk: bytes, captured: float | None) -> bytes:
         """`chunk` (16-bit PCM, 16 kHz) whose first sample was captured at wall-clock `captured` (None: not known
-        yet, passed as it is)."""
+        yet, or the stream has ended: passed on as it is, after what was held back)."""
         if captured is None:
             held, self._held = self._held, b""
+            pending, self._pending = self._pending.tobytes(), self._pending[:0]
             self._keep(np.frombuffer(held + chunk, "<i2"))
-            return held + chunk
-        first = self._index  # the stream's index of the first held sample, else of the chunk's
+            return pending + held + chunk
         # the wall clock of the stream's sample 0, as the stream's clock says now
-        origin = captured - (first + len(self._held) // SAMPLE_WIDTH) / SAMPLE_RATE
+        origin = captured - (self._index + len(self._held) // SAMPLE_WIDTH) / SAMPLE_RATE
         pcm = self._held + chunk
         whole = len(pcm) - len(pcm) % (FRAME * SAMPLE_WIDTH)
         self._held = pcm[whole:]
-        mic = np.frombuffer(pcm[:whole], "<i2")
-        if mic.size == 0:
+        new = np.frombuffer(pcm[:whole], "<i2")
+        if new.size == 0:
             return b""
-        self._keep(mic)
+        self._keep(new)
+        mic = np.concatenate([self._pending, new]) if self._pending.size else new
+        first = self._index - mic.size  # the stream's index of the first sample to pass on
         ref, near = self.reference(first, mic.size, origin)
+        if self._unplaced and self.look_back:  # held until the echo is found, then cancelled from its start
+            self._pending = mic
+            return b""
+        if self._pending.size:
+            self.held_ms = round(self._pending.size / SAMPLE_RATE * 1000.0, 1)
+            self._pending = self._pending[:0]
         out = mic.copy()
         refs = np.round(np.clip(ref, -1.0, 1.0) * 32767).astype(np.int16)
         if self._unplaced:  # not fed: its echo with no reference would unlearn what the canceller learnt
@@ -199,8 +217,8 @@ class EchoCanceller:
     def reference(self, first: int, n: int, origin: float) -> tuple[np.ndarray, bool]:
         """The played sound for the stream's samples `first` to `first + n`, and whether any of it lies within the
         filter's reach of them. Each sentence is placed by `origin` (the wall clock of the stream's sample 0) when
-        first seen, and `lock`ed to its echo once `LOCK_S` of it has been heard; until then the canceller is not fed
-        (`_unplaced`) and the stream passes as heard."""
+        first seen, and `lock`ed to its echo once `LOCK_S` of it has been heard; until then (`_unplaced`, from where
+        its echo may begin) the stream is held back (`look_back`) or passes as heard, and the canceller is not fed."""
         ref = np.zeros(n, dtype=np.float32)
         reach = int(self.filter_s * SAMPLE_RATE)
         near = False
@@ -211,8 +229,9 @@ class EchoCanceller:
             if sentence.placed is None and not sentence.lost:
                 self.lock(sentence)
             if sentence.placed is None or sentence.lost:
-                if sentence.placed is None and not sentence.lost and sentence.at < first + n + reach:
-                    self._unplaced = True  # its echo is in the stream with no reference for it yet
+                may_begin = sentence.at + int(SEARCH_S[0] * SAMPLE_RATE) - int(self.lead_s * SAMPLE_RATE)
+                if sentence.placed is None and not sentence.lost and may_begin < first + n:
+                    self._unplaced = True  # its echo may be in the stream with no reference for it yet
                 continue
             start, end = sentence.placed, sentence.placed + sentence.samples.size
             lo, hi = max(first, start), min(first + n, end)

@@ -415,7 +415,7 @@ class _Echo:
     def detail(self) -> dict[str, object]:
         c = self.canceller
         return {"echo_frames": c.frames, "echo_locked": c.locked, "echo_lost": c.lost, "echo_lag_ms_last": c.lag_ms,
-                "echo_erle_db_last": c.erle_db, **self.voice.detail()}
+                "echo_erle_db_last": c.erle_db, "echo_held_ms_last": c.held_ms, **self.voice.detail()}
 
 
 def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice | None, _Echo | None]:

@@ -34,7 +34,7 @@ from services.voice.clock import StreamClock
 from services.voice.engine import Recognition
 from services.voice.level import Meter, amplified, amplify
 from services.voice.mic import ALTERNATIVES, CHUNK_S, MicError, MicFormat, Stop, mic_chunks
-from services.voice.segmenter import Segmenter, SegmenterConfig
+from services.voice.segmenter import Segment, Segmenter, SegmenterConfig
 
 
 class SourceError(RuntimeError):
@@ -102,8 +102,8 @@ Recognise = Callable[[bytes], Recognition]
 HighpassState = Callable[[bool, float], None]
 """Told whether a live stream is heard through the high-pass, and the offset that switched it on (full scale 1.0)."""
 Echo = Callable[[bytes, float | None], bytes]
-"""A live stream's chunk and when its first sample was captured (wall clock; None until known) -> the chunk with the
-robot's own voice cancelled (`echo.EchoCanceller`)."""
+"""A live stream's chunk and when its first sample was captured (wall clock; None until known, and at the stream's
+end) -> the chunk with the robot's own voice cancelled (`echo.EchoCanceller`), with what it held back before it."""
 
 
 def stream_utterances(
@@ -119,21 +119,25 @@ def stream_utterances(
     if on_highpass is not None:
         on_highpass(highpass_on, 0.0)
     heard_s, clock = 0.0, StreamClock()
+
+    def utterances(segments: list[Segment]) -> Iterator[Utterance]:
+        for s in segments:
+            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
+                            start_s=s.start_s, began=clock.wall(s.start_s))
+
     for chunk in chunks:
         seconds = len(chunk) / (SAMPLE_RATE * SAMPLE_WIDTH)
         heard_s += seconds
         clock.heard(heard_s)
         if echo is not None:
             chunk = echo(chunk, clock.wall(heard_s - seconds))
-        for s in seg.feed(chunk):
-            yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", recognition=s.recognition, snr_db=s.snr_db,
-                            start_s=s.start_s, began=clock.wall(s.start_s))
+        yield from utterances(seg.feed(chunk))
         if on_highpass is not None and seg.highpass_on and not highpass_on:
             highpass_on = True
             on_highpass(True, seg.offset_seen_so_far()[1])
-    for s in seg.flush():
-        yield Utterance(s.pcm, f"{origin}@{s.start_s:.2f}s", snr_db=s.snr_db, start_s=s.start_s,
-                        began=clock.wall(s.start_s))
+    if echo is not None:  # what the canceller still holds back, as heard
+        yield from utterances(seg.feed(echo(b"", None)))
+    yield from utterances(seg.flush())
 
 
 TRIM_CONFIG = SegmenterConfig(vad="webrtc", window_s=0.3, ratio=0.9, highpass_hz=None)

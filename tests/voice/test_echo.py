@@ -32,6 +32,7 @@ from services.voice.echo import (
     echo_lag,
 )
 from services.voice.robot_voice import RobotVoice
+from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
 from tests.voice.streams import PacedMicrophone
@@ -140,11 +141,35 @@ def test_with_nothing_played_the_stream_passes_unchanged_in_any_chunking() -> No
 
 
 @espeak
-def test_the_robots_voice_is_cancelled_and_a_person_is_left() -> None:
-    """Four sentences through a bent loudspeaker in a room, the microphone's stream read in 30 ms blocks. Each
-    sentence's first `LOCK_S` and the search's reach pass as heard; from where its echo is found, the canceller learns
-    the way as the robot speaks: by the fourth sentence it takes the robot's voice down by more than 12 dB (16.6 here;
-    the first sentence, unlearnt, 4.3), and a person speaking over it is not cancelled with it."""
+def test_what_is_held_back_at_the_streams_end_is_heard() -> None:
+    """A stream that ends while a sentence's echo is still looked for (`look_back`): what was held back is passed on
+    as heard, and a word in it is still an utterance."""
+    rng = np.random.default_rng(4)
+    word = synth.speak("stop", "en-us", 175)[: int(0.5 * SAMPLE_RATE)] * 0.3
+    x = rng.normal(0.0, 1e-3, SAMPLE_RATE)  # a stream of 1 s
+    x[int(0.42 * SAMPLE_RATE) : int(0.42 * SAMPLE_RATE) + word.size] += word
+    played = Played()
+    played.add(100.5, synth.speak(SENTENCES[0], "en-us", 175))  # its echo is looked for at 1.1 s: after the end
+    canceller, pcm = EchoCanceller(played), _pcm(x)
+    chunks = [pcm[k : k + 960] for k in range(0, len(pcm), 960)]
+    out = b"".join(canceller(c, 100.0 + k * 480 / SAMPLE_RATE) for k, c in enumerate(chunks))
+    begins = 2 * int(0.38 * SAMPLE_RATE)  # where the echo may begin: 0.5 s less the search's reach and the lead
+    assert begins - 960 < len(out) <= begins  # held from the block it falls in
+    assert out + canceller(b"", None) == pcm  # then passed on as heard
+    canceller = EchoCanceller(Played())
+    canceller.played.add(100.5, synth.speak(SENTENCES[0], "en-us", 175))
+    seen = list(stream_utterances(iter(chunks), "test", echo=canceller))
+    assert len(seen) == 1 and 0.2 < seen[0].start_s < 0.42  # the word (its utterance begins with the pre-roll)
+
+
+@espeak
+@pytest.mark.parametrize("look_back", [True, False])
+def test_the_robots_voice_is_cancelled_and_a_person_is_left(look_back: bool) -> None:
+    """Four sentences through a bent loudspeaker in a room, the microphone's stream read in 30 ms blocks. The canceller
+    learns the way as the robot speaks: by the fourth sentence it takes the robot's voice down by more than 12 dB, and
+    a person speaking over it is not cancelled with it. Each sentence's first `LOCK_S` and the search's reach are held
+    back and cancelled once its echo is found (`look_back`), or pass as heard (16.6 dB down after them by the fourth
+    sentence, the first, unlearnt, 4.3)."""
     rng = np.random.default_rng(5)
     voices = [synth.speak(s, "en-us", 175) * 0.5 for s in (*SENTENCES, SENTENCES[0])]
     path = echo_path(rng)
@@ -160,9 +185,10 @@ def test_the_robots_voice_is_cancelled_and_a_person_is_left() -> None:
     at = starts[-1] + int(0.8 * SAMPLE_RATE)  # after the canceller has found that sentence's echo
     mic = robot + rng.normal(0.0, 10 ** (-70 / 20), n)
     mic[at : at + word.size] += word
-    canceller = EchoCanceller(played)
+    canceller = EchoCanceller(played, look_back=look_back)
     pcm, block = _pcm(mic), 2 * int(0.03 * SAMPLE_RATE)
     y = _x(b"".join(canceller(pcm[k : k + block], 100.0 + k / 2 / SAMPLE_RATE) for k in range(0, len(pcm), block)))
+    assert n - FRAME < y.size <= n  # nothing lost (the last part-frame waits for more)
 
     def cancelled_db(start: int, size: int) -> float:
         robot_only = np.ones(n, bool)
@@ -172,8 +198,15 @@ def test_the_robots_voice_is_cancelled_and_a_person_is_left() -> None:
 
     found = int((LOCK_S + SEARCH_S[1]) * SAMPLE_RATE) + 2 * FRAME  # each sentence's echo found by then
     assert cancelled_db(starts[-1] + found, voices[-1].size - found) < -12.0
-    assert cancelled_db(starts[0] + found, voices[0].size - found) > -8.0  # not yet learnt: the measure can tell
-    assert cancelled_db(starts[-1], found) > -1.0  # not cancelled before its echo is found
+    if look_back:  # cancelled from each sentence's first sample (-23.8 here), once the way is learnt (the first: -7.4)
+        assert cancelled_db(starts[-1], found) < -12.0
+        assert cancelled_db(starts[0], found) > cancelled_db(starts[-1], found) + 6.0
+        held = LOCK_S + SEARCH_S[1] - SEARCH_S[0] + LEAD_S  # from where the echo may begin until it is looked for
+        assert canceller.held_ms is not None and 0.0 < canceller.held_ms <= held * 1000.0 + 30.0
+    else:
+        assert cancelled_db(starts[0] + found, voices[0].size - found) > -8.0  # not yet learnt: the measure can tell
+        assert cancelled_db(starts[-1], found) > -1.0  # not cancelled before its echo is found
+        assert canceller.held_ms is None
     # the person is not cancelled with it: their word's part in what is left (its projection on the word) is 0.72 of
     # it (2.8 dB down; speexdsp goes on learning while both speak)
     kept = float(np.dot(y[at : at + word.size], word) / np.dot(word, word))
@@ -293,6 +326,8 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
         assert health.detail["echo_cancel"] == "on" and health.detail["echo_unrendered"] == 0
         assert health.detail["echo_locked"] == 4 and health.detail["echo_lost"] == 0
         assert 0.0 <= health.detail["echo_lag_ms_last"] <= 100.0  # the bus, the microphone's 30 ms blocks, the path
+        # held back while each sentence's echo was looked for: 0.72 s, in the microphone's 30 ms blocks
+        assert 0.0 < health.detail["echo_held_ms_last"] <= 780.0
     else:
         assert health.detail["echo_cancel"] == "off" and "echo_rendered" not in health.detail
         assert "echo_frames" not in health.detail
@@ -301,13 +336,16 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
 @espeak
 def test_the_bench_hears_more_stops_over_the_robots_voice_with_the_canceller() -> None:
     """`bench/voice_own.py --over --cancel`'s streams (a room, a small loudspeaker, the state's jitter) with four of
-    espeak-ng's "stop"s said over the robot at -26 dBFS: on the same streams, the canceller hears more of them."""
+    espeak-ng's "stop"s said over the robot at -26 dBFS: on the same streams, the canceller hears more of them, and
+    holding the stream back while it looks for a sentence's echo hears those said over the sentence's start."""
     from bench.voice_own import stop_over_cancelled
     from services.voice.engine import make_engine
     from services.voice.segmenter import SegmenterConfig
 
     voices = [synth.speak(s, "en-us", 175) for s in SENTENCES]
     stops = [synth.speak("stop", v, 140) for v in ("en", "en-us+m3", "en+f2", "en-gb+m1")]
-    without, cancelled = stop_over_cancelled(make_engine("spotter"), SegmenterConfig(), voices, stops, -26.0, -26.0,
-                                             -70.0, None, (0.25, 0.6), np.random.default_rng(1))
-    assert cancelled > without
+    over = stop_over_cancelled(make_engine("spotter"), SegmenterConfig(), voices, stops, -26.0, -26.0, -70.0, None,
+                               (0.25, 0.6), np.random.default_rng(1))
+    assert over.stops == 4 and over.look_back > over.without  # 4 against 1 here
+    # those said over a sentence's start are heard once the stream is held back for them (3 of 3 here, 0 without)
+    assert over.early > 0 and over.early_heard[2] > over.early_heard[1]
