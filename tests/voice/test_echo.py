@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.signal import fftconvolve, resample_poly
 
-from schemas.messages import SpeechRequest, SpeechState
+from schemas.messages import Command, SpeechRequest, SpeechState, VoiceCommand
 from services.runtime import ServiceContext
 from services.speech.tts import EspeakNg
 from services.voice import synth
@@ -296,7 +296,9 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     """The real speech service says four sentences; the microphone hears each through a bent loudspeaker in a room at
     -12 dBFS peak, from the moment the speech service says it began. The voice service renders each sentence again
     from its state and the speech service's health, places it by its own clock, and by the last sentence takes the
-    robot's voice down by more than 10 dB (17-21 dB on this machine). Off, nothing of it runs."""
+    robot's voice down by more than 10 dB (17-21 dB on this machine). A person's "stop" said 0.25 s into the last
+    sentence's echo, before the canceller has found it, is heard: the stream is held back and cancelled from the
+    sentence's first sample (without the look-back, nothing is heard). Off, nothing of it runs."""
     states: list[SpeechState] = []
     bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
     say = bus.publisher(bus.keys.speech_say, SpeechRequest)
@@ -305,9 +307,19 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     wait_for(lambda: any(s.id is None for s in states), timeout=20)
     path, gain = echo_path(np.random.default_rng(7)), 10 ** (-12 / 20)
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_ECHO_CANCEL=cancel)
+    heard: list[VoiceCommand] = []
+    bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
+    stop = synth.speak("stop", "en+f3", 140)
+    stop *= 10 ** (-20 / 20) / np.max(np.abs(stop))
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(RoomMicrophone(proc, out, lambda x: path(
             x) * gain / (np.max(np.abs(x)) + 1e-12))) as mic:
-        bus.subscribe(bus.keys.speech_state, SpeechState, mic.on_state)
+
+        def on_state(state: SpeechState) -> None:
+            mic.on_state(state)
+            if state.speaking and state.id == "s3":  # a person's "stop" 0.25 s into the last sentence's echo
+                mic.mix(stop, after_s=0.03 + 0.25)
+
+        bus.subscribe(bus.keys.speech_state, SpeechState, on_state)
         wait_for(lambda: (h := bus.query_health("voice")) is not None and "spotter_embedding" in h.detail, timeout=60)
         # the microphone's blocks that waited in the pipe while the engine loaded are read at once: the stream's clock
         # settles on the least-delayed ones (`clock.StreamClock`)
@@ -328,6 +340,8 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
         assert 0.0 <= health.detail["echo_lag_ms_last"] <= 100.0  # the bus, the microphone's 30 ms blocks, the path
         # held back while each sentence's echo was looked for: 0.72 s, in the microphone's 30 ms blocks
         assert 0.0 < health.detail["echo_held_ms_last"] <= 780.0
+        # the person's "stop" over the start of the robot's sentence, cancelled once its echo was found, is published
+        assert [c.command for c in heard] == [Command.STOP]
     else:
         assert health.detail["echo_cancel"] == "off" and "echo_rendered" not in health.detail
         assert "echo_frames" not in health.detail

@@ -36,6 +36,7 @@ def main() -> int:
     ap.add_argument("--peaks", default="-26,-12,-3")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--mic-rate", type=int, default=48000)
+    ap.add_argument("--warm", type=int, default=3, help="sentences before the one the \"stop\" is said over")
     args = ap.parse_args()
     tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
     with tempfile.TemporaryDirectory() as tmp:
@@ -45,7 +46,7 @@ def main() -> int:
     engine = make_engine("spotter")
     for peak in (float(p) for p in args.peaks.split(",")):
         over = stop_over_cancelled(engine, SegmenterConfig(), voices, stops, peak, -26.0, -70.0, args.mic_rate,
-                                   (0.25, 0.6), np.random.default_rng(args.seed))
+                                   (0.25, 0.6), np.random.default_rng(args.seed), warm=args.warm)
         print(f"{peak:+.0f} dBFS: {over}", flush=True)
     return 0
 
