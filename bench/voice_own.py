@@ -22,7 +22,9 @@ voice under them. A "stop" counts when an utterance that overlaps it is heard as
 `--cancel` (with `--over`): the service's echo canceller (`services/voice/echo.py`). Each "stop" is said over the last
 of four of the robot's sentences in a row, through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away,
 a small loudspeaker's soft clipping, the sound card's delay and the state's error per sentence); the same streams are
-heard with and without the canceller.
+heard three ways: without the canceller, with it cancelling each sentence once its echo is found, and as the service
+does by default (the stream held back meanwhile and cancelled from the sentence's first sample, `look_back`), with
+how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each way heard.
 
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
 makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a

@@ -1,4 +1,4 @@
-"""Stop 84 (round voice46), the tuning-side look before the rule: does holding the stream back while the echo
+"""Stop 87 (round voice46), the tuning-side look before the rule: does holding the stream back while the echo
 canceller looks for a sentence's echo (`EchoCanceller.look_back`) hear the "stop"s said over a sentence's start?
 
 `bench/voice_own.py --cancel`'s streams (a room with the loudspeaker 0.1 m away, a small loudspeaker's clipping, the
