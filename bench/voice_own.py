@@ -20,11 +20,13 @@ sentences, peaking at `--person` dBFS (-26: a person about a metre away), agains
 voice under them. A "stop" counts when an utterance that overlaps it is heard as "stop".
 
 `--cancel` (with `--over`): the service's echo canceller (`services/voice/echo.py`). Each "stop" is said over the last
-of four of the robot's sentences in a row, through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away,
-a small loudspeaker's soft clipping, the sound card's delay and the state's error per sentence); the same streams are
-heard three ways: without the canceller, with it cancelling each sentence once its echo is found, and as the service
-does by default (the stream held back meanwhile and cancelled from the sentence's first sample, `look_back`), with
-how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each way heard.
+of `--warm` + 1 of the robot's sentences in a row (4 by default; `--warm 0`: a canceller that has not heard the robot
+before), through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away, a small loudspeaker's soft
+clipping, the sound card's delay and the state's error per sentence); the same streams are heard each of `WAYS`:
+without the canceller, with it cancelling each sentence once its echo is found, held back meanwhile and cancelled from
+the sentence's first sample (`look_back`), and as the service does by default (what was held also learnt from first,
+`learn_first`), with how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each
+way heard.
 
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
 makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a
@@ -42,7 +44,7 @@ import re
 import sys
 import tempfile
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -150,19 +152,26 @@ EARLY_S = LOCK_S + SEARCH_S[1]
 looks for that echo (`EchoCanceller.look_back`); without the look-back it is not cancelled."""
 
 
+WAYS: dict[str, dict[str, bool] | None] = {
+    "without": None,
+    "once found": {"look_back": False},
+    "held back": {"look_back": True, "learn_first": False},
+    "learnt first": {},
+}
+"""`--cancel`'s ways of hearing each stream: without the canceller; with it cancelling each sentence once its echo is
+found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46); and the
+service's default, the held samples also learnt from before they are cancelled (round voice47)."""
+
+
 @dataclass
 class OverEcho:
-    """`--cancel`'s "stop"s heard over the robot's voice: without the canceller, with it cancelling only once each
-    sentence's echo is found (`look_back` off), and with the service's default (held back and cancelled from each
-    sentence's first sample); `early`: those begun within `EARLY_S` of their sentence's echo, and how many of them each
-    heard."""
+    """`--cancel`'s "stop"s heard over the robot's voice, each of `WAYS`; `early`: those begun within `EARLY_S` of
+    their sentence's echo, and how many of them each way heard."""
 
     stops: int = 0
-    without: int = 0
-    found_on: int = 0
-    look_back: int = 0
+    heard: Counter[str] = field(default_factory=Counter)
     early: int = 0
-    early_heard: tuple[int, int, int] = (0, 0, 0)
+    early_heard: Counter[str] = field(default_factory=Counter)
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
@@ -171,8 +180,8 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone; the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
-    states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s are heard without the canceller
-    and with it (`OverEcho`), on the same streams."""
+    states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `WAYS` hears
+    (`OverEcho`), on the same streams."""
     out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
@@ -192,29 +201,27 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         x[at : at + stop.size] += stop
         x = through_mic(np.clip(x, -1.0, 1.0), mic_rate)
         pcm, block = rounded_pcm(x), 2 * int(CHUNK_S * SAMPLE_RATE)
-        heard = []
-        for z in (x, *(_cancelled(played, look_back, pcm, block, t0) for look_back in (False, True))):
-            segs = stream(engine, z, config)
-            heard.append(any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
-                             for _, s, e, cmd, _ in segs))
         echo_begins = last + int(np.argmax(np.abs(echoes[-1][0]) > 1e-3 * np.max(np.abs(echoes[-1][0]))))
         early = at - echo_begins < EARLY_S * SAMPLE_RATE
         out.stops += 1
-        out.without, out.found_on, out.look_back = (n + h for n, h in
-                                                     zip((out.without, out.found_on, out.look_back), heard, strict=True))
-        if early:
-            out.early += 1
-            out.early_heard = tuple(n + h for n, h in zip(out.early_heard, heard, strict=True))  # type: ignore[assignment]
+        out.early += early
+        for way, settings in WAYS.items():
+            z = x if settings is None else _cancelled(played, settings, pcm, block, t0)
+            heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
+                        for _, s, e, cmd, _ in stream(engine, z, config))
+            out.heard[way] += heard
+            out.early_heard[way] += heard and early
     return out
 
 
-def _cancelled(said: list[tuple[float, np.ndarray]], look_back: bool, pcm: bytes, block: int, t0: float) -> np.ndarray:
-    """`pcm` through a new `EchoCanceller` told of the sentences `said` (when each began, its samples), in the
-    microphone's blocks (what it holds at the end passed on)."""
+def _cancelled(said: list[tuple[float, np.ndarray]], settings: dict[str, bool], pcm: bytes, block: int,
+               t0: float) -> np.ndarray:
+    """`pcm` through a new `EchoCanceller` (with `settings`) told of the sentences `said` (when each began, its
+    samples), in the microphone's blocks (what it holds at the end passed on)."""
     played = Played()
     for began, samples in said:
         played.add(began, samples)
-    canceller = EchoCanceller(played, look_back=look_back)
+    canceller = EchoCanceller(played, **settings)
     y = b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE) for i in range(0, len(pcm), block))
     return np.frombuffer(y + canceller(b"", None), "<i2") / 32768.0
 
@@ -231,8 +238,11 @@ def main() -> int:
     ap.add_argument("--over", type=int, help="voice_bench's held-out seed: its people's \"stop\" said over the robot")
     ap.add_argument("--person", type=float, default=-26.0, help="with --over: the person's \"stop\", dBFS peak")
     ap.add_argument("--cancel", action="store_true",
-                    help="with --over: the robot's voice through a room and a small loudspeaker, three sentences "
+                    help="with --over: the robot's voice through a room and a small loudspeaker, --warm sentences "
                          "before the one the \"stop\" is said over, with and without the service's echo canceller")
+    ap.add_argument("--warm", type=int, default=3,
+                    help="with --cancel: the robot's sentences before the one the \"stop\" is said over (0: the "
+                         "canceller has not heard the robot before, as when the voice service has just started)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -285,14 +295,11 @@ def main() -> int:
             row["stop_alone"], row["stops"] = alone, len(stops)
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
-                                           args.mic_rate, rt60, np.random.default_rng(args.seed))
-                row.update(stop_over_echo=over.without, stop_over_echo_cancelled=over.look_back,
-                           stop_over_echo_cancelled_once_found=over.found_on, stops_early=over.early,
-                           stops_early_heard=list(over.early_heard))
+                                           args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm)
+                row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
+                           stops_early_heard=dict(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
-                                                  "stop_over_echo", "stop_over_echo_cancelled",
-                                                  "stop_over_echo_cancelled_once_found", "stops_early",
-                                                  "stops_early_heard") if k in row}),
+                                                  "stop_over_echo", "stops_early", "stops_early_heard") if k in row}),
                   flush=True)
     print()
     print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
@@ -306,12 +313,11 @@ def main() -> int:
               + ", ".join(f"{r['stop_over_voice']}/{r['stops']} over {r['peak_dbfs']:.0f} dBFS" for r in rows)
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
-        print("the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after three sentences), "
-              "without the echo canceller / with it once each sentence's echo is found / with it held back and "
-              "cancelled from each sentence's start (the default): " + ", ".join(
-                  f"{r['stop_over_echo']} / {r['stop_over_echo_cancelled_once_found']} / {r['stop_over_echo_cancelled']} "
-                  f"of {r['stops']} at {r['peak_dbfs']:.0f} dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s "
-                  f"of the sentence's echo: {' / '.join(map(str, r['stops_early_heard']))})" for r in rows))
+        print(f"the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after {args.warm} "
+              f"sentences), {' / '.join(WAYS)} the echo canceller (the last the default): " + ", ".join(
+                  f"{' / '.join(str(r['stop_over_echo'][w]) for w in WAYS)} of {r['stops']} at {r['peak_dbfs']:.0f} "
+                  f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
+                  f"{' / '.join(str(r['stops_early_heard'][w]) for w in WAYS)})" for r in rows))
     print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
           f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
           f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "

@@ -152,6 +152,12 @@ class EchoCanceller:
     found, so that a person's "stop" said over the start of a sentence is cancelled too; what the stream held is then
     passed on at once, with its place in the stream unchanged. False: the stream goes on as heard meanwhile, uncancelled,
     and nothing is held."""
+    learn_first: bool = True
+    """With `look_back`: what was held is run through the canceller twice, first to learn the way from it (the output
+    dropped), then, after the filter's length of silence on both sides (so that the second run does not begin with the
+    end of the first in the filter's memory), for the stream. A canceller that has not heard the robot yet (the voice
+    service just started, the robot's first sentence) thus learns from the sentence's first 0.6 s before cancelling
+    them; one that has, learns them twice. It costs one more run over the hold (under 1 ms)."""
     held_ms: float | None = None
     """How long the stream was last held back while a sentence's echo was looked for."""
     _aec: object = field(init=False, repr=False)
@@ -193,21 +199,33 @@ class EchoCanceller:
         if self._unplaced and self.look_back:  # held until the echo is found, then cancelled from its start
             self._pending = mic
             return b""
+        out = mic.copy()
+        refs = np.round(np.clip(ref, -1.0, 1.0) * 32767).astype(np.int16)
         if self._pending.size:
             self.held_ms = round(self._pending.size / SAMPLE_RATE * 1000.0, 1)
             self._pending = self._pending[:0]
-        out = mic.copy()
-        refs = np.round(np.clip(ref, -1.0, 1.0) * 32767).astype(np.int16)
+            if self.learn_first and near:
+                self._run(mic, refs)
+                silence = np.zeros((int(self.filter_s * SAMPLE_RATE) // FRAME + 1) * FRAME, dtype=np.int16)
+                self._run(silence, silence)
         if self._unplaced:  # not fed: its echo with no reference would unlearn what the canceller learnt
             self._measure(mic, out, False)
             return out.tobytes()
-        for k in range(0, mic.size, FRAME):
-            cancelled = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
-            if near:
-                out[k : k + FRAME] = cancelled
-                self.frames += 1
+        cancelled = self._run(mic, refs)
+        if near:
+            out = cancelled
+            self.frames += mic.size // FRAME
         self._measure(mic, out, near)
         return out.tobytes()
+
+    def _run(self, mic: np.ndarray, refs: np.ndarray) -> np.ndarray:
+        """The canceller over whole frames of the microphone's samples and the reference's: its output. (speexdsp
+        reads a whole frame whatever it is given: a short one crashes the process.)"""
+        assert mic.size % FRAME == 0 and refs.size == mic.size
+        out = np.empty_like(mic)
+        for k in range(0, mic.size, FRAME):
+            out[k : k + FRAME] = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
+        return out
 
     def _keep(self, mic: np.ndarray) -> None:
         """The stream's recent samples, for finding a sentence's echo in them."""
