@@ -24,8 +24,8 @@ of `--warm` + 1 of the robot's sentences in a row (4 by default; `--warm 0`: a c
 before), through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away, a small loudspeaker's soft
 clipping, the sound card's delay and the state's error per sentence); the same streams are heard each of `WAYS`:
 without the canceller, with it cancelling each sentence once its echo is found, held back meanwhile and cancelled from
-the sentence's first sample (`look_back`, the service's default), and with what was held also learnt from first
-(`learn_first`), with how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each
+the sentence's first sample (`look_back`), and with what was held also learnt from first (`learn_first`: the
+service's default), with how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each
 way heard.
 
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
@@ -159,8 +159,8 @@ WAYS: dict[str, dict[str, bool] | None] = {
     "learnt first": {"look_back": True, "learn_first": True},
 }
 """`--cancel`'s ways of hearing each stream: without the canceller; with it cancelling each sentence once its echo is
-found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46, the
-service's default); and the held samples also learnt from before they are cancelled (round voice47, off)."""
+found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46); and the
+held samples also learnt from before they are cancelled (rounds voice47 and 47b: the service's default)."""
 
 
 @dataclass
@@ -314,7 +314,7 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after {args.warm} "
-              f"sentences), {' / '.join(WAYS)} (the echo canceller's ways; held back: the default): " + ", ".join(
+              f"sentences), {' / '.join(WAYS)} (the echo canceller's ways; learnt first: the default): " + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in WAYS)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
                   f"{' / '.join(str(r['stops_early_heard'][w]) for w in WAYS)})" for r in rows))
