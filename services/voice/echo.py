@@ -7,7 +7,9 @@ and subtracts its estimate of that sound from what the microphone heard, leaving
 sound sample for sample: the speech service says what it says (`SpeechState.text`) and with which espeak-ng voice and
 rate (its health), and espeak-ng renders the same text to the same samples every time, so the voice process renders
 it again (`robot_voice.RobotVoice`, onto `Played`). The state says when the robot began only to within tens of ms,
-so each sentence is placed where its echo is found in the stream (`EchoCanceller.lock`).
+so each sentence is placed where its echo is found in the stream (`EchoCanceller.lock`); while it is looked for
+(0.72 s) the stream is held back, then learnt from and cancelled from the sentence's first sample
+(`EchoCanceller.look_back`, `learn_first`).
 
 The canceller is speexdsp's (its multi-delay block frequency-domain filter, bundled in the `pyaec` wheel), on 10 ms
 frames, with a 256 ms filter: the sound card's delay and the room's first reflections fit in it. It runs on every
