@@ -159,8 +159,9 @@ class EchoCanceller:
     dropped), then, after the filter's length of silence on both sides (so that the second run does not begin with the
     end of the first in the filter's memory), for the stream. A canceller that has not heard the robot yet (the voice
     service just started, the robot's first sentence) thus learns from the sentence's first 0.6 s before cancelling
-    them; one that has, learns them twice. It costs one more run over the hold (under 1 ms). On since round voice47b
-    (voice README): it heard more "stop"s over a canceller that had heard the robot before, and no fewer cold."""
+    them; one that has, learns them twice. It costs one more run over the hold and the silence (about 9 ms a
+    sentence). On since round voice47b (voice README): it heard more "stop"s over a canceller that had heard the robot
+    before, and no fewer cold."""
     held_ms: float | None = None
     """How long the stream was last held back while a sentence's echo was looked for."""
     _aec: object = field(init=False, repr=False)
