@@ -28,6 +28,12 @@ the sentence's first sample (`look_back`), and with what was held also learnt fr
 service's default), with how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each
 way heard.
 
+`--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
+through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
+canceller cold, and with one that first recalled what an earlier run's canceller remembered of three other sentences
+(`EchoCanceller.memory`, `recall`; the service keeps it in the state folder), heard through another room with the
+same loudspeaker (the robot carried elsewhere) or through the same room.
+
 Per level: sentences heard as speech at all (each such utterance is a `VoiceCommand`; one that matched no command
 makes the reasoner answer "Sorry, I did not understand.", which the microphone hears again), sentences heard as a
 command (which ones, and those the reasoner would act on), and "go"s that would walk the robot or make it ask.
@@ -214,14 +220,83 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
     return out
 
 
+RECALLS = ("without", "cold", "recalled, another room", "recalled, same room")
+"""`--recall`'s ways of hearing each stream: without the canceller; with a canceller that has not heard the robot (the
+service just started); and with one that first `recall`ed what an earlier run's canceller remembered of three sentences
+(`EchoCanceller.memory`), heard through another room (the same head's loudspeaker) or the same one."""
+
+
+def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
+                       peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
+                       rng: np.random.Generator, before: int = 3) -> OverEcho:
+    """`--recall`: each of `stops` said over the robot's first sentence of a run, through an `EchoPath` drawn for it;
+    the canceller (the service's defaults) cold, or having recalled the memory of an earlier run in which the robot
+    said `before` other sentences, through another room with the same loudspeaker, or through the same room. How
+    many "stop"s each of `RECALLS` hears, on the same streams."""
+    out = OverEcho()
+    t0 = 1000.0
+    for k, stop in enumerate(stops):
+        path = EchoPath.draw(rng, rt60)
+        elsewhere = EchoPath(responses(own_room(rng, rt60))[0], path.drive)
+        earlier = [voices[(k + 1 + j) % len(voices)] for j in range(before)]
+        memories = {way: _memory(earlier, room, peak, floor, mic_rate, rng, t0)
+                    for way, room in (("recalled, another room", elsewhere), ("recalled, same room", path))}
+        voice = voices[k % len(voices)]
+        echo, late = path.echo(voice, rng)
+        scale = 10 ** (peak / 20) / (np.max(np.abs(echo)) + 1e-12)
+        start = int(LEAD_S * SAMPLE_RATE)
+        x = rng.normal(0.0, 10 ** (floor / 20), start + echo.size + SAMPLE_RATE)
+        x[start : start + echo.size] += echo * scale
+        at = start + int(rng.uniform(0.2, max(0.3, voice.size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
+        stop = at_level(stop, person)
+        x[at : at + stop.size] += stop
+        x = through_mic(np.clip(x, -1.0, 1.0), mic_rate)
+        pcm, block = rounded_pcm(x), 2 * int(CHUNK_S * SAMPLE_RATE)
+        echo_begins = start + int(np.argmax(np.abs(echo) > 1e-3 * np.max(np.abs(echo))))
+        early = at - echo_begins < EARLY_S * SAMPLE_RATE
+        out.stops += 1
+        out.early += early
+        said = [(t0 + start / SAMPLE_RATE + late, voice)]
+        for way in RECALLS:
+            recall = memories.get(way)
+            z = x if way == "without" else _cancelled(said, {}, pcm, block, t0, recall)
+            heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
+                        for _, s, e, cmd, _ in stream(engine, z, config))
+            out.heard[way] += heard
+            out.early_heard[way] += heard and early
+    return out
+
+
+def _memory(said: list[np.ndarray], path: EchoPath, peak: float, floor: float, mic_rate: int | None,
+            rng: np.random.Generator, t0: float) -> tuple[np.ndarray, np.ndarray]:
+    """What a canceller (the service's defaults) remembers (`EchoCanceller.memory`) after the robot said the sentences
+    `said`, 0.3 s apart, through `path`, the loudest at `peak` dBFS at the microphone, in a quiet room."""
+    gap = int(0.3 * SAMPLE_RATE)
+    echoes = [path.echo(v, rng) for v in said]
+    scale = 10 ** (peak / 20) / (max(np.max(np.abs(e)) for e, _ in echoes) + 1e-12)
+    starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
+    x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + SAMPLE_RATE)
+    played = Played()
+    for start, (echo, late), voice in zip(starts, echoes, said, strict=True):
+        x[start : start + echo.size] += echo * scale
+        played.add(t0 + start / SAMPLE_RATE + late, voice)
+    pcm, block = rounded_pcm(through_mic(np.clip(x, -1.0, 1.0), mic_rate)), 2 * int(CHUNK_S * SAMPLE_RATE)
+    canceller = EchoCanceller(played)
+    for i in range(0, len(pcm), block):
+        canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE)
+    return canceller.memory()
+
+
 def _cancelled(said: list[tuple[float, np.ndarray]], settings: dict[str, bool], pcm: bytes, block: int,
-               t0: float) -> np.ndarray:
-    """`pcm` through a new `EchoCanceller` (with `settings`) told of the sentences `said` (when each began, its
-    samples), in the microphone's blocks (what it holds at the end passed on)."""
+               t0: float, recall: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """`pcm` through a new `EchoCanceller` (with `settings`; first `recall`ing a memory, if given) told of the sentences
+    `said` (when each began, its samples), in the microphone's blocks (what it holds at the end passed on)."""
     played = Played()
     for began, samples in said:
         played.add(began, samples)
     canceller = EchoCanceller(played, **settings)
+    if recall is not None:
+        canceller.recall(*recall)
     y = b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE) for i in range(0, len(pcm), block))
     return np.frombuffer(y + canceller(b"", None), "<i2") / 32768.0
 
@@ -243,6 +318,9 @@ def main() -> int:
     ap.add_argument("--warm", type=int, default=3,
                     help="with --cancel: the robot's sentences before the one the \"stop\" is said over (0: the "
                          "canceller has not heard the robot before, as when the voice service has just started)")
+    ap.add_argument("--recall", action="store_true",
+                    help="with --over: the \"stop\"s said over the robot's first sentence of a run, the canceller "
+                         "cold or recalling an earlier run's memory of the robot's voice (another room, the same one)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -298,8 +376,15 @@ def main() -> int:
                                            args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm)
                 row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
                            stops_early_heard=dict(over.early_heard))
+            if args.recall:
+                over = stop_over_recalled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
+                                          args.mic_rate, rt60, np.random.default_rng(args.seed))
+                row.update(stop_over_recalled=dict(over.heard), stops_early_recalled=over.early,
+                           stops_early_heard_recalled=dict(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
-                                                  "stop_over_echo", "stops_early", "stops_early_heard") if k in row}),
+                                                  "stop_over_echo", "stops_early", "stops_early_heard",
+                                                  "stop_over_recalled", "stops_early_recalled", "stops_early_heard_recalled")
+                              if k in row}),
                   flush=True)
     print()
     print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
@@ -318,6 +403,12 @@ def main() -> int:
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in WAYS)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
                   f"{' / '.join(str(r['stops_early_heard'][w]) for w in WAYS)})" for r in rows))
+    if args.over is not None and args.recall:
+        print(f"the same \"stop\"s over the robot's first sentence of a run, {' / '.join(RECALLS)} (the echo "
+              "canceller's memory of three sentences of an earlier run): " + ", ".join(
+                  f"{' / '.join(str(r['stop_over_recalled'][w]) for w in RECALLS)} of {r['stops']} at "
+                  f"{r['peak_dbfs']:.0f} dBFS (of the {r['stops_early_recalled']} begun within {EARLY_S:.1f} s of the "
+                  f"sentence's echo: {' / '.join(str(r['stops_early_heard_recalled'][w]) for w in RECALLS)})" for r in rows))
     print(f"({len(sentences)} sentences the robot can say, espeak-ng {DEFAULT_VOICE} at {DEFAULT_RATE} words a minute; "
           f"hiss {args.floor:.0f} dBFS RMS; microphone {args.mic_rate or SAMPLE_RATE} Hz; "
           f"{'a room, the loudspeaker 0.1 m away' if args.room else 'no room'}; latest onset: an utterance's, after the "

@@ -19,9 +19,12 @@ sound lies within the filter's reach, its output is not used and the stream goes
 
 from __future__ import annotations
 
+import os
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -48,25 +51,52 @@ MIN_CORRELATION = 0.3
 louder than the robot) is not cancelled."""
 KEPT = 8
 """Sentences kept (the robot speaks one at a time; a few cover any overlap)."""
+MEMORY_S = 6.0
+"""How much of the robot's voice the canceller remembers (`EchoCanceller.memory`): the last this many seconds it
+cancelled, reference and microphone, about three sentences."""
 INSTALL = "pip install pyaec (speexdsp's echo canceller in a wheel; Linux x86_64)"
 
 
 ENV = "HRI_VOICE_ECHO_CANCEL"
 DEFAULT_ON = True
+MEMORY_ENV = "HRI_VOICE_ECHO_MEMORY"
+MEMORY_FILE = "echo-memory.npz"
+"""In the state folder: the canceller's `memory`, saved each time the robot falls silent, `recall`ed at start."""
 
 
 class EchoError(RuntimeError):
     """The canceller cannot run here (its library is missing), or its setting is not on or off."""
 
 
-def echo_cancel_from(raw: str | None) -> bool:
-    """`HRI_VOICE_ECHO_CANCEL` / `--echo-cancel`: on (the default) or off."""
+def echo_cancel_from(raw: str | None, env: str = ENV) -> bool:
+    """`HRI_VOICE_ECHO_CANCEL` / `--echo-cancel` (and `HRI_VOICE_ECHO_MEMORY` / `--echo-memory`, `env`): on (the
+    default) or off."""
     if raw is None or raw.strip() == "":
         return DEFAULT_ON
     value = parse_flag(raw)
     if value is None:
-        raise EchoError(f"{ENV}={raw!r}: on or off")
+        raise EchoError(f"{env}={raw!r}: on or off")
     return value
+
+
+def save_memory(path: Path, memory: tuple[np.ndarray, np.ndarray]) -> None:
+    """`EchoCanceller.memory` to `path` (NumPy's npz: `mic`, `ref`), written whole or not at all (a temporary file
+    renamed over it). OSError where it cannot be written."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with tmp.open("wb") as f:
+        np.savez(f, mic=memory[0], ref=memory[1])
+    os.replace(tmp, path)
+
+
+def load_memory(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A memory `save_memory` wrote; ValueError naming the file for one that cannot be read as such (OSError where it
+    cannot be opened). `EchoCanceller.recall` checks the samples."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return np.asarray(data["mic"]), np.asarray(data["ref"])
+    except (ValueError, KeyError, EOFError) as exc:  # not an npz, or one without the two arrays
+        raise ValueError(f"{path}: not an echo memory ({exc})") from None
 
 
 @dataclass
@@ -164,6 +194,11 @@ class EchoCanceller:
     before, and no fewer cold."""
     held_ms: float | None = None
     """How long the stream was last held back while a sentence's echo was looked for."""
+    recalled_s: float = 0.0
+    """Seconds of the robot's voice learnt from before the stream began (`recall`: an earlier run's `memory`)."""
+    on_silent: Callable[[EchoCanceller], None] | None = field(default=None, repr=False)
+    """Called (on the stream's thread) each time a stretch of the robot's voice has ended and passed out of the
+    filter's reach: the service saves the canceller's `memory` then."""
     _aec: object = field(init=False, repr=False)
     _held: bytes = b""
     _index: int = 0
@@ -176,6 +211,9 @@ class EchoCanceller:
     """The stream held back (`look_back`): the samples just before `_index`'s held ones."""
     _energy: tuple[float, float] = (0.0, 0.0)
     """Input and output energy of the current stretch of the robot's voice."""
+    _memory: tuple[np.ndarray, np.ndarray] = field(
+        default_factory=lambda: (np.zeros(0, dtype=np.int16), np.zeros(0, dtype=np.int16)), repr=False
+    )
 
     def __post_init__(self) -> None:
         self._aec = _aec(self.filter_s)
@@ -210,8 +248,7 @@ class EchoCanceller:
             self._pending = self._pending[:0]
             if self.learn_first and near:
                 self._run(mic, refs)
-                silence = np.zeros((int(self.filter_s * SAMPLE_RATE) // FRAME + 1) * FRAME, dtype=np.int16)
-                self._run(silence, silence)
+                self._silence()
         if self._unplaced:  # not fed: its echo with no reference would unlearn what the canceller learnt
             self._measure(mic, out, False)
             return out.tobytes()
@@ -219,6 +256,7 @@ class EchoCanceller:
         if near:
             out = cancelled
             self.frames += mic.size // FRAME
+            self._remember(mic, refs)
         self._measure(mic, out, near)
         return out.tobytes()
 
@@ -230,6 +268,38 @@ class EchoCanceller:
         for k in range(0, mic.size, FRAME):
             out[k : k + FRAME] = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
         return out
+
+    def _silence(self) -> None:
+        """The filter's length of silence through the canceller: what it ran before is out of its memory."""
+        silence = np.zeros((int(self.filter_s * SAMPLE_RATE) // FRAME + 1) * FRAME, dtype=np.int16)
+        self._run(silence, silence)
+
+    def _remember(self, mic: np.ndarray, refs: np.ndarray) -> None:
+        keep = int(MEMORY_S * SAMPLE_RATE) // FRAME * FRAME
+        self._memory = (np.concatenate([self._memory[0], mic])[-keep:], np.concatenate([self._memory[1], refs])[-keep:])
+
+    def memory(self) -> tuple[np.ndarray, np.ndarray]:
+        """The last `MEMORY_S` of the robot's voice this canceller cancelled: the microphone's samples and the reference
+        it was given for them (16-bit, whole frames), for `recall` by the next run."""
+        return self._memory[0].copy(), self._memory[1].copy()
+
+    def recall(self, mic: np.ndarray, refs: np.ndarray) -> None:
+        """Learn the way from the loudspeaker to the microphone from an earlier run's `memory` (the output dropped), then
+        the filter's length of silence: the robot's first sentence is cancelled by a filter that has heard it before.
+        The way through the robot's head changes little from run to run; the room's part of it may (a recall from
+        another room is measured in the voice README). ValueError for samples that are not such a memory."""
+        mic, refs = np.asarray(mic), np.asarray(refs)
+        if mic.dtype != np.int16 or refs.dtype != np.int16 or mic.ndim != 1 or mic.shape != refs.shape:
+            raise ValueError(f"not an echo memory: {mic.dtype}{mic.shape} and {refs.dtype}{refs.shape}, "
+                             "two 16-bit sample arrays of one length expected")
+        if mic.size % FRAME or mic.size > int(MEMORY_S * SAMPLE_RATE):
+            raise ValueError(f"not an echo memory: {mic.size} samples, whole {FRAME}-sample frames up to "
+                             f"{MEMORY_S} s expected")
+        if mic.size:
+            self._run(mic, refs)
+            self._silence()
+            self.recalled_s = round(mic.size / SAMPLE_RATE, 2)
+            self._memory = (mic.copy(), refs.copy())
 
     def _keep(self, mic: np.ndarray) -> None:
         """The stream's recent samples, for finding a sentence's echo in them."""
@@ -294,3 +364,5 @@ class EchoCanceller:
         elif into > 0.0:  # a stretch of the robot's voice has ended
             self.erle_db = round(10.0 * float(np.log10(max(left, 1.0) / into)), 1)
             self._energy = (0.0, 0.0)
+            if self.on_silent is not None:
+                self.on_silent(self)
