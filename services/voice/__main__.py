@@ -137,6 +137,13 @@ EchoCancelOption = Annotated[
                  help="a live source: cancel the robot's own voice from the stream, the speech service's sentences "
                       "rendered again as the reference (on or off) [default: on]"),
 ]
+EchoMemoryOption = Annotated[
+    str | None,
+    typer.Option("--echo-memory", envvar="HRI_VOICE_ECHO_MEMORY",
+                 help="a live source with the canceller on: keep the canceller's memory of the robot's voice (its last "
+                      "6 s, microphone and reference) in the state folder and learn from it at start (on or off) "
+                      "[default: on]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -158,7 +165,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
          highpass: HighpassOption = None, gain: GainOption = None, mic_rate: MicRateOption = None,
          mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
-         echo_cancel: EchoCancelOption = None) -> None:
+         echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -167,7 +174,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
                              vad_lift=vad_lift, highpass=highpass, gain=gain, mic_rate=mic_rate,
-                             mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel)
+                             mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
+                             echo_memory=echo_memory)
     try:
         check_settings(settings)
     except EngineError as exc:

@@ -62,6 +62,8 @@ DEFAULT_ON = True
 MEMORY_ENV = "HRI_VOICE_ECHO_MEMORY"
 MEMORY_FILE = "echo-memory.npz"
 """In the state folder: the canceller's `memory`, saved each time the robot falls silent, `recall`ed at start."""
+MEMORY_DEFAULT_ON = True
+"""Whether `HRI_VOICE_ECHO_MEMORY` is on when unset: on since round voice48 (voice README), which it passed."""
 
 
 class EchoError(RuntimeError):
@@ -69,8 +71,8 @@ class EchoError(RuntimeError):
 
 
 def echo_cancel_from(raw: str | None, env: str = ENV) -> bool:
-    """`HRI_VOICE_ECHO_CANCEL` / `--echo-cancel` (and `HRI_VOICE_ECHO_MEMORY` / `--echo-memory`, `env`): on (the
-    default) or off."""
+    """`HRI_VOICE_ECHO_CANCEL` / `--echo-cancel` (`env`: the variable a bad value is reported as): on (the default) or
+    off."""
     if raw is None or raw.strip() == "":
         return DEFAULT_ON
     value = parse_flag(raw)
@@ -79,24 +81,46 @@ def echo_cancel_from(raw: str | None, env: str = ENV) -> bool:
     return value
 
 
-def save_memory(path: Path, memory: tuple[np.ndarray, np.ndarray]) -> None:
-    """`EchoCanceller.memory` to `path` (NumPy's npz: `mic`, `ref`), written whole or not at all (a temporary file
-    renamed over it). OSError where it cannot be written."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with tmp.open("wb") as f:
-        np.savez(f, mic=memory[0], ref=memory[1])
-    os.replace(tmp, path)
+def echo_memory_from(raw: str | None) -> bool:
+    """`HRI_VOICE_ECHO_MEMORY` / `--echo-memory`: on or off; unset: `MEMORY_DEFAULT_ON`."""
+    if raw is None or raw.strip() == "":
+        return MEMORY_DEFAULT_ON
+    return echo_cancel_from(raw, MEMORY_ENV)
 
 
-def load_memory(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """A memory `save_memory` wrote; ValueError naming the file for one that cannot be read as such (OSError where it
-    cannot be opened). `EchoCanceller.recall` checks the samples."""
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            return np.asarray(data["mic"]), np.asarray(data["ref"])
-    except (ValueError, KeyError, EOFError) as exc:  # not an npz, or one without the two arrays
-        raise ValueError(f"{path}: not an echo memory ({exc})") from None
+@dataclass
+class EchoMemory:
+    """The canceller's `memory` in a file (NumPy's npz: `mic`, `ref`), so that the next run's canceller `recall`s it.
+    The file holds up to `MEMORY_S` of what the microphone heard while the robot spoke, a person talking over it
+    included: it stays in the state folder, and `HRI_VOICE_ECHO_MEMORY=off` neither reads nor writes it."""
+
+    path: Path
+
+    def keep(self, canceller: EchoCanceller) -> None:
+        """The canceller's memory to the file, written whole or not at all (a temporary file renamed over it). OSError
+        where it cannot be written."""
+        mic, ref = canceller.memory()
+        if not mic.size:
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        with tmp.open("wb") as f:
+            np.savez(f, mic=mic, ref=ref)
+        os.replace(tmp, self.path)
+
+    def recall(self, canceller: EchoCanceller) -> bool:
+        """The canceller learns from the file's memory, if there is a file (False if not). ValueError naming the file
+        for one that is not such a memory (the canceller then has learnt nothing from it); OSError where it cannot be
+        read."""
+        if not self.path.is_file():
+            return False
+        try:
+            with np.load(self.path, allow_pickle=False) as data:
+                mic, ref = np.asarray(data["mic"]), np.asarray(data["ref"])
+            canceller.recall(mic, ref)
+        except (ValueError, KeyError, EOFError) as exc:  # not an npz, one without the two arrays, or other samples
+            raise ValueError(f"{self.path}: not an echo memory ({exc})") from None
+        return True
 
 
 @dataclass

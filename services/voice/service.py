@@ -20,10 +20,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
-from services.runtime import ServiceContext
+from services.runtime import ServiceContext, default_state_dir
 from services.voice.audio import SAMPLE_RATE, AudioError
 from services.voice.echo import ENV as ECHO_ENV
-from services.voice.echo import EchoCanceller, EchoError, Played, echo_cancel_from
+from services.voice.echo import (
+    MEMORY_ENV,
+    MEMORY_FILE,
+    EchoCanceller,
+    EchoError,
+    EchoMemory,
+    Played,
+    echo_cancel_from,
+    echo_memory_from,
+)
 from services.voice.engine import (
     DEFAULT_ENGINE,
     Engine,
@@ -101,6 +110,9 @@ class VoiceSettings:
     echo_cancel: str | None = None
     """`HRI_VOICE_ECHO_CANCEL`: a live source's stream has the robot's own voice cancelled (`echo.EchoCanceller`),
     `on` or `off`; None: on."""
+    echo_memory: str | None = None
+    """`HRI_VOICE_ECHO_MEMORY`: the canceller's memory of the robot's voice kept in the state folder and recalled at
+    start (`echo.EchoMemory`), `on` or `off`; None: the default (`echo.MEMORY_DEFAULT_ON`)."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -129,6 +141,7 @@ class VoiceSettings:
             mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
             own_voice=os.environ.get("HRI_VOICE_OWN_VOICE") or None,
             echo_cancel=os.environ.get(ECHO_ENV) or None,
+            echo_memory=os.environ.get(MEMORY_ENV) or None,
         )
 
     def mic(self) -> MicFormat:
@@ -188,6 +201,7 @@ def check_settings(settings: VoiceSettings) -> None:
         gain_from(settings.gain)
         tail_from(settings.own_voice)
         echo_cancel_from(settings.echo_cancel)
+        echo_memory_from(settings.echo_memory)
     except (LevelError, OwnVoiceError, EchoError) as exc:
         raise EngineError(str(exc)) from None
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
@@ -415,7 +429,8 @@ class _Echo:
     def detail(self) -> dict[str, object]:
         c = self.canceller
         return {"echo_frames": c.frames, "echo_locked": c.locked, "echo_lost": c.lost, "echo_lag_ms_last": c.lag_ms,
-                "echo_erle_db_last": c.erle_db, "echo_held_ms_last": c.held_ms, **self.voice.detail()}
+                "echo_erle_db_last": c.erle_db, "echo_held_ms_last": c.held_ms, "echo_recalled_s": c.recalled_s,
+                **self.voice.detail()}
 
 
 def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice | None, _Echo | None]:
@@ -438,6 +453,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
             played = Played()
             speech_detail = lambda: (h := ctx.query_health("speech", timeout=1.0)) and h.detail  # noqa: E731
             echo = _Echo(EchoCanceller(played), RobotVoice(played, speech_detail))
+            _echo_memory(ctx, settings, echo.canceller)
         except EchoError as exc:
             ctx.update_detail(echo_cancel=f"unavailable: {exc}")
             ctx.log.warning("echo canceller unavailable: the robot's own voice is not cancelled", error=str(exc))
@@ -454,6 +470,36 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
         ctx.update_detail(own_voice="ignored", own_voice_tail_s=tail)
         ctx.thread(lambda: _ask_speaking(ctx, own), "own-voice")  # after subscribing: a newer state wins over it
     return own, echo
+
+
+def _echo_memory(ctx: ServiceContext, settings: VoiceSettings, canceller: EchoCanceller) -> None:
+    """With `HRI_VOICE_ECHO_MEMORY` on: the canceller recalls the memory an earlier run kept in the state folder (an
+    unreadable one is passed over with a warning, and the canceller starts cold, as on a first run; it is overwritten
+    once the robot has spoken) and keeps its own there each time the robot falls silent."""
+    if not echo_memory_from(settings.echo_memory):
+        ctx.update_detail(echo_memory="off")
+        return
+    memory = EchoMemory(default_state_dir(ctx.keys.robot) / MEMORY_FILE)
+    try:
+        if memory.recall(canceller):
+            ctx.log.info("echo memory recalled", path=str(memory.path), seconds=canceller.recalled_s)
+    except (OSError, ValueError) as exc:
+        ctx.log.warning("echo memory unusable: the canceller starts cold", path=str(memory.path), error=str(exc))
+        ctx.update_detail(echo_memory_warning=f"unusable, starting cold: {exc}")
+    warned = False
+
+    def keep(c: EchoCanceller) -> None:
+        nonlocal warned
+        try:
+            memory.keep(c)
+        except OSError as exc:
+            if not warned:  # once: the stream goes on, only the next run starts cold
+                ctx.log.warning("echo memory not saved", path=str(memory.path), error=str(exc))
+                ctx.update_detail(echo_memory_warning=f"not saved: {exc}")
+                warned = True
+
+    canceller.on_silent = keep
+    ctx.update_detail(echo_memory="on", echo_memory_path=str(memory.path), echo_recalled_s=canceller.recalled_s)
 
 
 def _robot_said(state: SpeechState, own: OwnVoice | None, echo: _Echo | None) -> None:

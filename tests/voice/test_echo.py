@@ -3,6 +3,7 @@ wall clock, speexdsp's canceller on a live stream, and the reference rendered ag
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import time
 import wave
@@ -24,12 +25,17 @@ from services.voice.echo import (
     FRAME,
     LEAD_S,
     LOCK_S,
+    MEMORY_DEFAULT_ON,
+    MEMORY_FILE,
+    MEMORY_S,
     SEARCH_S,
     EchoCanceller,
     EchoError,
+    EchoMemory,
     Played,
     echo_cancel_from,
     echo_lag,
+    echo_memory_from,
 )
 from services.voice.robot_voice import RobotVoice
 from services.voice.sources import stream_utterances
@@ -157,6 +163,85 @@ def test_a_canceller_that_has_not_heard_the_robot_learns_from_what_it_held_first
         y = _stream(EchoCanceller(played, learn_first=learn_first), x)
         down[learn_first] = 10 * np.log10(np.sum(y[first] ** 2) / np.sum(x[first] ** 2))
     assert down[True] < -10.0 and down[True] < down[False] - 4.0, down
+
+
+def _sentences_through(path: Callable[[np.ndarray], np.ndarray], texts: tuple[str, ...], seed: int
+                       ) -> tuple[np.ndarray, Played, list[int]]:
+    """`texts` said by the robot 0.3 s apart through `path` at about -12 dBFS, from 1 s into a faint hiss: the stream
+    (sample 0 at wall clock 100.0), the sentences as played, and where each echo begins."""
+    played, starts = Played(), []
+    voices = [synth.speak(t, "en-us", 175) * 0.5 for t in texts]
+    x = np.random.default_rng(seed).normal(0.0, 10 ** (-70 / 20), sum(v.size + SAMPLE_RATE for v in voices) + SAMPLE_RATE)
+    at = SAMPLE_RATE
+    for voice in voices:
+        echo = path(voice) * 0.25
+        x[at : at + echo.size] += echo
+        played.add(100.0 + at / SAMPLE_RATE, voice)
+        starts.append(at)
+        at += echo.size + int(0.3 * SAMPLE_RATE)
+    return x, played, starts
+
+
+@espeak
+def test_a_canceller_recalls_what_an_earlier_run_remembered(tmp_path: Path) -> None:
+    """One run's canceller hears the robot say two sentences and keeps its memory (the last `MEMORY_S` of them, whole
+    frames, microphone and reference) in a file; the next run's canceller recalls it and takes the robot's first
+    sentence down further than one that starts cold (-20.8 dB here against -12.5, over its first 2.5 s)."""
+    path = echo_path(np.random.default_rng(8))
+    x, played, _ = _sentences_through(path, SENTENCES[:2], 8)
+    earlier = EchoCanceller(played)
+    saved: list[int] = []
+    memory = EchoMemory(tmp_path / "state" / MEMORY_FILE)
+    earlier.on_silent = lambda c: (memory.keep(c), saved.append(c.memory()[0].size))
+    _stream(earlier, x)
+    mic, ref = earlier.memory()
+    assert saved and saved[-1] == mic.size  # kept each time the robot fell silent
+    assert mic.dtype == ref.dtype == np.int16 and mic.size == ref.size and mic.size % FRAME == 0
+    assert 2 * SAMPLE_RATE < mic.size <= MEMORY_S * SAMPLE_RATE and np.any(ref)
+    x, played, [start] = _sentences_through(path, SENTENCES[2:], 9)
+    sentence = slice(start, start + int(2.5 * SAMPLE_RATE))
+    down = {}
+    for recall in (False, True):
+        canceller = EchoCanceller(Played())
+        canceller.played.add(*next((s.began, s.samples) for s in played.sentences()))
+        assert memory.recall(canceller) if recall else True
+        assert canceller.recalled_s == (round(mic.size / SAMPLE_RATE, 2) if recall else 0.0)
+        y = _stream(canceller, x)
+        down[recall] = 10 * np.log10(np.sum(y[sentence] ** 2) / np.sum(x[sentence] ** 2))
+    assert down[True] < down[False] - 4.0, down
+
+
+def test_an_echo_memory_that_is_not_one_is_refused_and_nothing_learnt(tmp_path: Path) -> None:
+    """No file: nothing recalled. A file that is not an npz, one without the two arrays, or one whose samples are not
+    whole frames of 16-bit audio of one length: ValueError naming the file, and the canceller has learnt nothing. A
+    canceller that has not cancelled anything keeps no file."""
+    canceller = EchoCanceller(Played())
+    memory = EchoMemory(tmp_path / MEMORY_FILE)
+    assert memory.recall(canceller) is False
+    memory.keep(canceller)
+    assert not memory.path.exists()
+    bad = {
+        "text": lambda f: f.write(b"not numpy"),
+        "one array": lambda f: np.savez(f, mic=np.zeros(FRAME, np.int16)),
+        "floats": lambda f: np.savez(f, mic=np.zeros(FRAME), ref=np.zeros(FRAME)),
+        "short frame": lambda f: np.savez(f, mic=np.zeros(FRAME + 1, np.int16), ref=np.zeros(FRAME + 1, np.int16)),
+        "lengths": lambda f: np.savez(f, mic=np.zeros(FRAME, np.int16), ref=np.zeros(2 * FRAME, np.int16)),
+        "too long": lambda f: np.savez(f, mic=np.zeros(10 * SAMPLE_RATE, np.int16),
+                                       ref=np.zeros(10 * SAMPLE_RATE, np.int16)),
+    }
+    for what, write in bad.items():
+        with memory.path.open("wb") as f:
+            write(f)
+        with pytest.raises(ValueError, match=MEMORY_FILE):
+            memory.recall(canceller)
+        assert canceller.recalled_s == 0.0 and canceller.memory()[0].size == 0, what
+
+
+def test_the_echo_memory_setting() -> None:
+    assert echo_memory_from(None) is MEMORY_DEFAULT_ON and echo_memory_from(" ") is MEMORY_DEFAULT_ON
+    assert echo_memory_from("on") is True and echo_memory_from("off") is False
+    with pytest.raises(EchoError, match="HRI_VOICE_ECHO_MEMORY"):
+        echo_memory_from("sometimes")
 
 
 @espeak
@@ -317,7 +402,8 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     from its state and the speech service's health, places it by its own clock, and by the last sentence takes the
     robot's voice down by more than 10 dB (17-21 dB on this machine). A person's "stop" said 0.25 s into the last
     sentence's echo, before the canceller has found it, is heard: the stream is held back and cancelled from the
-    sentence's first sample (without the look-back, nothing is heard). Off, nothing of it runs."""
+    sentence's first sample (without the look-back, nothing is heard). The canceller's memory of the robot's voice is
+    kept in the state folder for the next run (on by default). Off, nothing of it runs."""
     states: list[SpeechState] = []
     bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
     say = bus.publisher(bus.keys.speech_say, SpeechRequest)
@@ -325,7 +411,9 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
     wait_for(lambda: any(s.id is None for s in states), timeout=20)
     path, gain = echo_path(np.random.default_rng(7)), 10 ** (-12 / 20)
-    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_ECHO_CANCEL=cancel)
+    state = tmp_path / "state"
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_ECHO_CANCEL=cancel,
+                      HRI_STATE_DIR=str(state))  # the echo memory on by default
     heard: list[VoiceCommand] = []
     bus.subscribe(bus.keys.voice_command, VoiceCommand, heard.append)
     stop = synth.speak("stop", "en+f3", 140)
@@ -361,9 +449,42 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
         assert 0.0 < health.detail["echo_held_ms_last"] <= 780.0
         # the person's "stop" over the start of the robot's sentence, cancelled once its echo was found, is published
         assert [c.command for c in heard] == [Command.STOP]
+        # what it learnt is kept for the next run: the last 6 s of the robot's voice, microphone and reference
+        assert health.detail["echo_memory"] == "on" and health.detail["echo_recalled_s"] == 0.0
+        with np.load(state / MEMORY_FILE) as kept:
+            assert kept["mic"].size == kept["ref"].size == int(MEMORY_S * SAMPLE_RATE) and np.any(kept["ref"])
     else:
         assert health.detail["echo_cancel"] == "off" and "echo_rendered" not in health.detail
-        assert "echo_frames" not in health.detail
+        assert "echo_frames" not in health.detail and "echo_memory" not in health.detail
+        assert not (state / MEMORY_FILE).exists()
+
+
+@pytest.mark.parametrize("kept", ["a memory", "not one"])
+def test_the_voice_service_recalls_the_memory_an_earlier_run_kept(bus: ServiceContext, router_endpoint: str,
+                                                                   robot_id: str, tmp_path: Path, kept: str) -> None:
+    """At start the voice service's canceller learns from the memory in the state folder (health: how many seconds);
+    one that is not a memory is passed over with a warning in health, and the service runs, cold, and stops cleanly."""
+    state = tmp_path / "state"
+    state.mkdir()
+    if kept == "a memory":
+        x = np.random.default_rng(3).normal(0.0, 3000.0, 2 * SAMPLE_RATE).astype(np.int16)
+        np.savez(state / MEMORY_FILE, mic=x, ref=x)
+    else:
+        (state / MEMORY_FILE).write_bytes(b"half-written")
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_STATE_DIR=str(state),
+                      HRI_VOICE_ECHO_MEMORY="on")
+    with stdin_service(env, tmp_path / "voice.log") as proc:
+        wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("echo_memory") == "on",
+                 timeout=30)
+        health = bus.query_health("voice")
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(20) == 0
+    assert health is not None
+    if kept == "a memory":
+        assert health.detail["echo_recalled_s"] == 2.0 and "echo_memory_warning" not in health.detail
+    else:
+        assert health.detail["echo_recalled_s"] == 0.0
+        assert "unusable" in health.detail["echo_memory_warning"] and MEMORY_FILE in health.detail["echo_memory_warning"]
 
 
 @espeak

@@ -231,7 +231,8 @@ def test_the_robot_does_not_answer_its_own_voice(bus: ServiceContext, router_end
     that matched no command makes the reasoner say "Sorry, I did not understand.", heard again without end) and
     "stop" and "yes" are; with `HRI_VOICE_OWN_VOICE=hear` the robot's words are published too."""
     states, heard, say, out = speech_service(bus, start_service, tmp_path)
-    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice,
+                      HRI_STATE_DIR=str(tmp_path / "state"))
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, out)) as mic:
         expected = "ignored" if own_voice == "" else "heard"
         wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("own_voice") == expected,
@@ -271,7 +272,7 @@ def test_a_sentence_under_way_when_the_voice_service_starts_is_the_robots(bus: S
     wait_for(lambda: any(s.id == "long" and s.speaking for s in states), timeout=10)
     robot = _pcm16k(out / "long.wav")
     assert robot.size > 15.0 * SAMPLE_RATE
-    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin")
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_STATE_DIR=str(tmp_path / "state"))
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, out)) as mic:
         # the engine ready (its embedding in health) and the question answered
         wait_for(lambda: (h := bus.query_health("voice")) is not None and "spotter_embedding" in h.detail
@@ -306,7 +307,8 @@ def test_a_robot_that_hears_itself_does_not_talk_to_itself(bus: ServiceContext, 
     wait_for(lambda: (h := bus.query_health("reasoner")) is not None and h.detail.get("ready"), timeout=30)
     start_service("speech", env={"HRI_SPEECH_OUT": str(said)})
     wait_for(lambda: any(s.id is None for s in states), timeout=20)
-    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice)
+    env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_VOICE=own_voice,
+                      HRI_STATE_DIR=str(tmp_path / "state"))
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(HeadMicrophone(proc, said)) as mic:
         bus.subscribe(bus.keys.speech_state, SpeechState, mic.on_state)
         wait_for(lambda: (h := bus.query_health("voice")) is not None and "own_voice" in h.detail, timeout=60)
