@@ -14,13 +14,16 @@ so each sentence is placed where its echo is found in the stream (`EchoCanceller
 The canceller is speexdsp's (its multi-delay block frequency-domain filter, bundled in the `pyaec` wheel), on 10 ms
 frames, with a 256 ms filter: the sound card's delay and the room's first reflections fit in it. It runs on every
 frame of a live stream, so that what it learnt in one sentence is there at the start of the next; where no played
-sound lies within the filter's reach, its output is not used and the stream goes on as the microphone heard it.
+sound lies within the filter's reach, its output is not used and the stream goes on as the microphone heard it. What it
+learnt from (its last 6 s of the robot's voice, `EchoCanceller.memory`) is kept in the state folder and learnt from
+again when the next run starts (`EchoMemory`, round voice48), so that a run's first sentence is cancelled too.
 """
 
 from __future__ import annotations
 
 import os
 import threading
+import zipfile
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -118,7 +121,8 @@ class EchoMemory:
             with np.load(self.path, allow_pickle=False) as data:
                 mic, ref = np.asarray(data["mic"]), np.asarray(data["ref"])
             canceller.recall(mic, ref)
-        except (ValueError, KeyError, EOFError) as exc:  # not an npz, one without the two arrays, or other samples
+        except (ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:  # not an npz (or cut short), one without
+            # the two arrays, or other samples
             raise ValueError(f"{self.path}: not an echo memory ({exc})") from None
         return True
 

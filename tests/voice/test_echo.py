@@ -3,6 +3,7 @@ wall clock, speexdsp's canceller on a live stream, and the reference rendered ag
 
 from __future__ import annotations
 
+import io
 import signal
 import subprocess
 import time
@@ -211,10 +212,16 @@ def test_a_canceller_recalls_what_an_earlier_run_remembered(tmp_path: Path) -> N
     assert down[True] < down[False] - 4.0, down
 
 
+def _npz(**arrays: np.ndarray) -> bytes:
+    out = io.BytesIO()
+    np.savez(out, **arrays)
+    return out.getvalue()
+
+
 def test_an_echo_memory_that_is_not_one_is_refused_and_nothing_learnt(tmp_path: Path) -> None:
-    """No file: nothing recalled. A file that is not an npz, one without the two arrays, or one whose samples are not
-    whole frames of 16-bit audio of one length: ValueError naming the file, and the canceller has learnt nothing. A
-    canceller that has not cancelled anything keeps no file."""
+    """No file: nothing recalled. A file that is not an npz (or one cut short), one without the two arrays, or one whose
+    samples are not whole frames of 16-bit audio of one length: ValueError naming the file, and the canceller has
+    learnt nothing. A canceller that has not cancelled anything keeps no file."""
     canceller = EchoCanceller(Played())
     memory = EchoMemory(tmp_path / MEMORY_FILE)
     assert memory.recall(canceller) is False
@@ -222,6 +229,7 @@ def test_an_echo_memory_that_is_not_one_is_refused_and_nothing_learnt(tmp_path: 
     assert not memory.path.exists()
     bad = {
         "text": lambda f: f.write(b"not numpy"),
+        "cut short": lambda f: f.write(_npz(mic=np.zeros(FRAME, np.int16), ref=np.zeros(FRAME, np.int16))[:-100]),
         "one array": lambda f: np.savez(f, mic=np.zeros(FRAME, np.int16)),
         "floats": lambda f: np.savez(f, mic=np.zeros(FRAME), ref=np.zeros(FRAME)),
         "short frame": lambda f: np.savez(f, mic=np.zeros(FRAME + 1, np.int16), ref=np.zeros(FRAME + 1, np.int16)),
