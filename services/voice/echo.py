@@ -99,10 +99,10 @@ class EchoMemory:
 
     path: Path
 
-    def keep(self, canceller: EchoCanceller) -> None:
-        """The canceller's memory to the file, written whole or not at all (a temporary file renamed over it). OSError
-        where it cannot be written."""
-        mic, ref = canceller.memory()
+    def write(self, memory: tuple[np.ndarray, np.ndarray]) -> None:
+        """A canceller's `memory()` to the file, written whole or not at all (a temporary file renamed over it); an empty
+        one is not written. OSError where it cannot be written."""
+        mic, ref = memory
         if not mic.size:
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)

@@ -12,12 +12,16 @@ A file or folder source that has been read to the end leaves the service idle (h
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import queue
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+
+import numpy as np
 
 from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
 from services.runtime import ServiceContext, default_state_dir
@@ -486,19 +490,33 @@ def _echo_memory(ctx: ServiceContext, settings: VoiceSettings, canceller: EchoCa
     except (OSError, ValueError) as exc:
         ctx.log.warning("echo memory unusable: the canceller starts cold", path=str(memory.path), error=str(exc))
         ctx.update_detail(echo_memory_warning=f"unusable, starting cold: {exc}")
-    warned = False
+    # written on a thread of its own: the stream's thread only copies the memory (a robot's SD card can stall a write
+    # for longer than a "stop" should wait); a newer memory replaces one not yet written
+    latest: queue.Queue[tuple[np.ndarray, np.ndarray]] = queue.Queue(maxsize=1)
 
     def keep(c: EchoCanceller) -> None:
-        nonlocal warned
-        try:
-            memory.keep(c)
-        except OSError as exc:
-            if not warned:  # once: the stream goes on, only the next run starts cold
-                ctx.log.warning("echo memory not saved", path=str(memory.path), error=str(exc))
-                ctx.update_detail(echo_memory_warning=f"not saved: {exc}")
-                warned = True
+        with contextlib.suppress(queue.Empty):
+            latest.get_nowait()
+        latest.put_nowait(c.memory())
+
+    def write() -> None:
+        warned = False
+        while not ctx.stopping.is_set() or not latest.empty():
+            try:
+                snapshot = latest.get(timeout=0.5)
+            except queue.Empty:
+                continue
+            try:
+                memory.write(snapshot)
+            except OSError as exc:
+                if not warned:  # once: the stream goes on, only the next run starts cold
+                    ctx.log.warning("echo memory not saved", path=str(memory.path), error=str(exc))
+                    ctx.update_detail(echo_memory_warning=f"not saved: {exc}")
+                    warned = True
 
     canceller.on_silent = keep
+    writer = ctx.thread(write, "echo-memory")
+    ctx.on_close(lambda: writer.join(timeout=2.0))  # the last memory written before the process exits
     ctx.update_detail(echo_memory="on", echo_memory_path=str(memory.path), echo_recalled_s=canceller.recalled_s)
 
 
