@@ -21,6 +21,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench.voice_own import (  # noqa: E402
     agent_sentences,
@@ -33,9 +34,7 @@ from services.speech.tts import EspeakNg  # noqa: E402
 from services.voice import synth  # noqa: E402
 from services.voice.engine import make_engine  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
-
-VOICES = ("en", "en-us", "en-gb", "en+m3", "en+f2", "en+f4", "en-us+m7", "en-us+f3", "en-gb+m1", "en-gb+f1",
-          "en+croak", "en+whisper")
+from voice46_look_back_probe import VOICES  # noqa: E402  (round voice46's espeak-ng voices, the same "stop"s)
 
 
 def main() -> int:
