@@ -457,6 +457,9 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
                      and h.detail["echo_erle_db_last"] < -10.0, timeout=10)
             # what it learnt is kept for the next run (on its own thread): the last 6 s of the robot's voice
             wait_for(lambda: _kept_s(state / MEMORY_FILE) == MEMORY_S, timeout=5)
+            # the person's word ends an utterance the length of the sentence, looked through for a "stop" (about 0.5 s
+            # of decoding on a loaded machine): it may still be on its way when the canceller's figures are in
+            wait_for(lambda: bool(heard), timeout=10)
         health = bus.query_health("voice")
     assert health is not None
     if cancel == "":
