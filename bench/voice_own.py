@@ -149,8 +149,14 @@ class EchoPath:
     def echo(self, voice: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, float]:
         """The sentence as the microphone hears it (unscaled), and the state's error, s."""
         delay = np.zeros(int(rng.uniform(0.02, 0.06) * SAMPLE_RATE))
-        bent = np.tanh(self.drive * 0.5 * voice) / np.tanh(self.drive)
-        return fftconvolve(np.concatenate([delay, bent]), self.response), float(rng.uniform(-0.03, 0.03))
+        return fftconvolve(np.concatenate([delay, self._bent(voice)]), self.response), float(rng.uniform(-0.03, 0.03))
+
+    def peak(self, voice: np.ndarray) -> float:
+        """The peak of `echo(voice)` (which the sound card's delay does not change)."""
+        return float(np.max(np.abs(fftconvolve(self._bent(voice), self.response))))
+
+    def _bent(self, voice: np.ndarray) -> np.ndarray:
+        return np.tanh(self.drive * 0.5 * voice) / np.tanh(self.drive)
 
 
 EARLY_S = LOCK_S + SEARCH_S[1]
@@ -163,10 +169,12 @@ WAYS: dict[str, dict[str, bool] | None] = {
     "once found": {"look_back": False, "learn_first": False},
     "held back": {"look_back": True, "learn_first": False},
     "learnt first": {"look_back": True, "learn_first": True},
+    "learnt first, fitted": {"look_back": True, "learn_first": True, "fit": True},
 }
 """`--cancel`'s ways of hearing each stream: without the canceller; with it cancelling each sentence once its echo is
-found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46); and the
-held samples also learnt from before they are cancelled (rounds voice47 and 47b: the service's default)."""
+found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46); the held
+samples also learnt from before they are cancelled (rounds voice47 and 47b: the service's default); and that with the
+way fitted on the canceller's memory subtracted first (`EchoCanceller.fit`, round voice49)."""
 
 
 @dataclass
@@ -220,10 +228,14 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
     return out
 
 
-RECALLS = ("without", "cold", "recalled, another room", "recalled, same room")
+RECALLS = ("without", "cold", "recalled, another room", "recalled, same room", "fitted, another room",
+           "fitted, same room")
 """`--recall`'s ways of hearing each stream: without the canceller; with a canceller that has not heard the robot (the
-service just started); and with one that first `recall`ed what an earlier run's canceller remembered of three sentences
-(`EchoCanceller.memory`), heard through another room (the same head's loudspeaker) or the same one."""
+service just started); with one that first `recall`ed what an earlier run's canceller remembered of three sentences
+(`EchoCanceller.memory`), heard through another room (the same head's loudspeaker at the same volume) or the same one;
+and the same with the way fitted on that memory subtracted first (`EchoCanceller.fit`, round voice49). (Until round
+voice49 each memory was made at the level of its own loudest sentence, not at the run's volume: a level mismatch of a
+dB or two that a recording of the same loudspeaker does not have.)"""
 
 
 def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
@@ -239,11 +251,11 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
         path = EchoPath.draw(rng, rt60)
         elsewhere = EchoPath(responses(own_room(rng, rt60))[0], path.drive)
         earlier = [voices[(k + 1 + j) % len(voices)] for j in range(before)]
-        memories = {way: _memory(earlier, room, peak, floor, mic_rate, rng, t0)
-                    for way, room in (("recalled, another room", elsewhere), ("recalled, same room", path))}
         voice = voices[k % len(voices)]
+        scale = 10 ** (peak / 20) / (path.peak(voice) + 1e-12)
+        memories = {way: _memory(earlier, room, scale, floor, mic_rate, rng, t0)
+                    for way, room in (("recalled, another room", elsewhere), ("recalled, same room", path))}
         echo, late = path.echo(voice, rng)
-        scale = 10 ** (peak / 20) / (np.max(np.abs(echo)) + 1e-12)
         start = int(LEAD_S * SAMPLE_RATE)
         x = rng.normal(0.0, 10 ** (floor / 20), start + echo.size + SAMPLE_RATE)
         x[start : start + echo.size] += echo * scale
@@ -258,8 +270,9 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
         out.early += early
         said = [(t0 + start / SAMPLE_RATE + late, voice)]
         for way in RECALLS:
-            recall = memories.get(way)
-            z = x if way == "without" else _cancelled(said, {}, pcm, block, t0, recall)
+            fitted = way.startswith("fitted")
+            recall = memories.get(way.replace("fitted", "recalled"))
+            z = x if way == "without" else _cancelled(said, {"fit": fitted}, pcm, block, t0, recall)
             heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
                         for _, s, e, cmd, _ in stream(engine, z, config))
             out.heard[way] += heard
@@ -267,13 +280,13 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
     return out
 
 
-def _memory(said: list[np.ndarray], path: EchoPath, peak: float, floor: float, mic_rate: int | None,
+def _memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: float, mic_rate: int | None,
             rng: np.random.Generator, t0: float) -> tuple[np.ndarray, np.ndarray]:
     """What a canceller (the service's defaults) remembers (`EchoCanceller.memory`) after the robot said the sentences
-    `said`, 0.3 s apart, through `path`, the loudest at `peak` dBFS at the microphone, in a quiet room."""
+    `said`, 0.3 s apart, through `path` at the loudspeaker's volume `scale` (the run's: the volume does not change from
+    run to run), in a quiet room."""
     gap = int(0.3 * SAMPLE_RATE)
     echoes = [path.echo(v, rng) for v in said]
-    scale = 10 ** (peak / 20) / (max(np.max(np.abs(e)) for e, _ in echoes) + 1e-12)
     starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
     x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + SAMPLE_RATE)
     played = Played()

@@ -144,6 +144,13 @@ EchoMemoryOption = Annotated[
                       "6 s, microphone and reference) in the state folder and learn from it at start (on or off) "
                       "[default: on]"),
 ]
+EchoFitOption = Annotated[
+    str | None,
+    typer.Option("--echo-fit", envvar="HRI_VOICE_ECHO_FIT",
+                 help="a live source with the canceller on: subtract the way from the loudspeaker to the microphone, "
+                      "fitted by least squares on the canceller's memory, before its adaptive filter (on or off) "
+                      "[default: off]"),
+]
 VoskModelOption = Annotated[
     str | None,
     typer.Option("--vosk-model", envvar="HRI_VOSK_MODEL",
@@ -165,7 +172,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
          highpass: HighpassOption = None, gain: GainOption = None, mic_rate: MicRateOption = None,
          mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
-         echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None) -> None:
+         echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
+         echo_fit: EchoFitOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -175,7 +183,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
                              vad_lift=vad_lift, highpass=highpass, gain=gain, mic_rate=mic_rate,
                              mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
-                             echo_memory=echo_memory)
+                             echo_memory=echo_memory, echo_fit=echo_fit)
     try:
         check_settings(settings)
     except EngineError as exc:

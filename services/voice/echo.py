@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 import zipfile
 from collections import deque
 from collections.abc import Callable
@@ -33,6 +34,7 @@ import numpy as np
 
 from services.runtime.flags import parse_flag
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH
+from services.voice.echo_fit import FittedPath, fit_path
 
 FRAME = 160
 """Samples per frame the canceller takes (10 ms at 16 kHz)."""
@@ -67,6 +69,9 @@ MEMORY_FILE = "echo-memory.npz"
 """In the state folder: the canceller's `memory`, saved each time the robot falls silent, `recall`ed at start."""
 MEMORY_DEFAULT_ON = True
 """Whether `HRI_VOICE_ECHO_MEMORY` is on when unset: on since round voice48 (voice README), which it passed."""
+FIT_ENV = "HRI_VOICE_ECHO_FIT"
+FIT_DEFAULT_ON = False
+"""Whether `HRI_VOICE_ECHO_FIT` (`EchoCanceller.fit`) is on when unset."""
 
 
 class EchoError(RuntimeError):
@@ -89,6 +94,13 @@ def echo_memory_from(raw: str | None) -> bool:
     if raw is None or raw.strip() == "":
         return MEMORY_DEFAULT_ON
     return echo_cancel_from(raw, MEMORY_ENV)
+
+
+def echo_fit_from(raw: str | None) -> bool:
+    """`HRI_VOICE_ECHO_FIT` / `--echo-fit`: on or off; unset: `FIT_DEFAULT_ON`."""
+    if raw is None or raw.strip() == "":
+        return FIT_DEFAULT_ON
+    return echo_cancel_from(raw, FIT_ENV)
 
 
 @dataclass
@@ -224,6 +236,15 @@ class EchoCanceller:
     """How long the stream was last held back while a sentence's echo was looked for."""
     recalled_s: float = 0.0
     """Seconds of the robot's voice learnt from before the stream began (`recall`: an earlier run's `memory`)."""
+    fit: bool = FIT_DEFAULT_ON
+    """Round voice49: a fixed estimate of the way (`echo_fit`), fitted by least squares on the `memory` each time a
+    stretch of the robot's voice ends and when one is `recall`ed, subtracted before speexdsp's filter."""
+    fit_db: float | None = None
+    """How far the last fit took the memory's own echo down (dB); None while there is no fit in use."""
+    fits: int = 0
+    """Fits made and used."""
+    fit_ms: float | None = None
+    """How long the last fit took (it runs on the stream's thread, when a stretch of the robot's voice has ended)."""
     on_silent: Callable[[EchoCanceller], None] | None = field(default=None, repr=False)
     """Called (on the stream's thread) each time a stretch of the robot's voice has ended and passed out of the
     filter's reach: the service saves the canceller's `memory` then."""
@@ -239,6 +260,7 @@ class EchoCanceller:
     """The stream held back (`look_back`): the samples just before `_index`'s held ones."""
     _energy: tuple[float, float] = (0.0, 0.0)
     """Input and output energy of the current stretch of the robot's voice."""
+    _path: FittedPath | None = field(default=None, repr=False)
     _memory: tuple[np.ndarray, np.ndarray] = field(
         default_factory=lambda: (np.zeros(0, dtype=np.int16), np.zeros(0, dtype=np.int16)), repr=False
     )
@@ -292,6 +314,8 @@ class EchoCanceller:
         """The canceller over whole frames of the microphone's samples and the reference's: its output. (speexdsp
         reads a whole frame whatever it is given: a short one crashes the process.)"""
         assert mic.size % FRAME == 0 and refs.size == mic.size
+        if self._path is not None:
+            mic = self._path.cancel(mic, refs)
         out = np.empty_like(mic)
         for k in range(0, mic.size, FRAME):
             out[k : k + FRAME] = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
@@ -324,10 +348,29 @@ class EchoCanceller:
             raise ValueError(f"not an echo memory: {mic.size} samples, whole {FRAME}-sample frames up to "
                              f"{MEMORY_S} s expected")
         if mic.size:
-            self._run(mic, refs)
-            self._silence()
-            self.recalled_s = round(mic.size / SAMPLE_RATE, 2)
             self._memory = (mic.copy(), refs.copy())
+            if not self._refit():
+                self._run(mic, refs)
+                self._silence()
+            self.recalled_s = round(mic.size / SAMPLE_RATE, 2)
+
+    def _refit(self) -> bool:
+        """With `fit`: the way fitted again on the `memory`; where the fit is good enough, it is used from now on, with
+        a new adaptive filter that has learnt the memory through it (the old one had learnt what the old fit left, and
+        would add that back). True if a fit was installed."""
+        if not self.fit:
+            return False
+        began = time.perf_counter()
+        fitted = fit_path(*self._memory, rate=SAMPLE_RATE, taps=int(self.filter_s * SAMPLE_RATE))
+        if fitted is not None:
+            taps, self.fit_db = fitted
+            self._path = FittedPath(taps)
+            self._aec = _aec(self.filter_s)
+            self._run(*self._memory)
+            self._silence()
+            self.fits += 1
+        self.fit_ms = round((time.perf_counter() - began) * 1000.0, 1)
+        return fitted is not None
 
     def _keep(self, mic: np.ndarray) -> None:
         """The stream's recent samples, for finding a sentence's echo in them."""
@@ -392,5 +435,6 @@ class EchoCanceller:
         elif into > 0.0:  # a stretch of the robot's voice has ended
             self.erle_db = round(10.0 * float(np.log10(max(left, 1.0) / into)), 1)
             self._energy = (0.0, 0.0)
+            self._refit()
             if self.on_silent is not None:
                 self.on_silent(self)

@@ -28,6 +28,7 @@ from services.runtime import ServiceContext, default_state_dir
 from services.voice.audio import SAMPLE_RATE, AudioError
 from services.voice.echo import ENV as ECHO_ENV
 from services.voice.echo import (
+    FIT_ENV,
     MEMORY_ENV,
     MEMORY_FILE,
     EchoCanceller,
@@ -35,6 +36,7 @@ from services.voice.echo import (
     EchoMemory,
     Played,
     echo_cancel_from,
+    echo_fit_from,
     echo_memory_from,
 )
 from services.voice.engine import (
@@ -117,6 +119,9 @@ class VoiceSettings:
     echo_memory: str | None = None
     """`HRI_VOICE_ECHO_MEMORY`: the canceller's memory of the robot's voice kept in the state folder and recalled at
     start (`echo.EchoMemory`), `on` or `off`; None: the default (`echo.MEMORY_DEFAULT_ON`)."""
+    echo_fit: str | None = None
+    """`HRI_VOICE_ECHO_FIT`: the canceller subtracts a way from the loudspeaker fitted on its memory before its adaptive
+    filter (`echo.EchoCanceller.fit`, `echo_fit`), `on` or `off`; None: the default (`echo.FIT_DEFAULT_ON`)."""
     retry_s: float = 2.0
     max_retry_s: float = 30.0
 
@@ -146,6 +151,7 @@ class VoiceSettings:
             own_voice=os.environ.get("HRI_VOICE_OWN_VOICE") or None,
             echo_cancel=os.environ.get(ECHO_ENV) or None,
             echo_memory=os.environ.get(MEMORY_ENV) or None,
+            echo_fit=os.environ.get(FIT_ENV) or None,
         )
 
     def mic(self) -> MicFormat:
@@ -206,6 +212,7 @@ def check_settings(settings: VoiceSettings) -> None:
         tail_from(settings.own_voice)
         echo_cancel_from(settings.echo_cancel)
         echo_memory_from(settings.echo_memory)
+        echo_fit_from(settings.echo_fit)
     except (LevelError, OwnVoiceError, EchoError) as exc:
         raise EngineError(str(exc)) from None
     if settings.vad == "silero":  # the model ships in a core dependency: missing means a broken install
@@ -434,6 +441,7 @@ class _Echo:
         c = self.canceller
         return {"echo_frames": c.frames, "echo_locked": c.locked, "echo_lost": c.lost, "echo_lag_ms_last": c.lag_ms,
                 "echo_erle_db_last": c.erle_db, "echo_held_ms_last": c.held_ms, "echo_recalled_s": c.recalled_s,
+                "echo_fits": c.fits, "echo_fit_db_last": c.fit_db, "echo_fit_ms_last": c.fit_ms,
                 **self.voice.detail()}
 
 
@@ -456,7 +464,8 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
         try:
             played = Played()
             speech_detail = lambda: (h := ctx.query_health("speech", timeout=1.0)) and h.detail  # noqa: E731
-            echo = _Echo(EchoCanceller(played), RobotVoice(played, speech_detail))
+            echo = _Echo(EchoCanceller(played, fit=echo_fit_from(settings.echo_fit)),
+                         RobotVoice(played, speech_detail))
             _echo_memory(ctx, settings, echo.canceller)
         except EchoError as exc:
             ctx.update_detail(echo_cancel=f"unavailable: {exc}")
@@ -464,7 +473,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     if own is not None or echo is not None:
         ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: _robot_said(state, own, echo))
     if echo is not None:
-        ctx.update_detail(echo_cancel="on")
+        ctx.update_detail(echo_cancel="on", echo_fit="on" if echo.canceller.fit else "off")
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:
         ctx.update_detail(echo_cancel="off")
