@@ -149,7 +149,7 @@ EchoFitOption = Annotated[
     typer.Option("--echo-fit", envvar="HRI_VOICE_ECHO_FIT",
                  help="a live source with the canceller on: subtract the way from the loudspeaker to the microphone, "
                       "fitted by least squares on the canceller's memory, before its adaptive filter (on or off) "
-                      "[default: off]"),
+                      "[default: on]"),
 ]
 VoskModelOption = Annotated[
     str | None,

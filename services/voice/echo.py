@@ -16,7 +16,9 @@ frames, with a 256 ms filter: the sound card's delay and the room's first reflec
 frame of a live stream, so that what it learnt in one sentence is there at the start of the next; where no played
 sound lies within the filter's reach, its output is not used and the stream goes on as the microphone heard it. What it
 learnt from (its last 6 s of the robot's voice, `EchoCanceller.memory`) is kept in the state folder and learnt from
-again when the next run starts (`EchoMemory`, round voice48), so that a run's first sentence is cancelled too.
+again when the next run starts (`EchoMemory`, round voice48), so that a run's first sentence is cancelled too. With
+`HRI_VOICE_ECHO_FIT` (round voice49, `echo_fit.py`) the whole way is also fitted on that memory by least squares and
+subtracted before speexdsp's filter, which then learns only what the fit leaves.
 """
 
 from __future__ import annotations
@@ -70,8 +72,9 @@ MEMORY_FILE = "echo-memory.npz"
 MEMORY_DEFAULT_ON = True
 """Whether `HRI_VOICE_ECHO_MEMORY` is on when unset: on since round voice48 (voice README), which it passed."""
 FIT_ENV = "HRI_VOICE_ECHO_FIT"
-FIT_DEFAULT_ON = False
-"""Whether `HRI_VOICE_ECHO_FIT` (`EchoCanceller.fit`) is on when unset."""
+FIT_DEFAULT_ON = True
+"""Whether `HRI_VOICE_ECHO_FIT` (`EchoCanceller.fit`) is on when unset: on since round voice49 (voice README), which it
+passed."""
 
 
 class EchoError(RuntimeError):
@@ -200,6 +203,15 @@ def _aec(filter_s: float) -> object:
 
 
 @dataclass
+class _Stages:
+    """What cancels: speexdsp's adaptive filter, after the fitted way where there is one (`EchoCanceller.fit`)."""
+
+    aec: object
+    path: FittedPath | None = None
+    fit_db: float | None = None
+
+
+@dataclass
 class EchoCanceller:
     """A live stream's chunks in, the same samples out with the robot's played sound cancelled where there was some.
     Samples come out in whole frames: up to 9 ms of a chunk waits for the next one."""
@@ -238,17 +250,27 @@ class EchoCanceller:
     """Seconds of the robot's voice learnt from before the stream began (`recall`: an earlier run's `memory`)."""
     fit: bool = FIT_DEFAULT_ON
     """Round voice49: a fixed estimate of the way (`echo_fit`), fitted by least squares on the `memory` each time a
-    stretch of the robot's voice ends and when one is `recall`ed, subtracted before speexdsp's filter."""
+    stretch of the robot's voice ends and when one is `recall`ed, subtracted before speexdsp's filter; each fit comes
+    with a new speexdsp filter that has learnt the memory through it (the old one had learnt what the old fit left, and
+    would add that back)."""
+    background: bool = False
+    """With `fit`: a fit after a stretch of the robot's voice is made on a thread of its own and put in use at the first
+    block after it is ready that lies outside the robot's voice (the service: a fit and the new filter's lesson take
+    0.1-0.3 s, longer than a stream's block should wait). False: at once, on the caller's thread (the bench, whose
+    streams run faster than real time)."""
     fit_db: float | None = None
-    """How far the last fit took the memory's own echo down (dB); None while there is no fit in use."""
+    """How far the fit in use took the memory's own echo down (dB); None while there is none."""
     fits: int = 0
-    """Fits made and used."""
+    """Fits put in use."""
     fit_ms: float | None = None
-    """How long the last fit took (it runs on the stream's thread, when a stretch of the robot's voice has ended)."""
+    """How long the last fit took, the new filter's lesson included."""
     on_silent: Callable[[EchoCanceller], None] | None = field(default=None, repr=False)
     """Called (on the stream's thread) each time a stretch of the robot's voice has ended and passed out of the
     filter's reach: the service saves the canceller's `memory` then."""
-    _aec: object = field(init=False, repr=False)
+    _stages: _Stages = field(init=False, repr=False)
+    _ready: _Stages | None = field(default=None, repr=False)
+    """A fit made in the `background`, waiting to be put in use."""
+    _fitting: threading.Thread | None = field(default=None, repr=False)
     _held: bytes = b""
     _index: int = 0
     """Samples of the stream seen so far; the held ones (`_held`) come after them."""
@@ -260,13 +282,12 @@ class EchoCanceller:
     """The stream held back (`look_back`): the samples just before `_index`'s held ones."""
     _energy: tuple[float, float] = (0.0, 0.0)
     """Input and output energy of the current stretch of the robot's voice."""
-    _path: FittedPath | None = field(default=None, repr=False)
     _memory: tuple[np.ndarray, np.ndarray] = field(
         default_factory=lambda: (np.zeros(0, dtype=np.int16), np.zeros(0, dtype=np.int16)), repr=False
     )
 
     def __post_init__(self) -> None:
-        self._aec = _aec(self.filter_s)
+        self._stages = _Stages(_aec(self.filter_s))
 
     def __call__(self, chunk: bytes, captured: float | None) -> bytes:
         """`chunk` (16-bit PCM, 16 kHz) whose first sample was captured at wall-clock `captured` (None: not known
@@ -310,21 +331,23 @@ class EchoCanceller:
         self._measure(mic, out, near)
         return out.tobytes()
 
-    def _run(self, mic: np.ndarray, refs: np.ndarray) -> np.ndarray:
-        """The canceller over whole frames of the microphone's samples and the reference's: its output. (speexdsp
-        reads a whole frame whatever it is given: a short one crashes the process.)"""
+    def _run(self, mic: np.ndarray, refs: np.ndarray, stages: _Stages | None = None) -> np.ndarray:
+        """The canceller (`stages`, else the one in use) over whole frames of the microphone's samples and the
+        reference's: its output. (speexdsp reads a whole frame whatever it is given: a short one crashes the
+        process.)"""
         assert mic.size % FRAME == 0 and refs.size == mic.size
-        if self._path is not None:
-            mic = self._path.cancel(mic, refs)
+        stages = self._stages if stages is None else stages
+        if stages.path is not None:
+            mic = stages.path.cancel(mic, refs)
         out = np.empty_like(mic)
         for k in range(0, mic.size, FRAME):
-            out[k : k + FRAME] = self._aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
+            out[k : k + FRAME] = stages.aec.cancel_echo(mic[k : k + FRAME].tolist(), refs[k : k + FRAME].tolist())  # type: ignore[attr-defined]
         return out
 
-    def _silence(self) -> None:
+    def _silence(self, stages: _Stages | None = None) -> None:
         """The filter's length of silence through the canceller: what it ran before is out of its memory."""
         silence = np.zeros((int(self.filter_s * SAMPLE_RATE) // FRAME + 1) * FRAME, dtype=np.int16)
-        self._run(silence, silence)
+        self._run(silence, silence, stages)
 
     def _remember(self, mic: np.ndarray, refs: np.ndarray) -> None:
         keep = int(MEMORY_S * SAMPLE_RATE) // FRAME * FRAME
@@ -355,22 +378,46 @@ class EchoCanceller:
             self.recalled_s = round(mic.size / SAMPLE_RATE, 2)
 
     def _refit(self) -> bool:
-        """With `fit`: the way fitted again on the `memory`; where the fit is good enough, it is used from now on, with
-        a new adaptive filter that has learnt the memory through it (the old one had learnt what the old fit left, and
-        would add that back). True if a fit was installed."""
+        """With `fit`, at once: the way fitted again on the `memory` and put in use where it is good enough. True if
+        it was."""
         if not self.fit:
             return False
+        stages = self._fitted(self._memory)
+        if stages is not None:
+            self._use(stages)
+        return stages is not None
+
+    def _fitted(self, memory: tuple[np.ndarray, np.ndarray]) -> _Stages | None:
+        """The way fitted on `memory` and a new speexdsp filter that has learnt `memory` through it; None where the fit
+        is not good enough (`echo_fit.MIN_GAIN_DB`)."""
         began = time.perf_counter()
-        fitted = fit_path(*self._memory, rate=SAMPLE_RATE, taps=int(self.filter_s * SAMPLE_RATE))
-        if fitted is not None:
-            taps, self.fit_db = fitted
-            self._path = FittedPath(taps)
-            self._aec = _aec(self.filter_s)
-            self._run(*self._memory)
-            self._silence()
-            self.fits += 1
+        found = fit_path(*memory, rate=SAMPLE_RATE, taps=int(self.filter_s * SAMPLE_RATE))
+        stages = None
+        if found is not None:
+            stages = _Stages(_aec(self.filter_s), FittedPath(found[0]), found[1])
+            self._run(*memory, stages)
+            self._silence(stages)
         self.fit_ms = round((time.perf_counter() - began) * 1000.0, 1)
-        return fitted is not None
+        return stages
+
+    def _fit_later(self, memory: tuple[np.ndarray, np.ndarray]) -> None:
+        self._ready = self._fitted(memory)
+
+    def _use(self, stages: _Stages) -> None:
+        self._stages = stages
+        self.fit_db = stages.fit_db
+        self.fits += 1
+
+    def _refit_after_voice(self) -> None:
+        """A stretch of the robot's voice has ended: with `fit`, fit the way again, at once or in the `background`
+        (unless a fit is being made)."""
+        if not self.fit:
+            return
+        if not self.background:
+            self._refit()
+        elif self._fitting is None or not self._fitting.is_alive():
+            self._fitting = threading.Thread(target=self._fit_later, args=(self.memory(),), name="echo-fit", daemon=True)
+            self._fitting.start()
 
     def _keep(self, mic: np.ndarray) -> None:
         """The stream's recent samples, for finding a sentence's echo in them."""
@@ -428,6 +475,9 @@ class EchoCanceller:
         self.lag_ms = round((lo + lag - sentence.at) / SAMPLE_RATE * 1000.0, 1)
 
     def _measure(self, mic: np.ndarray, out: np.ndarray, near: bool) -> None:
+        if not near and self._ready is not None:  # a fit made in the background, put in use outside the robot's voice
+            ready, self._ready = self._ready, None
+            self._use(ready)
         into, left = self._energy
         if near:
             self._energy = (into + float(np.sum(mic.astype(np.float64) ** 2)),
@@ -435,6 +485,6 @@ class EchoCanceller:
         elif into > 0.0:  # a stretch of the robot's voice has ended
             self.erle_db = round(10.0 * float(np.log10(max(left, 1.0) / into)), 1)
             self._energy = (0.0, 0.0)
-            self._refit()
+            self._refit_after_voice()
             if self.on_silent is not None:
                 self.on_silent(self)

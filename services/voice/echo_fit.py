@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.fft import irfft, next_fast_len, rfft
 from scipy.linalg import solve_toeplitz
 from scipy.signal import convolve
 
@@ -40,17 +41,17 @@ def fit_path(mic: np.ndarray, ref: np.ndarray, rate: int, taps: int = TAPS,
     x, y = ref.astype(np.float64), mic.astype(np.float64)
     if x.size < MIN_S * rate or not np.any(x):
         return None
-    size = 1 << int(np.ceil(np.log2(2 * x.size)))
-    spectrum = np.fft.rfft(x, size)
-    auto = np.fft.irfft(spectrum * np.conj(spectrum), size)[:taps]
-    cross = np.fft.irfft(np.fft.rfft(y, size) * np.conj(spectrum), size)[:taps]
+    size = next_fast_len(x.size + taps)  # the lags wanted (0 to taps - 1) do not wrap around
+    spectrum = rfft(x, size)
+    auto = irfft(spectrum * np.conj(spectrum), size)[:taps]
+    cross = irfft(rfft(y, size) * np.conj(spectrum), size)[:taps]
     auto[0] *= 1.0 + load
     try:
         h = solve_toeplitz(auto, cross)
     except np.linalg.LinAlgError:
         return None
-    left = y - np.fft.irfft(spectrum * np.fft.rfft(h, size), size)[: y.size]
-    gain_db = 10.0 * np.log10((float(np.sum(left**2)) + 1.0) / (float(np.sum(y**2)) + 1.0))
+    left = y - irfft(spectrum * rfft(h, size), size)[: y.size]  # what the fit leaves (its own linear convolution)
+    gain_db = 10.0 * np.log10((float(left @ left) + 1.0) / (float(y @ y) + 1.0))
     return (h, round(gain_db, 1)) if gain_db <= -MIN_GAIN_DB else None
 
 

@@ -464,7 +464,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
         try:
             played = Played()
             speech_detail = lambda: (h := ctx.query_health("speech", timeout=1.0)) and h.detail  # noqa: E731
-            echo = _Echo(EchoCanceller(played, fit=echo_fit_from(settings.echo_fit)),
+            echo = _Echo(EchoCanceller(played, fit=echo_fit_from(settings.echo_fit), background=True),
                          RobotVoice(played, speech_detail))
             _echo_memory(ctx, settings, echo.canceller)
         except EchoError as exc:
@@ -473,7 +473,9 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     if own is not None or echo is not None:
         ctx.subscribe(ctx.keys.speech_state, SpeechState, lambda state: _robot_said(state, own, echo))
     if echo is not None:
-        ctx.update_detail(echo_cancel="on", echo_fit="on" if echo.canceller.fit else "off")
+        c = echo.canceller
+        ctx.update_detail(echo_cancel="on", echo_fit="on" if c.fit else "off", echo_fits=c.fits,
+                          echo_fit_db_last=c.fit_db)
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:
         ctx.update_detail(echo_cancel="off")

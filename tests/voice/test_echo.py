@@ -23,6 +23,7 @@ from services.speech.tts import EspeakNg
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE
 from services.voice.echo import (
+    FIT_DEFAULT_ON,
     FRAME,
     LEAD_S,
     LOCK_S,
@@ -38,6 +39,7 @@ from services.voice.echo import (
     echo_lag,
     echo_memory_from,
 )
+from services.voice.echo_fit import MIN_GAIN_DB
 from services.voice.robot_voice import RobotVoice
 from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
@@ -483,8 +485,9 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
 @pytest.mark.parametrize("kept", ["a memory", "not one"])
 def test_the_voice_service_recalls_the_memory_an_earlier_run_kept(bus: ServiceContext, router_endpoint: str,
                                                                    robot_id: str, tmp_path: Path, kept: str) -> None:
-    """At start the voice service's canceller learns from the memory in the state folder (health: how many seconds);
-    one that is not a memory is passed over with a warning in health, and the service runs, cold, and stops cleanly."""
+    """At start the voice service's canceller learns from the memory in the state folder (health: how many seconds;
+    with `HRI_VOICE_ECHO_FIT=on`, the way fitted on it); one that is not a memory is passed over with a warning in
+    health, and the service runs, cold, and stops cleanly."""
     state = tmp_path / "state"
     state.mkdir()
     if kept == "a memory":
@@ -493,7 +496,7 @@ def test_the_voice_service_recalls_the_memory_an_earlier_run_kept(bus: ServiceCo
     else:
         (state / MEMORY_FILE).write_bytes(b"half-written")
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_STATE_DIR=str(state),
-                      HRI_VOICE_ECHO_MEMORY="on")
+                      HRI_VOICE_ECHO_MEMORY="on", HRI_VOICE_ECHO_FIT="on" if kept == "a memory" else "")
     with stdin_service(env, tmp_path / "voice.log") as proc:
         wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("echo_memory") == "on",
                  timeout=30)
@@ -503,8 +506,11 @@ def test_the_voice_service_recalls_the_memory_an_earlier_run_kept(bus: ServiceCo
     assert health is not None
     if kept == "a memory":
         assert health.detail["echo_recalled_s"] == 2.0 and "echo_memory_warning" not in health.detail
+        assert health.detail["echo_fit"] == "on" and health.detail["echo_fits"] == 1
+        assert health.detail["echo_fit_db_last"] < -MIN_GAIN_DB
     else:
         assert health.detail["echo_recalled_s"] == 0.0
+        assert health.detail["echo_fit"] == ("on" if FIT_DEFAULT_ON else "off") and health.detail["echo_fits"] == 0
         assert "unusable" in health.detail["echo_memory_warning"] and MEMORY_FILE in health.detail["echo_memory_warning"]
 
 
