@@ -2,12 +2,13 @@
 canceller remembers of the robot's voice and subtracted before speexdsp's adaptive filter (round voice49).
 
 speexdsp's filter adapts a little with every frame and, on the voice README's streams, levels off at taking the
-robot's voice down by about 21-23 dB however long it has heard it; a person's "stop" at -26 dBFS said over the robot
-at -12 dBFS then competes with a residue about as loud as itself. The canceller's memory (`EchoCanceller.memory`: the
-last 6 s of the microphone's samples and the reference placed before them) holds enough of the robot's voice to solve
-for the whole 256 ms impulse response at once (the Wiener-Hopf equations: the reference's autocorrelation, a
-Toeplitz matrix, against its cross-correlation with the microphone, by Levinson's recursion). What that leaves, speexdsp
-then learns as before; speexdsp keeps its own filter to itself, so the two stages are cascaded rather than merged.
+robot's voice down by about 20-24 dB however long it has heard it (whether the loudspeaker clips or not); a person's
+"stop" at -26 dBFS said over the robot at -12 dBFS then competes with a residue about as loud as itself. The
+canceller's memory (`EchoCanceller.memory`: the last 6 s of the microphone's samples and the reference placed before
+them) holds enough of the robot's voice to solve for the whole 256 ms impulse response at once (the Wiener-Hopf
+equations: the reference's autocorrelation, a Toeplitz matrix, against its cross-correlation with the microphone, by
+Levinson's recursion). What that leaves, speexdsp then learns as before; speexdsp keeps its own filter to itself, so the
+two stages are cascaded rather than merged.
 """
 
 from __future__ import annotations
