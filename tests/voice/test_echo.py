@@ -467,7 +467,9 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     if cancel == "":
         assert health.detail["echo_cancel"] == "on" and health.detail["echo_unrendered"] == 0
         assert health.detail["echo_locked"] == 4 and health.detail["echo_lost"] == 0
-        assert 0.0 <= health.detail["echo_lag_ms_last"] <= 100.0  # the bus, the microphone's 30 ms blocks, the path
+        # the bus, the microphone's 30 ms blocks, the path; on a loaded machine the state can arrive after the sound
+        # (-43 ms in one CI-exact run, stop 89): the canceller looks for the echo from SEARCH_S[0] on
+        assert SEARCH_S[0] * 1000.0 <= health.detail["echo_lag_ms_last"] <= 100.0
         # held back while each sentence's echo was looked for: 0.72 s, in the microphone's 30 ms blocks
         assert 0.0 < health.detail["echo_held_ms_last"] <= 780.0
         # the person's "stop" over the start of the robot's sentence, cancelled once its echo was found, is published
