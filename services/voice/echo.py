@@ -255,11 +255,9 @@ class EchoCanceller:
     would add that back)."""
     background: bool = False
     """With `fit`: a fit after a stretch of the robot's voice is made on a thread of its own and put in use at the first
-    block after it is ready that lies outside the robot's voice (the service: a fit and the new filter's lesson take
-    0.1-0.3 s, longer than a stream's block should wait). False: at once, on the caller's thread (the bench, whose
+    block after it is ready that lies outside the robot's voice (the service: a fit and the new filter's lesson took
+    0.45-0.6 s on a 2-core AVX2 machine beside a bench, far longer than a stream's block should wait). False: at once, on the caller's thread (the bench, whose
     streams run faster than real time)."""
-    fit_db: float | None = None
-    """How far the fit in use took the memory's own echo down (dB); None while there is none."""
     fits: int = 0
     """Fits put in use."""
     fit_ms: float | None = None
@@ -377,6 +375,11 @@ class EchoCanceller:
                 self._silence()
             self.recalled_s = round(mic.size / SAMPLE_RATE, 2)
 
+    @property
+    def fit_db(self) -> float | None:
+        """How far the fit in use took the memory's own echo down (dB); None while there is none."""
+        return self._stages.fit_db
+
     def _refit(self) -> bool:
         """With `fit`, at once: the way fitted again on the `memory` and put in use where it is good enough. True if
         it was."""
@@ -405,7 +408,6 @@ class EchoCanceller:
 
     def _use(self, stages: _Stages) -> None:
         self._stages = stages
-        self.fit_db = stages.fit_db
         self.fits += 1
 
     def _refit_after_voice(self) -> None:
