@@ -24,9 +24,9 @@ of `--warm` + 1 of the robot's sentences in a row (4 by default; `--warm 0`: a c
 before), through an `EchoPath` drawn for it (a room with the loudspeaker 0.1 m away, a small loudspeaker's soft
 clipping, the sound card's delay and the state's error per sentence); the same streams are heard each of `WAYS`:
 without the canceller, with it cancelling each sentence once its echo is found, held back meanwhile and cancelled from
-the sentence's first sample (`look_back`), and with what was held also learnt from first (`learn_first`: the
-service's default), with how many of the "stop"s began within 0.6 s of their sentence's echo and how many of those each
-way heard.
+the sentence's first sample (`look_back`), with what was held also learnt from first (`learn_first`), and that with
+the way fitted on the canceller's memory subtracted first (`fit`: the service's default), with how many of the "stop"s
+began within 0.6 s of their sentence's echo and how many of those each way heard (`--way`: only the ways named).
 
 `--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
 through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
@@ -166,15 +166,17 @@ looks for that echo (`EchoCanceller.look_back`); without the look-back it is not
 
 WAYS: dict[str, dict[str, bool] | None] = {
     "without": None,
-    "once found": {"look_back": False, "learn_first": False},
-    "held back": {"look_back": True, "learn_first": False},
-    "learnt first": {"look_back": True, "learn_first": True},
+    "once found": {"look_back": False, "learn_first": False, "fit": False},
+    "held back": {"look_back": True, "learn_first": False, "fit": False},
+    "learnt first": {"look_back": True, "learn_first": True, "fit": False},
     "learnt first, fitted": {"look_back": True, "learn_first": True, "fit": True},
 }
 """`--cancel`'s ways of hearing each stream: without the canceller; with it cancelling each sentence once its echo is
 found (round voice45); held back meanwhile and cancelled from the sentence's first sample (round voice46); the held
-samples also learnt from before they are cancelled (rounds voice47 and 47b: the service's default); and that with the
-way fitted on the canceller's memory subtracted first (`EchoCanceller.fit`, round voice49)."""
+samples also learnt from before they are cancelled (rounds voice47 and 47b); and that with the way fitted on the
+canceller's memory subtracted first (`EchoCanceller.fit`, round voice49: the service's default). Each way names every
+setting it differs in: one left to the canceller's default would follow the default when it changes (as "learnt
+first" did from stop 89 to stop 90, fitted like the last way; seed 22171 was measured so and run again)."""
 
 
 @dataclass
@@ -190,12 +192,12 @@ class OverEcho:
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
                         peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
-                        rng: np.random.Generator, warm: int = 3) -> OverEcho:
+                        rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone; the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
-    states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `WAYS` hears
-    (`OverEcho`), on the same streams."""
+    states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `ways` (of `WAYS`; all
+    by default) hears (`OverEcho`), on the same streams."""
     out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
@@ -219,7 +221,8 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         early = at - echo_begins < EARLY_S * SAMPLE_RATE
         out.stops += 1
         out.early += early
-        for way, settings in WAYS.items():
+        for way in ways or list(WAYS):
+            settings = WAYS[way]
             z = x if settings is None else _cancelled(played, settings, pcm, block, t0)
             heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
                         for _, s, e, cmd, _ in stream(engine, z, config))
@@ -253,7 +256,7 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
         earlier = [voices[(k + 1 + j) % len(voices)] for j in range(before)]
         voice = voices[k % len(voices)]
         scale = 10 ** (peak / 20) / (path.peak(voice) + 1e-12)
-        memories = {way: _memory(earlier, room, scale, floor, mic_rate, rng, t0)
+        memories = {way: echo_memory(earlier, room, scale, floor, mic_rate, rng, t0)
                     for way, room in (("recalled, another room", elsewhere), ("recalled, same room", path))}
         echo, late = path.echo(voice, rng)
         start = int(LEAD_S * SAMPLE_RATE)
@@ -280,7 +283,7 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
     return out
 
 
-def _memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: float, mic_rate: int | None,
+def echo_memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: float, mic_rate: int | None,
             rng: np.random.Generator, t0: float) -> tuple[np.ndarray, np.ndarray]:
     """What a canceller (the service's defaults) remembers (`EchoCanceller.memory`) after the robot said the sentences
     `said`, 0.3 s apart, through `path` at the loudspeaker's volume `scale` (the run's: the volume does not change from
@@ -331,6 +334,8 @@ def main() -> int:
     ap.add_argument("--warm", type=int, default=3,
                     help="with --cancel: the robot's sentences before the one the \"stop\" is said over (0: the "
                          "canceller has not heard the robot before, as when the voice service has just started)")
+    ap.add_argument("--way", action="append", choices=list(WAYS),
+                    help="with --cancel: hear the streams this way only (repeatable; all of WAYS by default)")
     ap.add_argument("--recall", action="store_true",
                     help="with --over: the \"stop\"s said over the robot's first sentence of a run, the canceller "
                          "cold or recalling an earlier run's memory of the robot's voice (another room, the same one)")
@@ -341,6 +346,7 @@ def main() -> int:
         rt60 = rt60_range(args.rt60)
     except ValueError as exc:
         ap.error(str(exc))
+    ways = args.way or list(WAYS)
     sentences = agent_sentences() + explanation_sentences()
     tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
     with tempfile.TemporaryDirectory(prefix="hri-own-voice-") as tmp:
@@ -386,7 +392,7 @@ def main() -> int:
             row["stop_alone"], row["stops"] = alone, len(stops)
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
-                                           args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm)
+                                           args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways)
                 row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
                            stops_early_heard=dict(over.early_heard))
             if args.recall:
@@ -412,10 +418,11 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after {args.warm} "
-              f"sentences), {' / '.join(WAYS)} (the echo canceller's ways; learnt first: the default): " + ", ".join(
-                  f"{' / '.join(str(r['stop_over_echo'][w]) for w in WAYS)} of {r['stops']} at {r['peak_dbfs']:.0f} "
+              f"sentences), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
+              + ", ".join(
+                  f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
-                  f"{' / '.join(str(r['stops_early_heard'][w]) for w in WAYS)})" for r in rows))
+                  f"{' / '.join(str(r['stops_early_heard'][w]) for w in ways)})" for r in rows))
     if args.over is not None and args.recall:
         print(f"the same \"stop\"s over the robot's first sentence of a run, {' / '.join(RECALLS)} (the echo "
               "canceller's memory of three sentences of an earlier run): " + ", ".join(

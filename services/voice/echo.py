@@ -256,8 +256,9 @@ class EchoCanceller:
     background: bool = False
     """With `fit`: a fit after a stretch of the robot's voice is made on a thread of its own and put in use at the first
     block after it is ready that lies outside the robot's voice (the service: a fit and the new filter's lesson took
-    0.45-0.6 s on a 2-core AVX2 machine beside a bench, far longer than a stream's block should wait). False: at once, on the caller's thread (the bench, whose
-    streams run faster than real time)."""
+    0.26-0.6 s on a 2-core AVX2 machine beside a bench, far longer than a stream's block should wait; the stream's
+    thread runs meanwhile, `echo_fit.solve_toeplitz`). False: at once, on the caller's thread (the bench, whose streams
+    run faster than real time)."""
     fits: int = 0
     """Fits put in use."""
     fit_ms: float | None = None

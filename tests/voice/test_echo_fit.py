@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.linalg
 from scipy.signal import fftconvolve, lfilter
 
 from services.voice.audio import SAMPLE_RATE
@@ -19,7 +20,7 @@ from services.voice.echo import (
     Played,
     echo_fit_from,
 )
-from services.voice.echo_fit import MIN_GAIN_DB, TAPS, FittedPath, fit_path
+from services.voice.echo_fit import LOAD, MIN_GAIN_DB, TAPS, FittedPath, fit_path, solve_toeplitz
 from tests.voice.test_echo import SENTENCES, _sentences_through, _stream, echo_path, espeak
 
 pytest.importorskip("pyaec")
@@ -62,6 +63,26 @@ def test_the_fit_finds_the_way_and_cancels_sound_it_was_not_fitted_on() -> None:
     new = _speechlike(np.random.default_rng(5), 3.0)
     heard = _through(h, new, rng)
     assert _down_db(heard, FittedPath(taps).cancel(heard, new)) < -30.0  # -38.4 here
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, TAPS])
+def test_the_levinson_solve_is_scipys_for_speechs_equations(n: int) -> None:
+    # the fit's own solver (which lets other threads run between its steps) against SciPy's, on the equations a fit
+    # solves: the autocorrelation of speech-like sound, loaded as the fit loads it
+    rng = np.random.default_rng(9)
+    ref = _speechlike(rng, 3.0).astype(float)
+    column = np.correlate(ref, ref[: ref.size - n + 1], mode="valid")
+    column[0] *= 1.0 + LOAD
+    b = rng.normal(0.0, 1.0, n) * column[0]
+    want = scipy.linalg.solve_toeplitz(column, b)
+    assert np.max(np.abs(solve_toeplitz(column, b) - want)) <= 1e-9 * np.max(np.abs(want))
+
+
+def test_the_levinson_solve_refuses_a_matrix_that_is_not_positive_definite() -> None:
+    with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
+        solve_toeplitz(np.array([1.0, 2.0, 0.5]), np.ones(3))  # |r1| > r0
+    with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
+        solve_toeplitz(np.array([1.0, 0.9, 0.0]), np.ones(3))  # positive leading 2 x 2 minor, negative 3 x 3
 
 
 def test_the_fitted_way_runs_the_same_in_a_streams_blocks_as_at_once() -> None:
