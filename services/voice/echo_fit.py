@@ -7,8 +7,8 @@ robot's voice down by about 20-24 dB however long it has heard it (whether the l
 canceller's memory (`EchoCanceller.memory`: the last 6 s of the microphone's samples and the reference placed before
 them) holds enough of the robot's voice to solve for the whole 256 ms impulse response at once (the Wiener-Hopf
 equations: the reference's autocorrelation, a Toeplitz matrix, against its cross-correlation with the microphone, by
-Levinson's recursion, `solve_toeplitz`). What that leaves, speexdsp then learns as before; speexdsp keeps its own filter to itself, so the
-two stages are cascaded rather than merged.
+Levinson's recursion, `solve_toeplitz`). What that leaves, speexdsp then learns as before; speexdsp keeps its own filter
+to itself, so the two stages are cascaded rather than merged.
 """
 
 from __future__ import annotations
