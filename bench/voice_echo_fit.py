@@ -23,7 +23,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TypeVar
 
@@ -75,10 +75,19 @@ def lateness(work: Callable[[], T], period: float = CHUNK_S) -> tuple[float, lis
     return took[0], late, result[0]
 
 
-def figures(took: list[float], late: list[float]) -> dict[str, float]:
+def measured(works: Iterable[Callable[[], T]]) -> tuple[dict[str, float], list[T]]:
+    """Each of `works` run through `lateness` in turn: the figures over all of them, and what each returned."""
+    took: list[float] = []
+    late: list[float] = []
+    results: list[T] = []
+    for work in works:
+        t, w, result = lateness(work)
+        took.append(t)
+        late += w
+        results.append(result)
     return {"ms_median": round(float(np.median(took)) * 1e3, 1), "ms_max": round(max(took) * 1e3, 1),
             "late_ms_max": round(max(late) * 1e3, 1), "late_ms_p99": round(float(np.percentile(late, 99)) * 1e3, 1),
-            "wakes": len(late)}
+            "wakes": len(late)}, results
 
 
 def main() -> int:
@@ -107,26 +116,13 @@ def main() -> int:
     rows: dict[str, dict[str, float]] = {}
     fits: dict[str, list[np.ndarray]] = {}
     for name, solve in SOLVERS.items():
-        took, late, found = [], [], []
-        for mic, ref in memories:
-            t, w, fit = lateness(lambda mic=mic, ref=ref, solve=solve: fit_path(mic, ref, SAMPLE_RATE, solve=solve))
-            took.append(t)
-            late += w
-            found.append(fit)
+        rows[name], found = measured(lambda mic=mic, ref=ref, solve=solve: fit_path(mic, ref, SAMPLE_RATE, solve=solve)
+                                     for mic, ref in memories)
         fits[name] = [f[0] for f in found if f is not None]
-        rows[name] = figures(took, late) | {"fitted": len(fits[name])}
-    took, late = [], []
-    for mic, ref in memories:
-        t, w, _ = lateness(lambda mic=mic, ref=ref: EchoCanceller(Played(), fit=True).recall(mic, ref))
-        took.append(t)
-        late += w
-    rows["EchoCanceller.recall (the service's refit)"] = figures(took, late)
-    took, late = [], []
-    for _ in memories:
-        t, w, _ = lateness(lambda: time.sleep(0.3))
-        took.append(t)
-        late += w
-    rows["nothing (time.sleep)"] = figures(took, late)
+        rows[name]["fitted"] = len(fits[name])
+    rows["EchoCanceller.recall (the service's refit)"], _ = measured(
+        lambda mic=mic, ref=ref: EchoCanceller(Played(), fit=True).recall(mic, ref) for mic, ref in memories)
+    rows["nothing (time.sleep)"], _ = measured(lambda: time.sleep(0.3) for _ in memories)
     a, b = fits.values()
     differ = max((float(np.max(np.abs(x - y)) / np.max(np.abs(x))) for x, y in zip(a, b, strict=True)), default=0.0)
     print(f"{args.memories} echo memories of 3 sentences at {args.peak:.0f} dBFS; a thread asking to wake every "

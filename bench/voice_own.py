@@ -284,7 +284,7 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
 
 
 def echo_memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: float, mic_rate: int | None,
-            rng: np.random.Generator, t0: float) -> tuple[np.ndarray, np.ndarray]:
+                rng: np.random.Generator, t0: float) -> tuple[np.ndarray, np.ndarray]:
     """What a canceller (the service's defaults) remembers (`EchoCanceller.memory`) after the robot said the sentences
     `said`, 0.3 s apart, through `path` at the loudspeaker's volume `scale` (the run's: the volume does not change from
     run to run), in a quiet room."""

@@ -40,11 +40,11 @@ def solve_toeplitz(column: np.ndarray, b: np.ndarray) -> np.ndarray:
     is not positive definite.
 
     The solution scipy.linalg.solve_toeplitz gives (to rounding; tests/voice/test_echo_fit.py holds them together), but
-    SciPy's compiled recursion keeps the interpreter's lock for the whole solve: 70-110 ms for `TAPS` on this machine
-    (bench/voice_echo_fit.py), longer on a robot's slower computer. A fit runs in the background while the service
-    listens, and for that long neither the stream's thread nor the microphone's PortAudio callback could run, as a
-    person's "stop" after the robot's sentence was coming in. Here each of the `column.size` steps is a few NumPy calls,
-    between which the other threads take their turn; the solve takes about twice as long, on the fitting thread."""
+    SciPy's compiled recursion keeps the interpreter's lock for the whole solve: for `TAPS` on a 2-core AVX2 machine,
+    7-18 ms idle and 62-69 ms beside another bench (bench/voice_echo_fit.py), longer on a robot's slower computer. A fit runs in the background while the
+    service listens, and for that long neither the stream's thread nor the microphone's PortAudio callback could run, as
+    a person's "stop" after the robot's sentence was coming in. Here each of the `column.size` steps is a few NumPy
+    calls, between which the other threads take their turn; the fit takes 1.5-2 times as long, on its own thread."""
     r = column[1:] / column[0]
     b = b / column[0]
     x, y = np.zeros(b.size), np.zeros(b.size)
