@@ -32,9 +32,10 @@ class Rig:
     ctx: ServiceContext
     procs: list[subprocess.Popen[bytes]] = field(default_factory=list)
 
-    def start(self, service: str, output: Output = subprocess.DEVNULL) -> subprocess.Popen[bytes]:
-        """Start `python -m services.<service>` on the rig's bus; it is stopped with the rig."""
-        proc = subprocess.Popen([sys.executable, "-m", f"services.{service}"], env=self.env,
+    def start(self, service: str, output: Output = subprocess.DEVNULL, stdin: Output = None) -> subprocess.Popen[bytes]:
+        """Start `python -m services.<service>` on the rig's bus (`stdin`: `subprocess.PIPE` for a stream written to
+        it); it is stopped with the rig."""
+        proc = subprocess.Popen([sys.executable, "-m", f"services.{service}"], env=self.env, stdin=stdin,
                                 stdout=output, stderr=None if output is None else subprocess.STDOUT)
         self.procs.append(proc)
         return proc

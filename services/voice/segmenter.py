@@ -82,6 +82,11 @@ class SegmenterConfig:
     end_threshold: float | None = 0.35
     """Silero: an utterance's quiet frames are those below this speech probability (None: `threshold - 0.15`,
     Silero's documented rule; 0.35 is that rule for its default start, 0.5)."""
+    vad_reset_s: float | None = None
+    """Silero: the model's state starts again after this much of the stream outside utterances (and again after as
+    much more), as at the start of a stream (`HRI_VOICE_VAD_RESET`); None: never. Silero's state drifts over a long
+    stream: after 30 s of a quiet room a word's end is found 0.5 s late (stop 91, voice README "The VAD's state over a
+    long stream")."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""
@@ -178,7 +183,9 @@ class Segmenter:
         self._ep: Any
         if self.config.vad == "silero":
             self._ep = SileroEndpointer(threshold=self.config.threshold, end_threshold=self.config.end_threshold,
-                                        end_frames=max(1, round(self.config.quiet_s * SAMPLE_RATE / FRAME_SAMPLES)))
+                                        end_frames=max(1, round(self.config.quiet_s * SAMPLE_RATE / FRAME_SAMPLES)),
+                                        reset_frames=None if self.config.vad_reset_s is None
+                                        else max(1, round(self.config.vad_reset_s * SAMPLE_RATE / FRAME_SAMPLES)))
         elif self.config.vad == "webrtc":
             self._ep = Endpointer(
                 window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,

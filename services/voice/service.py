@@ -101,6 +101,9 @@ class VoiceSettings:
     vad_lift: str | None = None
     """`HRI_VOICE_VAD_LIFT`: the peak (dBFS) a quiet live stream is lifted to for the second VAD
     (`SegmenterConfig.vad_lift_dbfs`), or `off`; None: the default (-20)."""
+    vad_reset: str | None = None
+    """`HRI_VOICE_VAD_RESET`: seconds of a live stream outside utterances after which Silero's state starts again,
+    warmed on them (`SegmenterConfig.vad_reset_s`), or `off`; None: the default."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
@@ -144,6 +147,7 @@ class VoiceSettings:
             early_look=os.environ.get("HRI_VOICE_EARLY_LOOK") or None,
             clear_window=os.environ.get("HRI_VOICE_CLEAR_WINDOW") or None,
             vad_lift=os.environ.get("HRI_VOICE_VAD_LIFT") or None,
+            vad_reset=os.environ.get("HRI_VOICE_VAD_RESET") or None,
             highpass=os.environ.get("HRI_VOICE_HIGHPASS") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
@@ -163,7 +167,7 @@ class VoiceSettings:
 
     def segmenter(self) -> SegmenterConfig:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
-        seconds shorter than the end window, a VAD lift or a high-pass out of its range."""
+        seconds shorter than the end window, a VAD lift, a VAD reset or a high-pass out of its range."""
         base = SegmenterConfig(vad=self.vad)
 
         def quiet_s(value: float) -> bool:
@@ -178,6 +182,9 @@ class VoiceSettings:
                        vad_lift_dbfs=_off_or(lambda v: -40.0 <= v <= 0.0, "the peak level (dBFS) a quiet stream is "
                                              "lifted to for the VAD, from -40 to 0", "HRI_VOICE_VAD_LIFT",
                                              self.vad_lift, base.vad_lift_dbfs),
+                       vad_reset_s=_off_or(lambda v: 0.3 <= v <= 60.0, "seconds from 0.3 to 60 of a stream outside "
+                                           "utterances after which the VAD's state starts again",
+                                           "HRI_VOICE_VAD_RESET", self.vad_reset, base.vad_reset_s),
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 

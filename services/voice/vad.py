@@ -20,6 +20,7 @@ more words found in a walking robot's noise), and ends an utterance in a clear s
 
 from __future__ import annotations
 
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -80,7 +81,8 @@ class SileroEndpointer:
     (s) of the current utterance's first frame; `end_stream` hands over what is left."""
 
     def __init__(self, threshold: float = 0.5, start_frames: int = 2, end_frames: int = 5,
-                 vad: SileroVad | None = None, end_threshold: float | None = None) -> None:
+                 vad: SileroVad | None = None, end_threshold: float | None = None,
+                 reset_frames: int | None = None) -> None:
         self.threshold = threshold
         self.neg_threshold = threshold - 0.15 if end_threshold is None else end_threshold
         if self.neg_threshold > threshold:
@@ -97,6 +99,13 @@ class SileroEndpointer:
         """What the model hears is the frame times this (the segmenter's `vad_lift_dbfs`); the audio handed over is
         the frame as it came."""
         self._quiet: list[bytes] = []  # frames below the lower threshold inside speech, held back
+        self.reset_frames = reset_frames
+        """After this many frames in a row outside speech (and again after as many more), the model's state starts
+        again and hears those frames once more: it has then heard as much of the stream as at the start of one that
+        began that long ago (`SegmenterConfig.vad_reset_s`); None: it never starts again."""
+        self._outside: deque[tuple[bytes, float]] = deque(maxlen=reset_frames or 1)
+        """With `reset_frames`: the frames outside speech, with no onset, since the last utterance or start, and the
+        gain each was heard with."""
 
     def process(self, frame: bytes) -> bytes | None:
         if len(frame) != self.frame_bytes:
@@ -105,9 +114,14 @@ class SileroEndpointer:
         self._frames += 1
         if not self.in_speech:
             self._onset = [*self._onset, frame] if p >= self.threshold else []
+            if not self._onset and self.reset_frames is not None:
+                self._outside.append((frame, self.gain))
+                if len(self._outside) == self.reset_frames:
+                    self._restart()
             if len(self._onset) < self.start_frames:
                 return None
             self.in_speech = True
+            self._outside.clear()
             self.speech_start = (self._frames - len(self._onset)) * FRAME_SAMPLES / SAMPLE_RATE
             out, self._onset, self._quiet = b"".join(self._onset), [], []
             return out
@@ -129,6 +143,14 @@ class SileroEndpointer:
             raise RuntimeError("the VAD's state is forgotten only outside speech")
         self._vad.reset()
         self._onset = []
+        self._outside.clear()
+
+    def _restart(self) -> None:
+        """The model's state started again and warmed on the frames outside speech it just heard; counted afresh."""
+        self._vad.reset()
+        for frame, gain in self._outside:
+            self._vad(frame, gain)
+        self._outside.clear()
 
     @property
     def quiet_frames(self) -> int:

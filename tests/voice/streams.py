@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import threading
-import time
-
 import numpy as np
 
 from services.voice import synth
@@ -52,39 +48,3 @@ def emitted(pcm: bytes, config: SegmenterConfig, judge: Judge | None = None) -> 
     for k in range(0, len(pcm), STEP):
         out += [((k + STEP) / 2 / SAMPLE_RATE, s) for s in seg.feed(pcm[k : k + STEP])]
     return out
-
-
-class PacedMicrophone:
-    """A microphone that is never silent, handed to a process's stdin (the voice service's `stdin` source) in 30 ms
-    blocks at a microphone's pace: a faint hiss (-70 dBFS) and what `sound` adds to each block."""
-
-    def __init__(self, proc: subprocess.Popen[bytes]) -> None:
-        self.proc = proc
-        self.lock = threading.Lock()
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def sound(self, n: int) -> np.ndarray:
-        """Up to `n` samples to add to the next block; called with `lock` held."""
-        return np.zeros(0)
-
-    def _run(self) -> None:
-        assert self.proc.stdin is not None
-        rng, block, start, k = np.random.default_rng(1), int(0.03 * SAMPLE_RATE), time.monotonic(), 0
-        while not self.stop.is_set():
-            x = rng.normal(0.0, 10 ** (-70 / 20), block)
-            with self.lock:
-                part = self.sound(block)
-            x[: part.size] += part
-            try:
-                self.proc.stdin.write(to_pcm(np.clip(x, -1.0, 1.0)))
-                self.proc.stdin.flush()
-            except (BrokenPipeError, ValueError):
-                return
-            k += 1
-            time.sleep(max(0.0, start + k * 0.03 - time.monotonic()))
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)

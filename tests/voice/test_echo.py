@@ -41,10 +41,10 @@ from services.voice.echo import (
 )
 from services.voice.echo_fit import MIN_GAIN_DB
 from services.voice.robot_voice import RobotVoice
+from services.voice.simmic import PacedMicrophone
 from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
-from tests.voice.streams import PacedMicrophone
 from tests.voice.test_service import stdin_service
 
 pytest.importorskip("pyaec")

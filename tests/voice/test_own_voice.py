@@ -21,10 +21,10 @@ from services.voice.clock import StreamClock
 from services.voice.engine import EngineError
 from services.voice.own_voice import LONGEST_S, TAIL_S, OwnVoice, OwnVoiceError, tail_from
 from services.voice.service import VoiceSettings, check_settings
+from services.voice.simmic import PacedMicrophone
 from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
-from tests.voice.streams import PacedMicrophone
 from tests.voice.test_service import stdin_service
 
 

@@ -1,0 +1,56 @@
+"""A simulated microphone for the voice service's `stdin` source: 16 kHz PCM handed to a process's standard input in
+30 ms blocks at a microphone's pace, never silent (a faint hiss), with what `sound` adds to each block.
+
+A real sound card hands its blocks over the same way, each once its last sample is captured; the tests and
+`bench/voice_stop_latency.py` speak to the running voice service through this, on the production stream path.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+import time
+
+import numpy as np
+
+from services.voice.audio import SAMPLE_RATE, to_pcm
+
+BLOCK_S = 0.03
+HISS_DBFS = -70.0
+
+
+class PacedMicrophone:
+    """A microphone that is never silent, handed to a process's stdin (the voice service's `stdin` source) in 30 ms
+    blocks at a microphone's pace: a faint hiss (-70 dBFS) and what `sound` adds to each block. Subclasses override
+    `sound` (called with `lock` held, just before its block is handed over)."""
+
+    def __init__(self, proc: subprocess.Popen[bytes]) -> None:
+        self.proc = proc
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def sound(self, n: int) -> np.ndarray:
+        """Up to `n` samples to add to the next block; called with `lock` held."""
+        return np.zeros(0)
+
+    def _run(self) -> None:
+        assert self.proc.stdin is not None
+        rng, block, start, k = np.random.default_rng(1), int(BLOCK_S * SAMPLE_RATE), time.monotonic(), 0
+        while not self.stop.is_set():
+            x = rng.normal(0.0, 10 ** (HISS_DBFS / 20), block)
+            with self.lock:
+                part = self.sound(block)
+            x[: part.size] += part
+            try:
+                self.proc.stdin.write(to_pcm(np.clip(x, -1.0, 1.0)))
+                self.proc.stdin.flush()
+            except (BrokenPipeError, ValueError):
+                return
+            k += 1
+            time.sleep(max(0.0, start + k * BLOCK_S - time.monotonic()))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)

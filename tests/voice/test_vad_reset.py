@@ -1,0 +1,116 @@
+"""Silero VAD's state over a long stream (`SegmenterConfig.vad_reset_s`, stop 91): it drifts in a quiet room, and a
+word's end is then found late; the state starting again, warmed on the quiet it just heard, finds it as a new
+stream's would."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from services.voice import synth
+from services.voice.audio import SAMPLE_RATE, read_wav, to_pcm
+from services.voice.engine import EngineError
+from services.voice.segmenter import Segmenter, SegmenterConfig
+from services.voice.service import VoiceSettings
+from services.voice.vad import FRAME_SAMPLES, SileroEndpointer
+
+QUIET = b"\0" * FRAME_SAMPLES * 2
+
+
+class Model:
+    """A VAD model that answers as told and records what it was asked."""
+
+    def __init__(self) -> None:
+        self.p = 0.0
+        self.heard: list[tuple[bytes, float]] = []
+        self.resets = 0
+
+    def __call__(self, frame: bytes, gain: float = 1.0) -> float:
+        self.heard.append((frame, gain))
+        return self.p
+
+    def reset(self) -> None:
+        self.resets += 1
+        self.heard.clear()
+
+
+def _frame(k: int) -> bytes:
+    return np.full(FRAME_SAMPLES, k, dtype="<i2").tobytes()
+
+
+def test_the_state_starts_again_after_each_stretch_outside_speech_warmed_on_it() -> None:
+    model = Model()
+    ep = SileroEndpointer(vad=model, reset_frames=4)  # type: ignore[arg-type]
+    ep.gain = 2.0
+    for k in range(7):
+        ep.process(_frame(k))
+    # after the 4th quiet frame: started again and heard frames 0-3 once more; then frames 4-6 as they came
+    assert model.resets == 1
+    assert model.heard == [(_frame(k), 2.0) for k in (0, 1, 2, 3, 4, 5, 6)]
+    ep.process(_frame(7))
+    assert model.resets == 2 and model.heard == [(_frame(k), 2.0) for k in (4, 5, 6, 7)]
+
+
+def test_not_within_speech_nor_an_onset_and_counted_afresh_after_an_utterance() -> None:
+    model = Model()
+    ep = SileroEndpointer(vad=model, reset_frames=3, start_frames=2, end_frames=2)  # type: ignore[arg-type]
+    ep.process(QUIET)
+    ep.process(QUIET)
+    model.p = 0.9  # an onset, then speech, however long
+    for _ in range(10):
+        ep.process(QUIET)
+    assert ep.in_speech and model.resets == 0
+    model.p = 0.0
+    for _ in range(2):  # the utterance's end
+        ep.process(QUIET)
+    assert not ep.in_speech and model.resets == 0
+    for _ in range(2):  # quiet frames before the utterance did not count
+        ep.process(QUIET)
+    assert model.resets == 0
+    ep.process(QUIET)
+    assert model.resets == 1
+
+
+def test_none_never_starts_again() -> None:
+    model = Model()
+    ep = SileroEndpointer(vad=model)  # type: ignore[arg-type]
+    for _ in range(500):
+        ep.process(QUIET)
+    assert model.resets == 0
+
+
+def _ended_after(config: SegmenterConfig, lead_s: float) -> float:
+    """A "stop" after `lead_s` of a quiet room's hiss: how long after its speech ends (s) the segment ends."""
+    speech = np.frombuffer(read_wav(synth.speech_clip("stop", "en-us", 150).path), "<i2") / 32768.0
+    loud = np.flatnonzero(np.abs(speech) > 0.02 * np.abs(speech).max())
+    speech = speech[loud[0] : loud[-1] + 1] * 0.1 / np.abs(speech).max()
+    x = np.random.default_rng(1).normal(0.0, 10 ** (-70 / 20), int((lead_s + 2.0) * SAMPLE_RATE))
+    at = int(lead_s * SAMPLE_RATE)
+    x[at : at + speech.size] += speech
+    pcm, seg = to_pcm(np.clip(x, -1.0, 1.0)), Segmenter(config)
+    segments = [s for k in range(0, len(pcm), 960) for s in seg.feed(pcm[k : k + 960])] + seg.flush()
+    (word,) = [s for s in segments if s.end_s > lead_s]
+    return word.end_s - (at + speech.size) / SAMPLE_RATE
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_only_with_the_reset() -> None:
+    """Measured: after 40 s of a -70 dBFS hiss Silero's drifted state ends the word 0.53 s after its speech (0.09 s after
+    1.5 s); started again every second, 0.08 s."""
+    fresh = _ended_after(SegmenterConfig(vad_reset_s=None), 1.5)
+    drifted = _ended_after(SegmenterConfig(vad_reset_s=None), 40.0)
+    reset = _ended_after(SegmenterConfig(vad_reset_s=1.0), 40.0)
+    assert fresh < 0.2 and reset < 0.2
+    assert drifted > fresh + 0.15
+
+
+@pytest.mark.parametrize(("raw", "seconds"), [(None, SegmenterConfig.vad_reset_s), ("off", None), ("1", 1.0),
+                                              (" 2.5 ", 2.5)])
+def test_the_setting(raw: str | None, seconds: float | None) -> None:
+    assert VoiceSettings(vad_reset=raw).segmenter().vad_reset_s == seconds
+
+
+@pytest.mark.parametrize("raw", ["0.1", "61", "soon", "nan"])
+def test_a_bad_setting_names_the_variable(raw: str) -> None:
+    with pytest.raises(EngineError, match="HRI_VOICE_VAD_RESET"):
+        VoiceSettings(vad_reset=raw).segmenter()
