@@ -11,8 +11,10 @@ what that costs and what `SegmenterConfig.vad_reset_s` buys:
 - each word trimmed to its speech, brought to each `--peaks` level (dBFS peak), and said into one stream of a quiet
   room's hiss (`--floor` dBFS RMS) after a pause drawn from 1 to `--longest` s (the same words, order and pauses for
   every way);
-- the stream through the service's path (`sources.stream_utterances`: high-pass, Silero VAD with the lifted second
-  VAD, end windows; 30 ms chunks) and the engine, each way of `--resets` (`off`, or `vad_reset_s` in seconds);
+- the stream rounded to 16 bits as a sound card does (`rounded_pcm`), through a microphone's path at `--mic-rate` if
+  asked (`voice_bench.through_mic`), then through the service's path (`sources.stream_utterances`: high-pass, Silero
+  VAD with the lifted second VAD, end windows; 30 ms chunks) and the engine, each way of `--resets` (`off`, or
+  `vad_reset_s` in seconds);
 - a command counts as heard when an utterance overlapping its word is taken by the reasoner's policy
   (`voice_bench.Policy`) as that command (a "go" asked about counts); another word counts as accepted when an
   overlapping utterance is taken as any command; latency: from the word's speech end to the stream time at which
@@ -48,10 +50,11 @@ from bench.voice_bench import (  # noqa: E402
     heldout_items,
     loud_frames,
     speech_end_s,
+    through_mic,
 )
 from bench.voice_levels import at_level  # noqa: E402
 from services.voice import synth  # noqa: E402
-from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, to_pcm  # noqa: E402
+from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, rounded_pcm, to_pcm  # noqa: E402
 from services.voice.engine import Engine, make_engine, one_blas_thread  # noqa: E402
 from services.voice.mic import CHUNK_S  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
@@ -89,9 +92,11 @@ class Placed:
     """Where its speech ends in the stream (`voice_bench.speech_end_s`)."""
 
 
-def long_stream(items: list[Item], peak: float, floor: float, longest: float, seed: int) -> tuple[bytes, list[Placed]]:
+def long_stream(items: list[Item], peak: float, floor: float, longest: float, seed: int,
+                mic_rate: int | None = None) -> tuple[bytes, list[Placed]]:
     """The words, each trimmed to its speech and at `peak` dBFS, with pauses of `SHORTEST_S` to `longest` s of hiss
-    at `floor` dBFS before each (and after the last)."""
+    at `floor` dBFS before each (and after the last); rounded to 16 bits as a sound card does, through a microphone's
+    path at `mic_rate` (`voice_bench.through_mic`; None: as made)."""
     rng = np.random.default_rng(seed)
     parts, placed, at = [], [], 0
     for it in items:
@@ -106,7 +111,7 @@ def long_stream(items: list[Item], peak: float, floor: float, longest: float, se
     parts.append(np.zeros(int(longest * SAMPLE_RATE)))
     stream = np.concatenate(parts)
     stream += rng.normal(0.0, 10 ** (floor / 20), stream.size)
-    return to_pcm(np.clip(stream, -1.0, 1.0)), placed
+    return rounded_pcm(through_mic(np.clip(stream, -1.0, 1.0), mic_rate)), placed
 
 
 def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterConfig,
@@ -165,6 +170,7 @@ def main() -> int:
     ap.add_argument("--longest", type=float, default=20.0, help="the longest pause before a word, s")
     ap.add_argument("--resets", default=f"off,{SegmenterConfig.vad_reset_s or 1.0}",
                     help="the ways: vad_reset_s in seconds, or off")
+    ap.add_argument("--mic-rate", type=int, help="the stream through a microphone's path at this rate (Hz)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     print(f"BLAS threads {one_blas_thread()}, as in the voice service", flush=True)
@@ -173,11 +179,12 @@ def main() -> int:
     engine, policy = make_engine("spotter"), Policy.from_knowledge()
     rows = []
     for peak in (float(p) for p in args.peaks.split(",")):
-        pcm, placed = long_stream(items, peak, args.floor, args.longest, seed)
+        pcm, placed = long_stream(items, peak, args.floor, args.longest, seed, args.mic_rate)
         for way in args.resets.split(","):
             config = replace(SegmenterConfig(), vad_reset_s=reset_arg(way))
             row = {"source": "tuning" if args.tuning else f"held-out seed {args.seed}", "peak_dbfs": peak,
-                   "floor_dbfs": args.floor, "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),
+                   "floor_dbfs": args.floor, "mic_rate": args.mic_rate,
+                   "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),
                    "vad_reset_s": config.vad_reset_s, **heard(engine, pcm, placed, config, policy)}
             rows.append(row)
             print(json.dumps(row), flush=True)

@@ -19,10 +19,11 @@ robot's processes run:
 
 Each condition runs in a voice service of its own with a fresh state folder: `fitted` (the default, `HRI_VOICE_ECHO_FIT`
 on), `not fitted` (off: no fit runs), and `alone` (the same "stop"s with no sentence before them). Per "stop" it
-records whether a fit was put in use for that sentence (health's `echo_fits`) and how long it took, and whether the
-word ended while that fit may still have been running (from the first block past the filter's reach after the echo to
-that plus the fit's time). `--busy` runs that many processes doing matrix products beside it (one thread each), as
-another program on the robot's computer would.
+records whether a fit was put in use for that sentence (health's `echo_fits`) and how long it took, and whether that
+fit may have run while the word was being decided (the fit from the first block past the filter's reach after the
+echo, for the fit's time; the decision from the word's end to the command). Settings in the environment reach the
+services (e.g. `HRI_VOICE_VAD_RESET=1`). `--busy` runs that many processes doing matrix products beside it (one thread
+each), as another program on the robot's computer would.
 
     .venv/bin/python bench/voice_stop_latency.py --n 24
     .venv/bin/python bench/voice_stop_latency.py --n 24 --busy 1 --json out.json
@@ -107,7 +108,7 @@ class Trial:
     """A fit was put in use after this sentence."""
     fit_ms: float | None = None
     during_fit: bool = False
-    """The word ended while that fit may still have been running."""
+    """That fit may have been running while the word was being decided (between its end and the command)."""
 
 
 @dataclass
@@ -125,7 +126,7 @@ class Condition:
 
         return {"condition": self.name, "stops": len(self.trials), "heard": int(lat.size),
                 "p50_ms": pct(lat, 50), "p90_ms": pct(lat, 90), "max_ms": pct(lat, 100),
-                "ended_during_a_fit": int(during.size), "during_p50_ms": pct(during, 50),
+                "decided_during_a_fit": int(during.size), "during_p50_ms": pct(during, 50),
                 "during_max_ms": pct(during, 100), "fits": len(fits),
                 "fit_ms_median": round(float(np.median(fits)), 1) if fits else None}
 
@@ -210,9 +211,9 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
                     trial.fitted, fits = now > fits, now
                     trial.fit_ms = health.detail.get("echo_fit_ms_last") if trial.fitted else None
                     echo_end = mic.times.get(f"{ident}:echo")
-                    if trial.fitted and trial.fit_ms is not None and echo_end is not None and ended is not None:
-                        fit_from = echo_end + FILTER_S - LEAD_S
-                        trial.during_fit = fit_from <= ended <= fit_from + trial.fit_ms / 1000.0
+                    if trial.fitted and trial.fit_ms is not None and echo_end is not None and ended is not None and got:
+                        fit_from = echo_end + FILTER_S - LEAD_S  # the first block past the filter's reach
+                        trial.during_fit = fit_from <= got[0] and ended <= fit_from + trial.fit_ms / 1000.0
                 out.trials.append(trial)
                 print(f"{name} {k}: {asdict(trial)}", flush=True)
         finally:
@@ -247,8 +248,8 @@ def main() -> int:
         for proc in busy:
             proc.kill()
             proc.wait()
-    print(f"# {os.cpu_count()} CPUs, {args.busy} busy beside; robot's voice {args.peak} dBFS, person {args.person} dBFS; "
-          f"gaps {gaps} s")
+    print(f"# {os.cpu_count()} CPUs, {args.busy} busy beside; robot's voice {args.peak} dBFS, "
+          f"person {args.person} dBFS; gaps {gaps} s")
     for row in rows:
         print(json.dumps(row))
     if args.json:

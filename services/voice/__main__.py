@@ -177,8 +177,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
-         vad_reset: VadResetOption = None, highpass: HighpassOption = None, gain: GainOption = None, mic_rate: MicRateOption = None,
-         mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
+         vad_reset: VadResetOption = None, highpass: HighpassOption = None, gain: GainOption = None,
+         mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
          echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
          echo_fit: EchoFitOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""

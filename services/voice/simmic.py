@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from services.voice.audio import SAMPLE_RATE, to_pcm
+from services.voice.audio import SAMPLE_RATE, rounded_pcm
 
 BLOCK_S = 0.03
 HISS_DBFS = -70.0
@@ -21,8 +21,9 @@ HISS_DBFS = -70.0
 
 class PacedMicrophone:
     """A microphone that is never silent, handed to a process's stdin (the voice service's `stdin` source) in 30 ms
-    blocks at a microphone's pace: a faint hiss (-70 dBFS) and what `sound` adds to each block. Subclasses override
-    `sound` (called with `lock` held, just before its block is handed over)."""
+    blocks at a microphone's pace: a faint hiss (-70 dBFS) and what `sound` adds to each block, each sample rounded to
+    16 bits as a sound card rounds it (`rounded_pcm`; the tests' copy before stop 91 truncated toward zero). Subclasses
+    override `sound` (called with `lock` held, just before its block is handed over)."""
 
     def __init__(self, proc: subprocess.Popen[bytes]) -> None:
         self.proc = proc
@@ -44,7 +45,7 @@ class PacedMicrophone:
                 part = self.sound(block)
             x[: part.size] += part
             try:
-                self.proc.stdin.write(to_pcm(np.clip(x, -1.0, 1.0)))
+                self.proc.stdin.write(rounded_pcm(np.clip(x, -1.0, 1.0)))
                 self.proc.stdin.flush()
             except (BrokenPipeError, ValueError):
                 return

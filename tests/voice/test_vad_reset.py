@@ -95,8 +95,8 @@ def _ended_after(config: SegmenterConfig, lead_s: float) -> float:
 
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_only_with_the_reset() -> None:
-    """Measured: after 40 s of a -70 dBFS hiss Silero's drifted state ends the word 0.53 s after its speech (0.09 s after
-    1.5 s); started again every second, 0.08 s."""
+    """Measured: after 40 s of a -70 dBFS hiss Silero's drifted state ends the word 0.53 s after its speech (0.09 s
+    after 1.5 s); started again every second, 0.08 s."""
     fresh = _ended_after(SegmenterConfig(vad_reset_s=None), 1.5)
     drifted = _ended_after(SegmenterConfig(vad_reset_s=None), 40.0)
     reset = _ended_after(SegmenterConfig(vad_reset_s=1.0), 40.0)

@@ -1,0 +1,33 @@
+"""`bench/voice_long_stream.py`: words placed where it says in one stream, and counted as the service hears them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bench.voice_bench import OTHER, WORDS, Item, Policy
+from bench.voice_long_stream import heard, long_stream
+from services.voice import synth
+from services.voice.audio import SAMPLE_RATE, read_wav
+from services.voice.engine import make_engine
+from services.voice.segmenter import SegmenterConfig
+
+
+def _item(word: str, label: int) -> Item:
+    return Item("espeak", "en-us", label, word, "clean", read_wav(synth.speech_clip(word, "en", 130).path))
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_words_are_placed_at_their_level_and_heard_with_their_latency() -> None:
+    items = [_item("stop", WORDS.index("stop")), _item("banana", OTHER), _item("yes", WORDS.index("yes"))]
+    pcm, placed = long_stream(items, -20.0, -70.0, 3.0, seed=4)
+    x = np.frombuffer(pcm, "<i2") / 32768.0
+    assert len(placed) == 3 and all(a.end_s < b.start_s for a, b in zip(placed, placed[1:], strict=False))
+    for p in placed:  # each word where it says, at its level; the pause before it is the room's hiss
+        word = x[int(p.start_s * SAMPLE_RATE) : int(p.end_s * SAMPLE_RATE)]
+        assert 20 * np.log10(np.abs(word).max()) == pytest.approx(-20.0, abs=0.5)
+        before = x[int((p.start_s - 0.9) * SAMPLE_RATE) : int((p.start_s - 0.1) * SAMPLE_RATE)]
+        assert 10 * np.log10(np.mean(before**2)) == pytest.approx(-70.0, abs=1.5)
+    row = heard(make_engine("spotter"), pcm, placed, SegmenterConfig(), Policy())
+    assert row["commands"] == 2 and row["others"] == 1 and row["heard"] == 2 and row["false_walks"] == 0
+    assert 0.0 < row["latency_p50_ms"] < 600.0  # type: ignore[operator]
