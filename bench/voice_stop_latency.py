@@ -103,7 +103,7 @@ class Trial:
     gap_s: float | None
     """How long after the sentence's echo ended the "stop" began (None: no sentence)."""
     latency_ms: float | None = None
-    """End of the word -> `VoiceCommand` "stop" (None: not heard within 5 s)."""
+    """End of the word -> `VoiceCommand` "stop" (None: not heard within 8 s)."""
     fitted: bool = False
     """A fit was put in use after this sentence."""
     fit_ms: float | None = None

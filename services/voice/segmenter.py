@@ -85,8 +85,8 @@ class SegmenterConfig:
     vad_reset_s: float | None = None
     """Silero: the model's state starts again after this much of the stream outside utterances (and again after as
     much more), as at the start of a stream (`HRI_VOICE_VAD_RESET`); None: never. Silero's state drifts over a long
-    stream: after 30 s of a quiet room a word's end is found 0.5 s late (stop 91, voice README "The VAD's state over a
-    long stream")."""
+    stream: after 30 s of a quiet room a word's end is found 0.5 s late; restarted, quiet words over a noisy floor are
+    lost (round voice50 did not pass: voice README, stop 91)."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""

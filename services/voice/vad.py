@@ -104,8 +104,8 @@ class SileroEndpointer:
         again and hears those frames once more: it has then heard as much of the stream as at the start of one that
         began that long ago (`SegmenterConfig.vad_reset_s`); None: it never starts again."""
         self._outside: deque[tuple[bytes, float]] = deque(maxlen=reset_frames or 1)
-        """With `reset_frames`: the frames outside speech, with no onset, since the last utterance or start, and the
-        gain each was heard with."""
+        """With `reset_frames`: the frames outside speech and any onset since the last utterance, restart or start of
+        the stream, and the gain each was heard with."""
 
     def process(self, frame: bytes) -> bytes | None:
         if len(frame) != self.frame_bytes:
