@@ -54,7 +54,7 @@ from services.cli.rig import service_rig  # noqa: E402
 from services.voice import synth  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, to_pcm  # noqa: E402
 from services.voice.echo import FILTER_S, LEAD_S  # noqa: E402
-from services.voice.simmic import PacedMicrophone  # noqa: E402
+from services.voice.simmic import MixingMicrophone  # noqa: E402
 from services.voice.training.tts import wav_samples  # noqa: E402
 
 STOP_VOICES = (("en+f3", 140), ("en-us", 150), ("en+m3", 130), ("en-gb", 160))
@@ -64,38 +64,6 @@ CONDITIONS = {"fitted": {"HRI_VOICE_ECHO_FIT": "on"}, "not fitted": {"HRI_VOICE_
 BUSY = ("import numpy as np\n"
         "a = np.random.default_rng(0).random((400, 400))\n"
         "while True:\n    a @ a\n")
-
-
-class RoomMicrophone(PacedMicrophone):
-    """The robot's microphone: the hiss, and whatever is `mix`ed in from a sample on; `marks` the wall-clock time at
-    which the block holding a given sample is handed over."""
-
-    def __init__(self, proc: subprocess.Popen[bytes]) -> None:
-        self.ahead = np.zeros(0)
-        self.handed = 0
-        """Samples handed over (or about to be: `sound` is called just before its block is written)."""
-        self.marks: dict[str, int] = {}
-        self.times: dict[str, float] = {}
-        super().__init__(proc)
-
-    def mix(self, x: np.ndarray, after_s: float) -> int:
-        """`x` added from `after_s` after the next block's first sample; the stream's index of its first sample.
-        Called with `lock` held."""
-        at = int(after_s * SAMPLE_RATE)
-        if self.ahead.size < at + x.size:
-            self.ahead = np.concatenate([self.ahead, np.zeros(at + x.size - self.ahead.size)])
-        self.ahead[at : at + x.size] += x
-        return self.handed + at
-
-    def sound(self, n: int) -> np.ndarray:
-        self.handed += n
-        now = time.time()
-        for name, index in list(self.marks.items()):
-            if index < self.handed:
-                self.times[name] = now
-                del self.marks[name]
-        part, self.ahead = self.ahead[:n], self.ahead[n:]
-        return part
 
 
 @dataclass
@@ -161,7 +129,7 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
         rig.ctx.subscribe(rig.ctx.keys.voice_command, VoiceCommand, lambda c: heard.append((time.time(), c)))
         rig.start("speech", logf)
         voice = rig.start("voice", logf, stdin=subprocess.PIPE)
-        mic = RoomMicrophone(voice)
+        mic = MixingMicrophone(voice)
         try:
             planned: dict[str, tuple[np.ndarray, float]] = {}
 

@@ -41,7 +41,7 @@ from services.voice.echo import (
 )
 from services.voice.echo_fit import MIN_GAIN_DB
 from services.voice.robot_voice import RobotVoice
-from services.voice.simmic import PacedMicrophone
+from services.voice.simmic import MixingMicrophone
 from services.voice.sources import stream_utterances
 from services.voice.training.tts import wav_samples
 from tests.conftest import service_env, wait_for
@@ -386,29 +386,17 @@ def _kept_s(path: Path) -> float:
         return kept["mic"].size / SAMPLE_RATE
 
 
-class RoomMicrophone(PacedMicrophone):
-    """The robot's microphone, never silent, as a room mixes it: a faint hiss, and whatever is `mix`ed in from a moment
-    on (the robot's loudspeaker through `path`, from the moment the speech service says it began)."""
+class RoomMicrophone(MixingMicrophone):
+    """The robot's microphone, never silent, as a room mixes it: a faint hiss, and the robot's loudspeaker through
+    `path` from the moment the speech service says a sentence began (`on_state`), with whatever else is `mix`ed in."""
 
     def __init__(self, proc: subprocess.Popen[bytes], said: Path, path: Callable[[np.ndarray], np.ndarray]) -> None:
         self.said, self.path = said, path
-        self.ahead = np.zeros(0)
         super().__init__(proc)
-
-    def mix(self, x: np.ndarray, after_s: float = 0.0) -> None:
-        at = int(after_s * SAMPLE_RATE)
-        with self.lock:
-            if self.ahead.size < at + x.size:
-                self.ahead = np.concatenate([self.ahead, np.zeros(at + x.size - self.ahead.size)])
-            self.ahead[at : at + x.size] += x
 
     def on_state(self, state: SpeechState) -> None:
         if state.speaking and state.id is not None:
             self.mix(self.path(wav_samples((self.said / f"{state.id}.wav").read_bytes())))
-
-    def sound(self, n: int) -> np.ndarray:
-        part, self.ahead = self.ahead[:n], self.ahead[n:]
-        return part
 
 
 @espeak
