@@ -433,7 +433,8 @@ def spotter_settings(args: argparse.Namespace, names: Iterable[str]) -> dict[str
 
 
 def early_look_arg(text: str) -> float | None:
-    """A bench option that takes a number or `off` (None): `--early-look`, `--clear-window`, `--vad-lift`, `--vad-lift-floor`."""
+    """A bench option that takes a number or `off` (None): `--early-look`, `--clear-window`, `--vad-lift`,
+    `--vad-lift-floor`, `voice_long_stream.py --resets`."""
     return None if text.strip().lower() == "off" else float(text)
 
 

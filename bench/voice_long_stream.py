@@ -47,6 +47,7 @@ from bench.voice_bench import (  # noqa: E402
     Item,
     Policy,
     _rendered,
+    early_look_arg,
     heldout_items,
     loud_frames,
     speech_end_s,
@@ -155,10 +156,6 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
             "latency_max_ms": round(float(a.max()), 1) if a.size else None}
 
 
-def reset_arg(text: str) -> float | None:
-    return None if text.strip().lower() == "off" else float(text)
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     source = ap.add_mutually_exclusive_group(required=True)
@@ -181,7 +178,7 @@ def main() -> int:
     for peak in (float(p) for p in args.peaks.split(",")):
         pcm, placed = long_stream(items, peak, args.floor, args.longest, seed, args.mic_rate)
         for way in args.resets.split(","):
-            config = replace(SegmenterConfig(), vad_reset_s=reset_arg(way))
+            config = replace(SegmenterConfig(), vad_reset_s=early_look_arg(way))
             row = {"source": "tuning" if args.tuning else f"held-out seed {args.seed}", "peak_dbfs": peak,
                    "floor_dbfs": args.floor, "mic_rate": args.mic_rate,
                    "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),

@@ -125,7 +125,6 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
                         HRI_VOICE_SOURCE="stdin", **CONDITIONS[name]) as rig:
         said = Path(tmp) / "said"
         heard: list[tuple[float, VoiceCommand]] = []
-        states: list[SpeechState] = []
         rig.ctx.subscribe(rig.ctx.keys.voice_command, VoiceCommand, lambda c: heard.append((time.time(), c)))
         rig.start("speech", logf)
         voice = rig.start("voice", logf, stdin=subprocess.PIPE)
@@ -134,7 +133,6 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
             planned: dict[str, tuple[np.ndarray, float]] = {}
 
             def on_state(state: SpeechState) -> None:
-                states.append(state)
                 if not (state.speaking and state.id in planned):
                     return
                 word, gap = planned.pop(state.id)
