@@ -166,13 +166,22 @@ def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_brief
     stuck = subprocess.Popen([sys.executable, "-c", STUCK_SUBSCRIBER, router_endpoint, keys.all], cwd=ROOT,
                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     motion, publisher = (zenoh.open(client_config([router_endpoint])) for _ in range(2))
-    late: list[float] = []
+    late: dict[int, float] = {}
     sent = 0
+
+    def goal(sample: zenoh.Sample) -> None:
+        number, at = sample.payload.to_bytes().split()
+        late[int(number)] = time.monotonic() - float(at)
+
     try:
         assert stuck.stdout is not None and "reading no more" in stuck.stdout.readline()
-        motion.declare_subscriber(keys.motion_goal, lambda s: late.append(time.monotonic() - float(s.payload.to_bytes())))
+        motion.declare_subscriber(keys.motion_goal, goal)
         goals = publisher.declare_publisher(keys.motion_goal, congestion_control=zenoh.CongestionControl.BLOCK)
         images = publisher.declare_publisher(f"{keys.prefix}/test/image", congestion_control=zenoh.CongestionControl.DROP)
+        # A subscriber's declaration reaches the router on its own link: on a loaded machine a goal sent at once
+        # from another session could find no route yet and be dropped, which is not what this test is about
+        # (measured: 7 of 40 first messages lost with 8 busy processes on 2 cores). Goal -1 until one arrives.
+        wait_for(lambda: goals.put(f"-1 {time.monotonic():.6f}") or -1 in late, timeout=10, interval=0.05)
         image = b"x" * 65536
         end = time.monotonic() + 3.0
         for i in itertools.count():
@@ -180,18 +189,23 @@ def test_a_subscriber_that_stops_reading_holds_blocking_messages_back_only_brief
                 break
             images.put(image)
             if i % 10 == 0:
-                goals.put(f"{time.monotonic():.6f}")
+                goals.put(f"{sent} {time.monotonic():.6f}")
                 sent += 1
             time.sleep(0.002)
         # Generous: on a loaded 2-core machine (the whole suite on two workers) delivery itself can lag; the waiting
         # returns as soon as every goal is in, and the delay asserted below is what tells 0.25 s from Zenoh's 5 s.
-        wait_for(lambda: len(late) == sent, timeout=30)
+        deadline = time.monotonic() + 30
+        while not set(range(sent)) <= late.keys() and time.monotonic() < deadline:
+            time.sleep(0.02)
     finally:
         stuck.kill()
         stuck.wait()
         motion.close()
         publisher.close()
-    assert max(late) < 3.0, f"a goal waited {max(late):.2f} s for a client that did not read ({sent} goals)"
+    lost = sorted(set(range(sent)) - late.keys())
+    assert not lost, f"{len(lost)} of {sent} goals never arrived (numbers {lost[:10]}...)"
+    worst = max(late[n] for n in range(sent))
+    assert worst < 3.0, f"a goal waited {worst:.2f} s for a client that did not read ({sent} goals)"
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
