@@ -156,6 +156,13 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
             "latency_max_ms": round(float(a.max()), 1) if a.size else None}
 
 
+def way_config(way: str) -> SegmenterConfig:
+    """`off` (neither state restarted), `<s>` (`vad_reset_s`) or `fresh<s>` (`vad_fresh_end_s`) over the defaults."""
+    if way.startswith("fresh"):
+        return replace(SegmenterConfig(), vad_reset_s=None, vad_fresh_end_s=early_look_arg(way.removeprefix("fresh")))
+    return replace(SegmenterConfig(), vad_reset_s=early_look_arg(way), vad_fresh_end_s=None)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     source = ap.add_mutually_exclusive_group(required=True)
@@ -166,7 +173,7 @@ def main() -> int:
     ap.add_argument("--floor", type=float, default=-70.0, help="the room's hiss, dBFS RMS")
     ap.add_argument("--longest", type=float, default=20.0, help="the longest pause before a word, s")
     ap.add_argument("--resets", default=f"off,{SegmenterConfig.vad_reset_s or 1.0}",
-                    help="the ways: vad_reset_s in seconds, or off")
+                    help="the ways: off, vad_reset_s in seconds, or fresh<seconds> for vad_fresh_end_s")
     ap.add_argument("--mic-rate", type=int, help="the stream through a microphone's path at this rate (Hz)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -178,11 +185,11 @@ def main() -> int:
     for peak in (float(p) for p in args.peaks.split(",")):
         pcm, placed = long_stream(items, peak, args.floor, args.longest, seed, args.mic_rate)
         for way in args.resets.split(","):
-            config = replace(SegmenterConfig(), vad_reset_s=early_look_arg(way))
+            config = way_config(way)
             row = {"source": "tuning" if args.tuning else f"held-out seed {args.seed}", "peak_dbfs": peak,
                    "floor_dbfs": args.floor, "mic_rate": args.mic_rate,
                    "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),
-                   "vad_reset_s": config.vad_reset_s, **heard(engine, pcm, placed, config, policy)}
+                   "vad_reset_s": config.vad_reset_s, "vad_fresh_end_s": config.vad_fresh_end_s, **heard(engine, pcm, placed, config, policy)}
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.json:

@@ -107,6 +107,13 @@ VadResetOption = Annotated[
                       "warmed on them (over a long stream it drifts and finds a word's end late); or 'off' "
                       "[default: off]"),
 ]
+VadFreshEndOption = Annotated[
+    str | None,
+    typer.Option("--vad-fresh-end", envvar="HRI_VOICE_VAD_FRESH_END",
+                 help="live stream (Silero): seconds outside utterances after which a second VAD state starts again, "
+                      "warmed on them, to end the words it hears (the first, never restarted, starts them); or 'off' "
+                      "[default: off]"),
+]
 HighpassOption = Annotated[
     str | None,
     typer.Option("--highpass", envvar="HRI_VOICE_HIGHPASS",
@@ -177,7 +184,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          stop_in_phrase: StopInPhraseOption = None, stop_in_long: StopInLongOption = None,
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
-         vad_reset: VadResetOption = None, highpass: HighpassOption = None, gain: GainOption = None,
+         vad_reset: VadResetOption = None, vad_fresh_end: VadFreshEndOption = None,
+         highpass: HighpassOption = None, gain: GainOption = None,
          mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
          echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
          echo_fit: EchoFitOption = None) -> None:
@@ -188,8 +196,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
-                             vad_lift=vad_lift, vad_reset=vad_reset, highpass=highpass, gain=gain, mic_rate=mic_rate,
-                             mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
+                             vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end, highpass=highpass,
+                             gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
                              echo_memory=echo_memory, echo_fit=echo_fit)
     try:
         check_settings(settings)

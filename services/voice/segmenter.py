@@ -87,6 +87,12 @@ class SegmenterConfig:
     much more), as at the start of a stream (`HRI_VOICE_VAD_RESET`); None: never. Silero's state drifts over a long
     stream: after 30 s of a quiet room a word's end is found 0.5 s late; restarted, quiet words over a noisy floor are
     lost (round voice50 did not pass: voice README, stop 91)."""
+    vad_fresh_end_s: float | None = None
+    """Silero: a second state of the model, started again after this much of the stream outside utterances and warmed
+    on it, ends the utterances it heard; the first state, never restarted, starts every utterance and ends those the
+    second did not hear (`HRI_VOICE_VAD_FRESH_END`; `vad.SileroEndpointer.fresh_end_frames`); None: one state. Round
+    voice50b: the drifted state keeps what round voice50 lost (quiet words over a noisy floor), the fresh one ends
+    words as a new stream does."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""
@@ -184,8 +190,8 @@ class Segmenter:
         if self.config.vad == "silero":
             self._ep = SileroEndpointer(threshold=self.config.threshold, end_threshold=self.config.end_threshold,
                                         end_frames=max(1, round(self.config.quiet_s * SAMPLE_RATE / FRAME_SAMPLES)),
-                                        reset_frames=None if self.config.vad_reset_s is None
-                                        else max(1, round(self.config.vad_reset_s * SAMPLE_RATE / FRAME_SAMPLES)))
+                                        reset_frames=self._stream_frames(self.config.vad_reset_s),
+                                        fresh_end_frames=self._stream_frames(self.config.vad_fresh_end_s))
         elif self.config.vad == "webrtc":
             self._ep = Endpointer(
                 window=self.config.window_s, ratio=self.config.ratio, vad_mode=self.config.vad_mode,
@@ -220,6 +226,11 @@ class Segmenter:
         self._consumed = 0  # bytes handed to the endpointer
         self._history = bytearray()  # the most recent raw audio, for pre- and post-roll
         self._history_start = 0  # stream offset (bytes) of _history[0]
+
+    @staticmethod
+    def _stream_frames(seconds: float | None) -> int | None:
+        """`seconds` of the stream as VAD frames, at least one; None stays None."""
+        return None if seconds is None else max(1, round(seconds * SAMPLE_RATE / FRAME_SAMPLES))
 
     def _frames_before_end(self, seconds: float | None) -> int:
         """Silero: `seconds` of quiet as frames, if fewer than the end window's; else (or None, or WebRTC) 0."""

@@ -60,6 +60,7 @@ class SileroVad:
         except Exception as exc:  # onnxruntime raises its own exception types
             raise VadError(f"cannot load the Silero VAD model: {exc}") from None
         self._sr = np.array(SAMPLE_RATE, dtype=np.int64)
+        self.model = model
         self.reset()
 
     def reset(self) -> None:
@@ -82,7 +83,8 @@ class SileroEndpointer:
 
     def __init__(self, threshold: float = 0.5, start_frames: int = 2, end_frames: int = 5,
                  vad: SileroVad | None = None, end_threshold: float | None = None,
-                 reset_frames: int | None = None) -> None:
+                 reset_frames: int | None = None, fresh_end_frames: int | None = None,
+                 ender: SileroVad | None = None) -> None:
         self.threshold = threshold
         self.neg_threshold = threshold - 0.15 if end_threshold is None else end_threshold
         if self.neg_threshold > threshold:
@@ -106,14 +108,36 @@ class SileroEndpointer:
         self._outside: deque[tuple[bytes, float]] = deque(maxlen=reset_frames or 1)
         """With `reset_frames`: the frames outside speech and any onset since the last utterance, restart or start of
         the stream, and the gain each was heard with."""
+        self.fresh_end_frames = fresh_end_frames
+        """A second state of the model (the ender), started again after this many frames outside speech, warmed on
+        them; an utterance that it heard too (a frame at or above the threshold) ends where it hears it end. The
+        first state, never restarted, still starts every utterance, and ends those the ender did not hear
+        (`SegmenterConfig.vad_fresh_end_s`). None: one state."""
+        self._ender = None if fresh_end_frames is None else ender or SileroVad(getattr(self._vad, "model", None))
+        self._ender_outside: deque[tuple[bytes, float]] = deque(maxlen=fresh_end_frames or 1)
+        self._ender_count = 0  # frames outside speech since the ender last started again
+        self._ender_onset = False  # the ender heard a frame of the onset at or above the threshold
+        self._ender_heard = False  # the ender heard the current utterance
+        self._p = 0.0  # the first state's last probability
+        self._rearm = False
+        """The ender ended the last utterance while the first state still heard speech: until that state hears the
+        end too, the ender starts utterances (else the first state's stale speech would start one at once)."""
 
     def process(self, frame: bytes) -> bytes | None:
         if len(frame) != self.frame_bytes:
             raise ValueError(f"frames of {self.frame_bytes} bytes, not {len(frame)}")
-        p = self._vad(frame, self.gain)
+        self._p = p = self._vad(frame, self.gain)
+        q = p if self._ender is None else self._ender(frame, self.gain)
         self._frames += 1
         if not self.in_speech:
-            self._onset = [*self._onset, frame] if p >= self.threshold else []
+            self._rearm = self._rearm and p >= self.neg_threshold
+            self._onset = [*self._onset, frame] if (q if self._rearm else p) >= self.threshold else []
+            self._ender_onset = bool(self._onset) and (self._ender_onset or q >= self.threshold)
+            if self._ender is not None:
+                self._ender_outside.append((frame, self.gain))
+                self._ender_count += 1
+                if self._ender_count >= self.fresh_end_frames and not self._onset:  # type: ignore[operator]
+                    self._restart_ender()
             if not self._onset and self.reset_frames is not None:
                 self._outside.append((frame, self.gain))
                 if len(self._outside) == self.reset_frames:
@@ -122,16 +146,18 @@ class SileroEndpointer:
                 return None
             self.in_speech = True
             self._outside.clear()
+            self._ender_heard, self._ender_onset = self._ender_onset, False
             self.speech_start = (self._frames - len(self._onset)) * FRAME_SAMPLES / SAMPLE_RATE
             out, self._onset, self._quiet = b"".join(self._onset), [], []
             return out
-        if p >= self.neg_threshold:
+        self._ender_heard = self._ender_heard or q >= self.threshold
+        if (q if self._ender_heard else p) >= self.neg_threshold:
             out, self._quiet = b"".join([*self._quiet, frame]), []
             return out
         self._quiet.append(frame)
         if len(self._quiet) < self.end_frames:
             return None
-        self.in_speech, self._quiet = False, []
+        self._ended()
         return b""  # the utterance ended; its quiet tail is not speech
 
     def forget(self) -> None:
@@ -144,6 +170,10 @@ class SileroEndpointer:
         self._vad.reset()
         self._onset = []
         self._outside.clear()
+        if self._ender is not None:
+            self._ender.reset()
+            self._ender_outside.clear()
+            self._ender_count = 0
 
     def _restart(self) -> None:
         """The model's state started again and warmed on the frames outside speech it just heard; counted afresh."""
@@ -151,6 +181,20 @@ class SileroEndpointer:
         for frame, gain in self._outside:
             self._vad(frame, gain)
         self._outside.clear()
+
+    def _ended(self) -> None:
+        """The current utterance ended (its quiet frames, or `end_now`)."""
+        self.in_speech, self._quiet, self._onset = False, [], []
+        self._ender_count = 0
+        self._rearm = self._ender is not None and self._ender_heard and self._p >= self.neg_threshold
+
+    def _restart_ender(self) -> None:
+        """The ender started again and warmed on the last `fresh_end_frames` frames it heard outside speech."""
+        assert self._ender is not None
+        self._ender.reset()
+        for frame, gain in self._ender_outside:
+            self._ender(frame, gain)
+        self._ender_count = 0
 
     @property
     def quiet_frames(self) -> int:
@@ -160,7 +204,7 @@ class SileroEndpointer:
     def end_now(self) -> None:
         """End the current utterance here, as if its quiet frames had reached `end_frames` (the segmenter's
         early look took it); the next frames at or above the threshold start a new one."""
-        self.in_speech, self._quiet, self._onset = False, [], []
+        self._ended()
 
     def end_stream(self, tail: bytes) -> bytes | None:
         """The stream ended (with `tail`, less than a frame): the utterance in progress, if any, ends too."""

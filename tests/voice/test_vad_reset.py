@@ -114,3 +114,85 @@ def test_the_setting(raw: str | None, seconds: float | None) -> None:
 def test_a_bad_setting_names_the_variable(raw: str) -> None:
     with pytest.raises(EngineError, match="HRI_VOICE_VAD_RESET"):
         VoiceSettings(vad_reset=raw).segmenter()
+
+
+# ------------------------------------------------------------------- a fresh state ends words (round voice50b)
+def _two_states(fresh_end_frames: int = 3) -> tuple[Model, Model, SileroEndpointer]:
+    drifted, ender = Model(), Model()
+    ep = SileroEndpointer(vad=drifted, ender=ender, fresh_end_frames=fresh_end_frames,  # type: ignore[arg-type]
+                          start_frames=2, end_frames=2)
+    return drifted, ender, ep
+
+
+def _run(ep: SileroEndpointer, drifted: Model, ender: Model, probabilities: list[tuple[float, float]]) -> list[bool]:
+    """Feed one frame per (drifted, ender) probability pair; whether the endpointer is in speech after each."""
+    out = []
+    for p, q in probabilities:
+        drifted.p, ender.p = p, q
+        ep.process(QUIET)
+        out.append(ep.in_speech)
+    return out
+
+
+def test_an_utterance_the_fresh_state_heard_ends_where_it_hears_it_end() -> None:
+    drifted, ender, ep = _two_states()
+    # the drifted state runs on (0.9 to the end); the fresh one heard the word and hears it end at the 5th frame
+    states = _run(ep, drifted, ender, [(0.9, 0.9), (0.9, 0.9), (0.9, 0.9), (0.9, 0.9), (0.9, 0.1), (0.9, 0.1)])
+    assert states == [False, True, True, True, True, False]
+
+
+def test_an_utterance_the_fresh_state_did_not_hear_ends_by_the_drifted_one() -> None:
+    """Round voice50: a restarted state hears almost nothing of quiet words over a noisy floor; those the drifted state
+    starts, and only it can end them."""
+    drifted, ender, ep = _two_states()
+    states = _run(ep, drifted, ender, [(0.9, 0.1), (0.9, 0.1), (0.9, 0.1), (0.9, 0.1), (0.1, 0.1), (0.1, 0.1)])
+    assert states == [False, True, True, True, True, False]
+
+
+def test_the_fresh_state_alone_starts_nothing() -> None:
+    drifted, ender, ep = _two_states()
+    assert not any(_run(ep, drifted, ender, [(0.1, 0.9)] * 6))
+
+
+def test_the_fresh_state_starts_again_outside_speech_warmed_and_the_drifted_one_never() -> None:
+    drifted, ender, ep = _two_states(fresh_end_frames=3)
+    for k in range(3):
+        ep.process(_frame(k))
+    assert (drifted.resets, ender.resets) == (0, 1)
+    assert ender.heard == [(_frame(k), 1.0) for k in range(3)]  # warmed on the frames it had just heard
+    _run(ep, drifted, ender, [(0.9, 0.9)] * 10)  # in speech: no restart however long
+    assert (drifted.resets, ender.resets) == (0, 1)
+    _run(ep, drifted, ender, [(0.1, 0.1)] * 4)  # the end (2 frames), then 2 outside: counted afresh
+    assert ender.resets == 1
+    _run(ep, drifted, ender, [(0.1, 0.1)])
+    assert (drifted.resets, ender.resets) == (0, 2)
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_with_a_fresh_state_ending_it() -> None:
+    fresh = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=None), 1.5)
+    drifted = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=None), 40.0)
+    ended = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=1.0), 40.0)
+    assert ended < 0.2 and fresh < 0.2
+    assert drifted > ended + 0.15
+
+
+def test_after_the_fresh_state_ended_a_word_the_drifted_states_run_on_starts_nothing_but_a_new_word_does() -> None:
+    drifted, ender, ep = _two_states()
+    _run(ep, drifted, ender, [(0.9, 0.9)] * 4 + [(0.9, 0.1)] * 2)  # ended by the fresh state
+    assert not any(_run(ep, drifted, ender, [(0.9, 0.1)] * 5))  # the drifted state's stale speech
+    assert _run(ep, drifted, ender, [(0.9, 0.9)] * 2)[-1]  # a word the fresh state hears starts at once
+    _run(ep, drifted, ender, [(0.9, 0.1)] * 2 + [(0.1, 0.1)])  # ended; the drifted state then hears the end too
+    assert _run(ep, drifted, ender, [(0.9, 0.1)] * 2)[-1]  # and starts utterances again on its own
+
+
+@pytest.mark.parametrize(("raw", "seconds"), [(None, SegmenterConfig.vad_fresh_end_s), ("off", None), ("1", 1.0),
+                                              (" 2.5 ", 2.5)])
+def test_the_fresh_end_setting(raw: str | None, seconds: float | None) -> None:
+    assert VoiceSettings(vad_fresh_end=raw).segmenter().vad_fresh_end_s == seconds
+
+
+@pytest.mark.parametrize("raw", ["0.1", "61", "soon", "nan"])
+def test_a_bad_fresh_end_setting_names_the_variable(raw: str) -> None:
+    with pytest.raises(EngineError, match="HRI_VOICE_VAD_FRESH_END"):
+        VoiceSettings(vad_fresh_end=raw).segmenter()
