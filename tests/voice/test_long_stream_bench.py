@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bench.voice_bench import OTHER, WORDS, Item, Policy
-from bench.voice_long_stream import heard, long_stream
+from bench.voice_long_stream import heard, long_stream, way_config
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav
 from services.voice.engine import make_engine
@@ -31,3 +31,11 @@ def test_words_are_placed_at_their_level_and_heard_with_their_latency() -> None:
     row = heard(make_engine("spotter"), pcm, placed, SegmenterConfig(), Policy())
     assert row["commands"] == 2 and row["others"] == 1 and row["heard"] == 2 and row["false_walks"] == 0
     assert 0.0 < row["latency_p50_ms"] < 600.0  # type: ignore[operator]
+
+
+@pytest.mark.parametrize(("way", "reset", "fresh"), [("off", None, None), ("1", 1.0, None), ("fresh2", None, 2.0),
+                                                     ("freshoff", None, None)])
+def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: float | None,
+                                                             fresh: float | None) -> None:
+    config = way_config(way)
+    assert (config.vad_reset_s, config.vad_fresh_end_s) == (reset, fresh)
