@@ -16,6 +16,10 @@ ends after `end_frames` (5: 0.15 s, `SegmenterConfig.quiet_s`) frames in a row b
 quiet frames that end it are not speech. The segmenter starts speech at 0.4 and keeps the end at 0.35 (round 18:
 more words found in a walking robot's noise), and ends an utterance in a clear stream after 3 quiet frames
 (`SegmenterConfig.clear_quiet_s`, round 17).
+
+Silero's state drifts over a long stream (stop 91): a word's end is found later and later. Two options restart it,
+both off by default: `reset_frames` restarts the one state outside speech (round voice50), `fresh_end_frames` keeps a
+second, restarted state that ends the words it heard while the drifted one starts them (round voice50b).
 """
 
 from __future__ import annotations

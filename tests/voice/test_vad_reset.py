@@ -104,16 +104,7 @@ def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_only_with_the_reset()
     assert drifted > fresh + 0.15
 
 
-@pytest.mark.parametrize(("raw", "seconds"), [(None, SegmenterConfig.vad_reset_s), ("off", None), ("1", 1.0),
-                                              (" 2.5 ", 2.5)])
-def test_the_setting(raw: str | None, seconds: float | None) -> None:
-    assert VoiceSettings(vad_reset=raw).segmenter().vad_reset_s == seconds
 
-
-@pytest.mark.parametrize("raw", ["0.1", "61", "soon", "nan"])
-def test_a_bad_setting_names_the_variable(raw: str) -> None:
-    with pytest.raises(EngineError, match="HRI_VOICE_VAD_RESET"):
-        VoiceSettings(vad_reset=raw).segmenter()
 
 
 # ------------------------------------------------------------------- a fresh state ends words (round voice50b)
@@ -186,13 +177,19 @@ def test_after_the_fresh_state_ended_a_word_the_drifted_states_run_on_starts_not
     assert _run(ep, drifted, ender, [(0.9, 0.1)] * 2)[-1]  # and starts utterances again on its own
 
 
-@pytest.mark.parametrize(("raw", "seconds"), [(None, SegmenterConfig.vad_fresh_end_s), ("off", None), ("1", 1.0),
-                                              (" 2.5 ", 2.5)])
-def test_the_fresh_end_setting(raw: str | None, seconds: float | None) -> None:
-    assert VoiceSettings(vad_fresh_end=raw).segmenter().vad_fresh_end_s == seconds
+SETTINGS = [("vad_reset", "vad_reset_s", "HRI_VOICE_VAD_RESET"),
+            ("vad_fresh_end", "vad_fresh_end_s", "HRI_VOICE_VAD_FRESH_END")]
 
 
+@pytest.mark.parametrize(("setting", "field", "variable"), SETTINGS)
+@pytest.mark.parametrize(("raw", "seconds"), [(None, "default"), ("off", None), ("1", 1.0), (" 2.5 ", 2.5)])
+def test_the_setting(setting: str, field: str, variable: str, raw: str | None, seconds: float | str | None) -> None:
+    expected = getattr(SegmenterConfig, field) if seconds == "default" else seconds
+    assert getattr(VoiceSettings(**{setting: raw}).segmenter(), field) == expected
+
+
+@pytest.mark.parametrize(("setting", "field", "variable"), SETTINGS)
 @pytest.mark.parametrize("raw", ["0.1", "61", "soon", "nan"])
-def test_a_bad_fresh_end_setting_names_the_variable(raw: str) -> None:
-    with pytest.raises(EngineError, match="HRI_VOICE_VAD_FRESH_END"):
-        VoiceSettings(vad_fresh_end=raw).segmenter()
+def test_a_bad_setting_names_the_variable(setting: str, field: str, variable: str, raw: str) -> None:
+    with pytest.raises(EngineError, match=variable):
+        VoiceSettings(**{setting: raw}).segmenter()
