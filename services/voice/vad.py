@@ -119,7 +119,8 @@ class SileroEndpointer:
         (`SegmenterConfig.vad_fresh_end_s`). None: one state."""
         self._ender = None if fresh_end_frames is None else ender or SileroVad(getattr(self._vad, "model", None))
         self._ender_outside: deque[tuple[bytes, float]] = deque(maxlen=fresh_end_frames or 1)
-        self._ender_count = 0  # frames outside speech since the ender last started again
+        """With `fresh_end_frames`: the frames outside speech (onsets included) since the ender last started again,
+        the last utterance or the start of the stream, and the gain each was heard with."""
         self._ender_onset = False  # the ender heard a frame of the onset at or above the threshold
         self._ender_heard = False  # the ender heard the current utterance
         self._p = 0.0  # the first state's last probability
@@ -139,13 +140,12 @@ class SileroEndpointer:
             self._ender_onset = bool(self._onset) and (self._ender_onset or q >= self.threshold)
             if self._ender is not None:
                 self._ender_outside.append((frame, self.gain))
-                self._ender_count += 1
-                if self._ender_count >= self.fresh_end_frames and not self._onset:  # type: ignore[operator]
-                    self._restart_ender()
+                if len(self._ender_outside) == self.fresh_end_frames and not self._onset:
+                    _warm(self._ender, self._ender_outside)
             if not self._onset and self.reset_frames is not None:
                 self._outside.append((frame, self.gain))
                 if len(self._outside) == self.reset_frames:
-                    self._restart()
+                    _warm(self._vad, self._outside)
             if len(self._onset) < self.start_frames:
                 return None
             self.in_speech = True
@@ -177,28 +177,12 @@ class SileroEndpointer:
         if self._ender is not None:
             self._ender.reset()
             self._ender_outside.clear()
-            self._ender_count = 0
-
-    def _restart(self) -> None:
-        """The model's state started again and warmed on the frames outside speech it just heard; counted afresh."""
-        self._vad.reset()
-        for frame, gain in self._outside:
-            self._vad(frame, gain)
-        self._outside.clear()
 
     def _ended(self) -> None:
         """The current utterance ended (its quiet frames, or `end_now`)."""
         self.in_speech, self._quiet, self._onset = False, [], []
-        self._ender_count = 0
+        self._ender_outside.clear()
         self._rearm = self._ender is not None and self._ender_heard and self._p >= self.neg_threshold
-
-    def _restart_ender(self) -> None:
-        """The ender started again and warmed on the last `fresh_end_frames` frames it heard outside speech."""
-        assert self._ender is not None
-        self._ender.reset()
-        for frame, gain in self._ender_outside:
-            self._ender(frame, gain)
-        self._ender_count = 0
 
     @property
     def quiet_frames(self) -> int:
@@ -216,3 +200,11 @@ class SileroEndpointer:
             return None
         self.in_speech, self._quiet = False, []
         return tail
+
+
+def _warm(model: SileroVad, frames: deque[tuple[bytes, float]]) -> None:
+    """`model`'s state starts again and hears `frames` (each with its gain), which are then counted afresh."""
+    model.reset()
+    for frame, gain in frames:
+        model(frame, gain)
+    frames.clear()

@@ -104,9 +104,6 @@ def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_only_with_the_reset()
     assert drifted > fresh + 0.15
 
 
-
-
-
 # ------------------------------------------------------------------- a fresh state ends words (round voice50b)
 def _two_states(fresh_end_frames: int = 3) -> tuple[Model, Model, SileroEndpointer]:
     drifted, ender = Model(), Model()
