@@ -157,9 +157,13 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
 
 
 def way_config(way: str) -> SegmenterConfig:
-    """`off` (neither state restarted), `<s>` (`vad_reset_s`) or `fresh<s>` (`vad_fresh_end_s`) over the defaults."""
+    """`off` (neither state restarted), `<s>` (`vad_reset_s`), `fresh<s>` (`vad_fresh_end_s`, ending every utterance
+    the fresh state heard) or `fresh<s>:<dB>` (ending those with speech that far over the noise:
+    `vad_fresh_end_snr_db`) over the defaults."""
     if way.startswith("fresh"):
-        return replace(SegmenterConfig(), vad_reset_s=None, vad_fresh_end_s=early_look_arg(way.removeprefix("fresh")))
+        seconds, _, snr = way.removeprefix("fresh").partition(":")
+        return replace(SegmenterConfig(), vad_reset_s=None, vad_fresh_end_s=early_look_arg(seconds),
+                       vad_fresh_end_snr_db=float(snr) if snr else None)
     return replace(SegmenterConfig(), vad_reset_s=early_look_arg(way), vad_fresh_end_s=None)
 
 
@@ -173,7 +177,8 @@ def main() -> int:
     ap.add_argument("--floor", type=float, default=-70.0, help="the room's hiss, dBFS RMS")
     ap.add_argument("--longest", type=float, default=20.0, help="the longest pause before a word, s")
     ap.add_argument("--resets", default=f"off,{SegmenterConfig.vad_reset_s or 1.0}",
-                    help="the ways: off, vad_reset_s in seconds, or fresh<seconds> for vad_fresh_end_s")
+                    help="the ways: off, vad_reset_s in seconds, or fresh<seconds>[:<dB>] for vad_fresh_end_s "
+                         "[and vad_fresh_end_snr_db]")
     ap.add_argument("--mic-rate", type=int, help="the stream through a microphone's path at this rate (Hz)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -189,7 +194,8 @@ def main() -> int:
             row = {"source": "tuning" if args.tuning else f"held-out seed {args.seed}", "peak_dbfs": peak,
                    "floor_dbfs": args.floor, "mic_rate": args.mic_rate,
                    "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),
-                   "vad_reset_s": config.vad_reset_s, "vad_fresh_end_s": config.vad_fresh_end_s, **heard(engine, pcm, placed, config, policy)}
+                   "vad_reset_s": config.vad_reset_s, "vad_fresh_end_s": config.vad_fresh_end_s,
+                   "vad_fresh_end_snr_db": config.vad_fresh_end_snr_db, **heard(engine, pcm, placed, config, policy)}
             rows.append(row)
             print(json.dumps(row), flush=True)
     if args.json:

@@ -114,6 +114,13 @@ VadFreshEndOption = Annotated[
                       "warmed on them, to end the words it hears (the first, never restarted, starts them); or 'off' "
                       "[default: off]"),
 ]
+VadFreshEndSnrOption = Annotated[
+    str | None,
+    typer.Option("--vad-fresh-end-snr", envvar="HRI_VOICE_VAD_FRESH_END_SNR",
+                 help="live stream (Silero), with --vad-fresh-end: the second state ends only an utterance whose "
+                      "speech is this far (dB, 0 to 60) over the noise floor; or 'off' (every utterance it heard) "
+                      "[default: off]"),
+]
 HighpassOption = Annotated[
     str | None,
     typer.Option("--highpass", envvar="HRI_VOICE_HIGHPASS",
@@ -185,6 +192,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          warped_look: WarpedLookOption = None, down_in_phrase: DownInPhraseOption = None, vad: VadOption = "silero",
          early_look: EarlyLookOption = None, clear_window: ClearWindowOption = None, vad_lift: VadLiftOption = None,
          vad_reset: VadResetOption = None, vad_fresh_end: VadFreshEndOption = None,
+         vad_fresh_end_snr: VadFreshEndSnrOption = None,
          highpass: HighpassOption = None, gain: GainOption = None,
          mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
          echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
@@ -196,7 +204,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              head=head, walk_gate=walk_gate, agree_min=agree_min, decoder=decoder,
                              stop_in_phrase=stop_in_phrase, stop_in_long=stop_in_long, warped_look=warped_look,
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
-                             vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end, highpass=highpass,
+                             vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end,
+                             vad_fresh_end_snr=vad_fresh_end_snr, highpass=highpass,
                              gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
                              echo_memory=echo_memory, echo_fit=echo_fit)
     try:

@@ -94,6 +94,10 @@ class SegmenterConfig:
     voice50b (stop 92) did not pass: at 1 s it ends -20 dBFS words 56-79 ms sooner than the drifted state and keeps the
     quiet words over a noisy floor that round voice50 lost, but over a quiet floor it takes 19 of 150 quiet other
     words as commands, where the drifted state takes 5 (voice README, stop 92)."""
+    vad_fresh_end_snr_db: float | None = None
+    """Silero, with `vad_fresh_end_s`: the second state ends only an utterance whose speech is this far over the noise
+    floor so far (dB, as `clear_snr_db`); the first state ends the others. None: the second ends every utterance it
+    heard (round voice50b)."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""
@@ -204,6 +208,8 @@ class Segmenter:
         # quiet frames before the early look; 0: none
         self._early_frames = self._frames_before_end(self.config.early_quiet_s) if self.recognise is not None else 0
         self._clear_frames = self._frames_before_end(self.config.clear_quiet_s)  # ends a clear utterance; 0: none
+        fresh_end = self.config.vad == "silero" and self.config.vad_fresh_end_s is not None
+        self._fresh_end_snr = self.config.vad_fresh_end_snr_db if fresh_end else None
         self._floor: deque[float] = deque(maxlen=max(1, round(self.config.noise_floor_s * SAMPLE_RATE / FRAME_SAMPLES)))
         self._peaks: deque[int] | None = None  # the VAD's lift: each frame's peak over `vad_peak_s`
         self._second: Segmenter | None = None  # `vad_lift_second`: the VAD that hears the lifted stream
@@ -323,6 +329,9 @@ class Segmenter:
             was_speech = self._ep.in_speech
             if self._peaks is not None:
                 self._ep.gain = self._vad_gain(frame)
+            if self._fresh_end_snr is not None:
+                snr = self._snr_db()
+                self._ep.ender_trusted = snr is not None and snr >= self._fresh_end_snr
             speech = self._ep.process(frame)
             self._measure(frame, was_speech)
             seg = self._after(speech)

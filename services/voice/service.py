@@ -107,6 +107,9 @@ class VoiceSettings:
     vad_fresh_end: str | None = None
     """`HRI_VOICE_VAD_FRESH_END`: seconds of a live stream outside utterances after which a second Silero state starts
     again to end the words it hears (`SegmenterConfig.vad_fresh_end_s`), or `off`; None: the default."""
+    vad_fresh_end_snr: str | None = None
+    """`HRI_VOICE_VAD_FRESH_END_SNR`: how far (dB) an utterance's speech must be over the noise floor for the second
+    state to end it (`SegmenterConfig.vad_fresh_end_snr_db`), or `off` (every utterance it heard); None: the default."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
@@ -152,6 +155,7 @@ class VoiceSettings:
             vad_lift=os.environ.get("HRI_VOICE_VAD_LIFT") or None,
             vad_reset=os.environ.get("HRI_VOICE_VAD_RESET") or None,
             vad_fresh_end=os.environ.get("HRI_VOICE_VAD_FRESH_END") or None,
+            vad_fresh_end_snr=os.environ.get("HRI_VOICE_VAD_FRESH_END_SNR") or None,
             highpass=os.environ.get("HRI_VOICE_HIGHPASS") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
@@ -192,6 +196,10 @@ class VoiceSettings:
                        vad_fresh_end_s=_off_or(lambda v: 0.3 <= v <= 60.0, "seconds from 0.3 to 60 of a stream "
                                                "outside utterances after which the VAD's second state starts again",
                                                "HRI_VOICE_VAD_FRESH_END", self.vad_fresh_end, base.vad_fresh_end_s),
+                       vad_fresh_end_snr_db=_off_or(lambda v: 0.0 <= v <= 60.0, "dB from 0 to 60 of speech over the "
+                                                    "noise floor from which the VAD's second state ends an utterance",
+                                                    "HRI_VOICE_VAD_FRESH_END_SNR", self.vad_fresh_end_snr,
+                                                    base.vad_fresh_end_snr_db),
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 

@@ -123,6 +123,9 @@ class SileroEndpointer:
         the last utterance or the start of the stream, and the gain each was heard with."""
         self._ender_onset = False  # the ender heard a frame of the onset at or above the threshold
         self._ender_heard = False  # the ender heard the current utterance
+        self.ender_trusted = True
+        """Whether the ender may end the current utterance (set before each frame by the segmenter when
+        `SegmenterConfig.vad_fresh_end_snr_db` asks for a clear utterance); False: the first state ends it."""
         self._p = 0.0  # the first state's last probability
         self._rearm = False
         """The ender ended the last utterance while the first state still heard speech: until that state hears the
@@ -155,7 +158,7 @@ class SileroEndpointer:
             out, self._onset, self._quiet = b"".join(self._onset), [], []
             return out
         self._ender_heard = self._ender_heard or q >= self.threshold
-        if (q if self._ender_heard else p) >= self.neg_threshold:
+        if (q if self._ender_ends else p) >= self.neg_threshold:
             out, self._quiet = b"".join([*self._quiet, frame]), []
             return out
         self._quiet.append(frame)
@@ -182,7 +185,12 @@ class SileroEndpointer:
         """The current utterance ended (its quiet frames, or `end_now`)."""
         self.in_speech, self._quiet, self._onset = False, [], []
         self._ender_outside.clear()
-        self._rearm = self._ender is not None and self._ender_heard and self._p >= self.neg_threshold
+        self._rearm = self._ender is not None and self._ender_ends and self._p >= self.neg_threshold
+
+    @property
+    def _ender_ends(self) -> bool:
+        """The ender, not the first state, ends the current utterance."""
+        return self._ender_heard and self.ender_trusted
 
     @property
     def quiet_frames(self) -> int:

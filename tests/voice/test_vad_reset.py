@@ -165,6 +165,16 @@ def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_with_a_fresh_state_en
     assert drifted > ended + 0.15
 
 
+def test_an_utterance_the_fresh_state_is_not_trusted_with_ends_by_the_drifted_one_and_arms_no_hold() -> None:
+    """`ender_trusted` (the segmenter's `vad_fresh_end_snr_db`: an utterance not clear of the noise) leaves the end to
+    the first state, as if the fresh one had not heard the word."""
+    drifted, ender, ep = _two_states()
+    ep.ender_trusted = False
+    states = _run(ep, drifted, ender, [(0.9, 0.9)] * 4 + [(0.9, 0.1)] * 2 + [(0.1, 0.1)] * 2)
+    assert states == [False, True, True, True, True, True, True, False]
+    assert _run(ep, drifted, ender, [(0.9, 0.1)] * 2)[-1]  # no hold after it: the drifted state starts the next
+
+
 def test_after_the_fresh_state_ended_a_word_the_drifted_states_run_on_starts_nothing_but_a_new_word_does() -> None:
     drifted, ender, ep = _two_states()
     _run(ep, drifted, ender, [(0.9, 0.9)] * 4 + [(0.9, 0.1)] * 2)  # ended by the fresh state
@@ -174,19 +184,31 @@ def test_after_the_fresh_state_ended_a_word_the_drifted_states_run_on_starts_not
     assert _run(ep, drifted, ender, [(0.9, 0.1)] * 2)[-1]  # and starts utterances again on its own
 
 
-SETTINGS = [("vad_reset", "vad_reset_s", "HRI_VOICE_VAD_RESET"),
-            ("vad_fresh_end", "vad_fresh_end_s", "HRI_VOICE_VAD_FRESH_END")]
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_with_a_clear_speech_bar_the_fresh_state_ends_only_a_word_that_clears_it() -> None:
+    """A -20 dBFS "stop" over a -70 dBFS hiss is about 35 dB over it: with the bar at 30 dB the fresh state ends it;
+    with a bar no word clears, the drifted state does, late."""
+    clear = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=1.0, vad_fresh_end_snr_db=30.0), 40.0)
+    unclear = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=1.0, vad_fresh_end_snr_db=80.0), 40.0)
+    assert clear < 0.2
+    assert unclear > clear + 0.15
 
 
-@pytest.mark.parametrize(("setting", "field", "variable"), SETTINGS)
-@pytest.mark.parametrize(("raw", "seconds"), [(None, "default"), ("off", None), ("1", 1.0), (" 2.5 ", 2.5)])
-def test_the_setting(setting: str, field: str, variable: str, raw: str | None, seconds: float | str | None) -> None:
-    expected = getattr(SegmenterConfig, field) if seconds == "default" else seconds
+SETTINGS = [("vad_reset", "vad_reset_s", "HRI_VOICE_VAD_RESET", "0.1"),
+            ("vad_fresh_end", "vad_fresh_end_s", "HRI_VOICE_VAD_FRESH_END", "0.1"),
+            ("vad_fresh_end_snr", "vad_fresh_end_snr_db", "HRI_VOICE_VAD_FRESH_END_SNR", "-1")]
+
+
+@pytest.mark.parametrize(("setting", "field", "variable", "too_low"), SETTINGS)
+@pytest.mark.parametrize(("raw", "value"), [(None, "default"), ("off", None), ("1", 1.0), (" 2.5 ", 2.5)])
+def test_the_setting(setting: str, field: str, variable: str, too_low: str, raw: str | None,
+                     value: float | str | None) -> None:
+    expected = getattr(SegmenterConfig, field) if value == "default" else value
     assert getattr(VoiceSettings(**{setting: raw}).segmenter(), field) == expected
 
 
-@pytest.mark.parametrize(("setting", "field", "variable"), SETTINGS)
-@pytest.mark.parametrize("raw", ["0.1", "61", "soon", "nan"])
-def test_a_bad_setting_names_the_variable(setting: str, field: str, variable: str, raw: str) -> None:
+@pytest.mark.parametrize(("setting", "field", "variable", "too_low"), SETTINGS)
+@pytest.mark.parametrize("raw", ["too low", "61", "soon", "nan"])
+def test_a_bad_setting_names_the_variable(setting: str, field: str, variable: str, too_low: str, raw: str) -> None:
     with pytest.raises(EngineError, match=variable):
-        VoiceSettings(**{setting: raw}).segmenter()
+        VoiceSettings(**{setting: too_low if raw == "too low" else raw}).segmenter()
