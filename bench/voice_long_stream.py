@@ -56,7 +56,7 @@ from bench.voice_bench import (  # noqa: E402
 from bench.voice_levels import at_level  # noqa: E402
 from services.voice import synth  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, rounded_pcm, to_pcm  # noqa: E402
-from services.voice.engine import Engine, make_engine, one_blas_thread  # noqa: E402
+from services.voice.engine import Engine, Recognition, make_engine, one_blas_thread  # noqa: E402
 from services.voice.mic import CHUNK_S  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 from services.voice.sources import stream_utterances  # noqa: E402
@@ -115,9 +115,20 @@ def long_stream(items: list[Item], peak: float, floor: float, longest: float, se
     return rounded_pcm(through_mic(np.clip(stream, -1.0, 1.0), mic_rate)), placed
 
 
-def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterConfig,
-          policy: Policy) -> dict[str, object]:
-    """The stream through the service's path with `config`: commands heard, other words accepted, latency."""
+@dataclass(frozen=True)
+class Hearing:
+    """One utterance of the stream, as the service hears it."""
+
+    start_s: float
+    end_s: float
+    recognition: Recognition
+    emitted_s: float
+    """Stream time at which it was handed over, plus its decoding (the latency point)."""
+    snr_db: float | None
+
+
+def hearings(engine: Engine, pcm: bytes, config: SegmenterConfig) -> list[Hearing]:
+    """The stream through the service's path with `config`, in 30 ms chunks: every utterance and its recognition."""
     step = int(CHUNK_S * SAMPLE_RATE) * SAMPLE_WIDTH
     fed = [0]
 
@@ -126,13 +137,22 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
             fed[0] = k + step
             yield pcm[k : k + step]
 
-    taken: list[tuple[float, float, str | None, float]] = []  # start, end, what the policy takes, latency point (s)
+    out = []
     for u in stream_utterances(chunks(), "long", config, recognise=engine.recognise):
         began = time.perf_counter()
         rec = u.recognition or engine.recognise(u.pcm)
         emitted = fed[0] / SAMPLE_WIDTH / SAMPLE_RATE + time.perf_counter() - began
         start = u.start_s or 0.0
-        taken.append((start, start + u.seconds, policy.takes(rec.command, rec.confidence), emitted))
+        out.append(Hearing(start, start + u.seconds, rec, emitted, u.snr_db))
+    return out
+
+
+def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterConfig,
+          policy: Policy) -> dict[str, object]:
+    """The stream through the service's path with `config`: commands heard, other words accepted, latency."""
+    # start, end, what the policy takes, latency point (s)
+    taken = [(h.start_s, h.end_s, policy.takes(h.recognition.command, h.recognition.confidence), h.emitted_s)
+             for h in hearings(engine, pcm, config)]
     commands = [p for p in placed if p.item.label < OTHER]
     others = [p for p in placed if p.item.label == OTHER]
     right, accepted, walks, lat = 0, 0, 0, []

@@ -96,8 +96,10 @@ class SegmenterConfig:
     words as commands, where the drifted state takes 5 (voice README, stop 92)."""
     vad_fresh_end_snr_db: float | None = None
     """Silero, with `vad_fresh_end_s`: the second state ends only an utterance whose speech is this far over the noise
-    floor so far (dB, as `clear_snr_db`); the first state ends the others. None: the second ends every utterance it
-    heard (round voice50b)."""
+    floor so far (dB, as `clear_snr_db`); the first state ends the others (`HRI_VOICE_VAD_FRESH_END_SNR`). None: the
+    second ends every utterance it heard (round voice50b). Round voice50c (stop 93, 30 dB) did not pass: on held-out
+    seed 27721 every quiet word, and every word over a -55 dBFS floor, was heard as by the drifted state, and -20 dBFS
+    words over a quiet floor ended 78 ms sooner, but 7 fewer of their 150 commands were heard (voice README, stop 93)."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
     command comes p50 ~370 ms after it, decoding included; 0.3 s took ~150 ms longer and split no fewer words."""

@@ -33,9 +33,10 @@ def test_words_are_placed_at_their_level_and_heard_with_their_latency() -> None:
     assert 0.0 < row["latency_p50_ms"] < 600.0  # type: ignore[operator]
 
 
-@pytest.mark.parametrize(("way", "reset", "fresh"), [("off", None, None), ("1", 1.0, None), ("fresh2", None, 2.0),
-                                                     ("freshoff", None, None)])
-def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: float | None,
-                                                             fresh: float | None) -> None:
+@pytest.mark.parametrize(("way", "reset", "fresh", "bar"), [("off", None, None, None), ("1", 1.0, None, None),
+                                                            ("fresh2", None, 2.0, None), ("freshoff", None, None, None),
+                                                            ("fresh1:30", None, 1.0, 30.0)])
+def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: float | None, fresh: float | None,
+                                                             bar: float | None) -> None:
     config = way_config(way)
-    assert (config.vad_reset_s, config.vad_fresh_end_s) == (reset, fresh)
+    assert (config.vad_reset_s, config.vad_fresh_end_s, config.vad_fresh_end_snr_db) == (reset, fresh, bar)
