@@ -331,7 +331,7 @@ class Segmenter:
             was_speech = self._ep.in_speech
             if self._peaks is not None:
                 self._ep.gain = self._vad_gain(frame)
-            if self._fresh_end_snr is not None:
+            if self._fresh_end_snr is not None and self._ep.in_speech:  # only an utterance's end asks for it
                 snr = self._snr_db()
                 self._ep.ender_trusted = snr is not None and snr >= self._fresh_end_snr
             speech = self._ep.process(frame)
