@@ -209,10 +209,13 @@ def _speakable(jobs: list[tuple[dataset.Recipe, str]], required: bool) -> list[t
     return [(r, c) for r, c in jobs if tts.base_voice(r.voice) not in missing]
 
 
-def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bool = True) -> list[Item]:
+def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bool = True,
+              split: str = "heldout") -> list[Item]:
+    """The clips of `jobs`, rendered in `workers` processes and cached under `split`'s name (a tuning set's cache is
+    never named held-out)."""
     jobs = _speakable(jobs, required)
     key = hashlib.sha1(repr([1, jobs]).encode()).hexdigest()[:16]  # bump when render_utterance changes
-    cache = synth.cache_dir() / f"bench-heldout-{key}.pickle"
+    cache = synth.cache_dir() / f"bench-{split}-{key}.pickle"
     if cache.exists():
         items: list[Item] = pickle.loads(cache.read_bytes())
     else:
@@ -221,7 +224,7 @@ def _rendered(jobs: list[tuple[dataset.Recipe, str]], workers: int, required: bo
         tmp = cache.with_suffix(f".{os.getpid()}.tmp")  # whole or not at all: another run may read it meanwhile
         tmp.write_bytes(pickle.dumps(items))
         tmp.replace(cache)
-    print(f"held-out clips: {len(items)} of {len(jobs)} rendered", flush=True)
+    print(f"{'held-out' if split == 'heldout' else split} clips: {len(items)} of {len(jobs)} rendered", flush=True)
     return items
 
 

@@ -71,7 +71,7 @@ def tuning_items(seed: int) -> list[Item]:
     words = [*enumerate(WORDS), *((OTHER, w) for w in synth.OOV_TUNE)]
     jobs = [(dataset.Recipe(word, label, voice, rng.choice((0.85, 1.0, 1.15)), 1.0, rng.randrange(2**31), 0.0),
              "clean") for voice in corpus.voices("tune") for label, word in words]
-    return _rendered(jobs, workers=2, required=False)
+    return _rendered(jobs, workers=2, required=False, split="tuning")
 
 
 def picked(items: list[Item], n: int, seed: int) -> list[Item]:

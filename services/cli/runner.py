@@ -58,9 +58,14 @@ class ScenarioRunner:
 
     # ------------------------------------------------------------------ readiness
     def wait_ready(self, timeout: float = 90.0) -> list[str]:
-        """Wait for a working servo bus with a known posture, camera frames, all five services on the bus (a word
-        spoken before the voice service listens, or a refusal before the speech service is up, would be lost) and a
-        ready reasoner.
+        """Wait for a working servo bus with a known posture, camera frames, vision listening for scene commands, all
+        five services' liveliness tokens and a ready reasoner.
+
+        A token is declared as its service's session opens, just before the service declares its subscribers, so it
+        says the process is up, not yet that it listens. What makes that safe here: a word is a WAV in the voice
+        service's spool folder, which the service reads from the start (a word spoken early is heard late, not lost);
+        the reasoner's `ready` says it listens to every input; and the speech service is asked to speak only when the
+        reasoner answers an input, which a scenario sends after all this.
 
         Returns what is still missing after `timeout` (empty when ready).
         """

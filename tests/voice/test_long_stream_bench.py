@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -40,3 +42,17 @@ def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: fl
                                                              bar: float | None) -> None:
     config = way_config(way)
     assert (config.vad_reset_s, config.vad_fresh_end_s, config.vad_fresh_end_snr_db) == (reset, fresh, bar)
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_a_tuning_set_is_cached_under_its_own_name_never_as_held_out(tmp_path: Path,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    from bench.voice_bench import _rendered
+    from services.voice.training import dataset
+
+    monkeypatch.setenv("HRI_VOICE_CACHE", str(tmp_path))
+    jobs = [(dataset.Recipe("stop", WORDS.index("stop"), "espeak:en-us+m2", 1.0, 1.0, 5, 0.0), "clean")]
+    items = _rendered(jobs, workers=1, required=False, split="tuning")
+    assert [it.text for it in items] == ["stop"] and len(items[0].pcm) > SAMPLE_RATE // 5
+    assert [p.name.split("-")[1] for p in tmp_path.glob("bench-*.pickle")] == ["tuning"]
+    assert _rendered(jobs, workers=1, required=False, split="tuning")[0].pcm == items[0].pcm  # read back from it
