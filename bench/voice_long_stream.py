@@ -177,14 +177,14 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
 
 
 def way_config(way: str) -> SegmenterConfig:
-    """`off` (neither state restarted), `<s>` (`vad_reset_s`), `fresh<s>` (`vad_fresh_end_s`, ending every utterance
-    the fresh state heard) or `fresh<s>:<dB>` (ending those with speech that far over the noise:
-    `vad_fresh_end_snr_db`) over the defaults."""
+    """`off` (one state, never restarted: the default before round voice50d), `<s>` (`vad_reset_s`), `fresh<s>`
+    (`vad_fresh_end_s`, ending every utterance the fresh state heard) or `fresh<s>:<dB>` (ending those with speech that
+    far over the noise: `vad_fresh_end_snr_db`; `fresh1:30` is the default since round voice50d) over the defaults."""
     if way.startswith("fresh"):
         seconds, _, snr = way.removeprefix("fresh").partition(":")
         return replace(SegmenterConfig(), vad_reset_s=None, vad_fresh_end_s=early_look_arg(seconds),
                        vad_fresh_end_snr_db=float(snr) if snr else None)
-    return replace(SegmenterConfig(), vad_reset_s=early_look_arg(way), vad_fresh_end_s=None)
+    return replace(SegmenterConfig(), vad_reset_s=early_look_arg(way), vad_fresh_end_s=None, vad_fresh_end_snr_db=None)
 
 
 def main() -> int:

@@ -112,14 +112,14 @@ VadFreshEndOption = Annotated[
     typer.Option("--vad-fresh-end", envvar="HRI_VOICE_VAD_FRESH_END",
                  help="live stream (Silero): seconds outside utterances after which a second VAD state starts again, "
                       "warmed on them, to end the words it hears (the first, never restarted, starts them); or 'off' "
-                      "[default: off]"),
+                      "[default: 1]"),
 ]
 VadFreshEndSnrOption = Annotated[
     str | None,
     typer.Option("--vad-fresh-end-snr", envvar="HRI_VOICE_VAD_FRESH_END_SNR",
                  help="live stream (Silero), with --vad-fresh-end: the second state ends only an utterance whose "
                       "speech is this far (dB, 0 to 60) over the noise floor; or 'off' (every utterance it heard) "
-                      "[default: off]"),
+                      "[default: 30]"),
 ]
 HighpassOption = Annotated[
     str | None,

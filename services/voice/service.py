@@ -311,6 +311,9 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       early_look_s=segmenter.early_quiet_s,
                       clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None,
                       vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None,
+                      vad_reset_s=segmenter.vad_reset_s if settings.vad == "silero" else None,
+                      vad_fresh_end_s=segmenter.vad_fresh_end_s if settings.vad == "silero" else None,
+                      vad_fresh_end_snr_db=segmenter.vad_fresh_end_snr_db if settings.vad == "silero" else None,
                       highpass_hz=segmenter.highpass_hz)
     # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
     own, echo = _robot_voice(ctx, settings)

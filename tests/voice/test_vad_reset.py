@@ -97,9 +97,9 @@ def _ended_after(config: SegmenterConfig, lead_s: float) -> float:
 def test_a_word_after_a_long_quiet_ends_as_in_a_new_stream_only_with_the_reset() -> None:
     """Measured: after 40 s of a -70 dBFS hiss Silero's drifted state ends the word 0.53 s after its speech (0.09 s
     after 1.5 s); started again every second, 0.08 s."""
-    fresh = _ended_after(SegmenterConfig(vad_reset_s=None), 1.5)
-    drifted = _ended_after(SegmenterConfig(vad_reset_s=None), 40.0)
-    reset = _ended_after(SegmenterConfig(vad_reset_s=1.0), 40.0)
+    fresh = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=None), 1.5)
+    drifted = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=None), 40.0)
+    reset = _ended_after(SegmenterConfig(vad_reset_s=1.0, vad_fresh_end_s=None), 40.0)
     assert fresh < 0.2 and reset < 0.2
     assert drifted > fresh + 0.15
 
@@ -192,6 +192,13 @@ def test_with_a_clear_speech_bar_the_fresh_state_ends_only_a_word_that_clears_it
     unclear = _ended_after(SegmenterConfig(vad_reset_s=None, vad_fresh_end_s=1.0, vad_fresh_end_snr_db=80.0), 40.0)
     assert clear < 0.2
     assert unclear > clear + 0.15
+
+
+@pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
+def test_by_default_a_clear_word_after_a_long_quiet_ends_as_in_a_new_stream() -> None:
+    """Round voice50d: the fresh state, trusted with a word 30 dB over the floor, is the default."""
+    assert (SegmenterConfig().vad_fresh_end_s, SegmenterConfig().vad_fresh_end_snr_db) == (1.0, 30.0)
+    assert _ended_after(SegmenterConfig(), 40.0) < 0.2
 
 
 SETTINGS = [("vad_reset", "vad_reset_s", "HRI_VOICE_VAD_RESET", "0.1"),
