@@ -13,13 +13,17 @@ what that costs and what `SegmenterConfig.vad_reset_s` buys:
   every way);
 - the stream rounded to 16 bits as a sound card does (`rounded_pcm`), through a microphone's path at `--mic-rate` if
   asked (`voice_bench.through_mic`), then through the service's path (`sources.stream_utterances`: high-pass, Silero
-  VAD with the lifted second VAD, end windows; 30 ms chunks) and the engine, each way of `--resets` (`off`, or
-  `vad_reset_s` in seconds);
+  VAD with the lifted second VAD, end windows; 30 ms chunks) and the engine, each way of `--resets` (`default`: the
+  service's; `off`: one state, never restarted; `vad_reset_s` in seconds; `fresh<s>[:<dB>]`: `vad_fresh_end_s` and
+  `vad_fresh_end_snr_db`);
 - a command counts as heard when an utterance overlapping its word is taken by the reasoner's policy
   (`voice_bench.Policy`) as that command (a "go" asked about counts); another word counts as accepted when an
   overlapping utterance is taken as any command; latency: from the word's speech end to the stream time at which
   its utterance was handed over, plus the decoding (as `voice_bench.stream_latency`); a false walk: a word other
-  than "go" (a command or not) that an overlapping utterance makes the robot walk on at once.
+  than "go" (a command or not) that an overlapping utterance makes the robot walk on at once;
+- each way after the first: word by word against the first (`against_first_way`: commands lost and gained, other
+  words newly taken and no longer taken), the count a pooled rule's tolerance is set from (stop 94); `--json` also
+  keeps which words each way heard (`heard_at`, `accepted_at`: positions in the stream).
 
     .venv/bin/python bench/voice_long_stream.py --tuning
     .venv/bin/python bench/voice_long_stream.py --seed 23281 --json out.json
@@ -155,31 +159,49 @@ def heard(engine: Engine, pcm: bytes, placed: list[Placed], config: SegmenterCon
              for h in hearings(engine, pcm, config)]
     commands = [p for p in placed if p.item.label < OTHER]
     others = [p for p in placed if p.item.label == OTHER]
-    right, accepted, walks, lat = 0, 0, 0, []
-    for p in placed:
+    heard_at, accepted_at, walks, lat = [], [], 0, []
+    for k, p in enumerate(placed):
         over = [t for t in taken if t[0] < p.end_s + 0.15 and t[1] > p.start_s]
         walks += p.item.label != WORDS.index("go") and any(t[2] == WALK for t in over)
         if p.item.label < OTHER:
             word = WORDS[p.item.label]
             hits = [t for t in over if t[2] is not None and (t[2] == word or t[2].startswith(f"{word}:"))]
-            right += bool(hits)
             if hits:
+                heard_at.append(k)
                 lat.append(hits[0][3] - p.end_s)
-        else:
-            accepted += any(t[2] is not None for t in over)
+        elif any(t[2] is not None for t in over):
+            accepted_at.append(k)
     a = np.array(lat) * 1000.0
+    right, accepted = len(heard_at), len(accepted_at)
     return {"commands": len(commands), "heard": right, "command_share": round(right / max(1, len(commands)), 3),
             "others": len(others), "others_accepted": accepted,
             "others_share": round(accepted / max(1, len(others)), 3), "false_walks": walks, "utterances": len(taken),
             "latency_p50_ms": round(float(np.median(a)), 1) if a.size else None,
             "latency_p90_ms": round(float(np.percentile(a, 90)), 1) if a.size else None,
-            "latency_max_ms": round(float(a.max()), 1) if a.size else None}
+            "latency_max_ms": round(float(a.max()), 1) if a.size else None,
+            "heard_at": heard_at, "accepted_at": accepted_at}
+
+
+def disagreement(base: dict[str, object], row: dict[str, object]) -> dict[str, int]:
+    """Word by word, how `row`'s way differs from `base`'s on the same stream: commands it lost and gained, other
+    words it took and let go. A change of where words are cut flips borderline verdicts both ways; the two counts
+    together say how far its net change can move by chance (stop 94's rule: about the square root of their sum)."""
+    def diff(key: str) -> tuple[int, int]:
+        a, b = set(base[key]), set(row[key])  # type: ignore[call-overload]
+        return len(a - b), len(b - a)
+
+    lost, gained = diff("heard_at")
+    dropped, taken = diff("accepted_at")
+    return {"commands_lost": lost, "commands_gained": gained, "others_newly_taken": taken,
+            "others_no_longer_taken": dropped}
 
 
 def way_config(way: str) -> SegmenterConfig:
-    """`off` (one state, never restarted: the default before round voice50d), `<s>` (`vad_reset_s`), `fresh<s>`
+    """`default` (the service's), `off` (one state, never restarted: the default before round voice50d), `<s>` (`vad_reset_s`), `fresh<s>`
     (`vad_fresh_end_s`, ending every utterance the fresh state heard) or `fresh<s>:<dB>` (ending those with speech that
     far over the noise: `vad_fresh_end_snr_db`; `fresh1:30` is the default since round voice50d) over the defaults."""
+    if way == "default":
+        return SegmenterConfig()
     if way.startswith("fresh"):
         seconds, _, snr = way.removeprefix("fresh").partition(":")
         return replace(SegmenterConfig(), vad_reset_s=None, vad_fresh_end_s=early_look_arg(seconds),
@@ -196,9 +218,9 @@ def main() -> int:
     ap.add_argument("--peaks", default="-20,-38", help="dBFS peak of every word, a stream each")
     ap.add_argument("--floor", type=float, default=-70.0, help="the room's hiss, dBFS RMS")
     ap.add_argument("--longest", type=float, default=20.0, help="the longest pause before a word, s")
-    ap.add_argument("--resets", default=f"off,{SegmenterConfig.vad_reset_s or 1.0}",
-                    help="the ways: off, vad_reset_s in seconds, or fresh<seconds>[:<dB>] for vad_fresh_end_s "
-                         "[and vad_fresh_end_snr_db]")
+    ap.add_argument("--resets", default="off,default",
+                    help="the ways: default (the service's), off (one state, never restarted), vad_reset_s in "
+                         "seconds, or fresh<seconds>[:<dB>] for vad_fresh_end_s [and vad_fresh_end_snr_db]")
     ap.add_argument("--mic-rate", type=int, help="the stream through a microphone's path at this rate (Hz)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -209,6 +231,7 @@ def main() -> int:
     rows = []
     for peak in (float(p) for p in args.peaks.split(",")):
         pcm, placed = long_stream(items, peak, args.floor, args.longest, seed, args.mic_rate)
+        first: dict[str, object] | None = None
         for way in args.resets.split(","):
             config = way_config(way)
             row = {"source": "tuning" if args.tuning else f"held-out seed {args.seed}", "peak_dbfs": peak,
@@ -216,8 +239,12 @@ def main() -> int:
                    "stream_min": round(len(pcm) / SAMPLE_WIDTH / SAMPLE_RATE / 60, 1),
                    "vad_reset_s": config.vad_reset_s, "vad_fresh_end_s": config.vad_fresh_end_s,
                    "vad_fresh_end_snr_db": config.vad_fresh_end_snr_db, **heard(engine, pcm, placed, config, policy)}
+            if first is None:
+                first = row
+            else:
+                row["against_first_way"] = disagreement(first, row)
             rows.append(row)
-            print(json.dumps(row), flush=True)
+            print(json.dumps({k: v for k, v in row.items() if not k.endswith("_at")}), flush=True)  # lists: --json
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     return 0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bench.voice_bench import OTHER, WORDS, Item, Policy
-from bench.voice_long_stream import heard, long_stream, way_config
+from bench.voice_long_stream import disagreement, heard, long_stream, way_config
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav
 from services.voice.engine import make_engine
@@ -32,12 +32,16 @@ def test_words_are_placed_at_their_level_and_heard_with_their_latency() -> None:
         assert 10 * np.log10(np.mean(before**2)) == pytest.approx(-70.0, abs=1.5)
     row = heard(make_engine("spotter"), pcm, placed, SegmenterConfig(), Policy())
     assert row["commands"] == 2 and row["others"] == 1 and row["heard"] == 2 and row["false_walks"] == 0
+    assert row["heard_at"] == [0, 2]  # word by word: which of the stream's words were heard
     assert 0.0 < row["latency_p50_ms"] < 600.0  # type: ignore[operator]
 
 
 @pytest.mark.parametrize(("way", "reset", "fresh", "bar"), [("off", None, None, None), ("1", 1.0, None, None),
                                                             ("fresh2", None, 2.0, None), ("freshoff", None, None, None),
-                                                            ("fresh1:30", None, 1.0, 30.0)])
+                                                            ("fresh1:30", None, 1.0, 30.0),
+                                                            ("default", SegmenterConfig.vad_reset_s,
+                                                             SegmenterConfig.vad_fresh_end_s,
+                                                             SegmenterConfig.vad_fresh_end_snr_db)])
 def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: float | None, fresh: float | None,
                                                              bar: float | None) -> None:
     config = way_config(way)
@@ -56,3 +60,11 @@ def test_a_tuning_set_is_cached_under_its_own_name_never_as_held_out(tmp_path: P
     assert [it.text for it in items] == ["stop"] and len(items[0].pcm) > SAMPLE_RATE // 5
     assert [p.name.split("-")[1] for p in tmp_path.glob("bench-*.pickle")] == ["tuning"]
     assert _rendered(jobs, workers=1, required=False, split="tuning")[0].pcm == items[0].pcm  # read back from it
+
+
+def test_ways_are_compared_word_by_word_with_the_first() -> None:
+    base = {"heard_at": [0, 2, 5, 7], "accepted_at": [1, 4]}
+    row = {"heard_at": [0, 5, 7, 8, 9], "accepted_at": [4, 6, 10]}
+    assert disagreement(base, row) == {"commands_lost": 1, "commands_gained": 2, "others_newly_taken": 2,
+                                       "others_no_longer_taken": 1}
+    assert disagreement(base, base) == dict.fromkeys(disagreement(base, base), 0)
