@@ -197,9 +197,10 @@ def disagreement(base: dict[str, object], row: dict[str, object]) -> dict[str, i
 
 
 def way_config(way: str) -> SegmenterConfig:
-    """`default` (the service's), `off` (one state, never restarted: the default before round voice50d), `<s>` (`vad_reset_s`), `fresh<s>`
-    (`vad_fresh_end_s`, ending every utterance the fresh state heard) or `fresh<s>:<dB>` (ending those with speech that
-    far over the noise: `vad_fresh_end_snr_db`; `fresh1:30` is the default since round voice50d) over the defaults."""
+    """`default` (the service's), `off` (one state, never restarted: the default before round voice50d), `<s>`
+    (`vad_reset_s`), `fresh<s>` (`vad_fresh_end_s`, ending every utterance the fresh state heard) or `fresh<s>:<dB>`
+    (ending those with speech that far over the noise: `vad_fresh_end_snr_db`; `fresh1:30` is the default since round
+    voice50d) over the defaults."""
     if way == "default":
         return SegmenterConfig()
     if way.startswith("fresh"):

@@ -100,7 +100,7 @@ class SegmenterConfig:
     (`HRI_VOICE_VAD_FRESH_END_SNR`). None: the second ends every utterance it heard (round voice50b). Round voice50c
     (stop 93) failed on one seed (7 fewer of 150 clear commands; a borderline word's verdict turns on where it is cut);
     round voice50d (stop 94) judged it on three fresh seeds pooled and it landed: -20 dBFS words over a quiet floor end
-    68-80 ms sooner, as many commands heard, every quiet word and every word over a -55 dBFS floor as the drifted state
+    68-81 ms sooner, as many commands heard, every quiet word and every word over a -55 dBFS floor as the drifted state
     hears it (voice README, stop 94)."""
     window_s: float = 0.15
     """WebRTC: length of the VAD decision window. Measured from the voice's real end (round 15), a stream's
