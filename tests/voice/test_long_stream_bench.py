@@ -7,12 +7,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.voice_bench import OTHER, WORDS, Item, Policy
+from bench.voice_bench import OTHER, WORDS, Item, Policy, _rendered
 from bench.voice_long_stream import disagreement, heard, long_stream, way_config
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav
 from services.voice.engine import make_engine
 from services.voice.segmenter import SegmenterConfig
+from services.voice.training import dataset
 
 
 def _item(word: str, label: int) -> Item:
@@ -51,9 +52,6 @@ def test_each_way_names_one_setting_and_leaves_the_other_off(way: str, reset: fl
 @pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 def test_a_tuning_set_is_cached_under_its_own_name_never_as_held_out(tmp_path: Path,
                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
-    from bench.voice_bench import _rendered
-    from services.voice.training import dataset
-
     monkeypatch.setenv("HRI_VOICE_CACHE", str(tmp_path))
     jobs = [(dataset.Recipe("stop", WORDS.index("stop"), "espeak:en-us+m2", 1.0, 1.0, 5, 0.0), "clean")]
     items = _rendered(jobs, workers=1, required=False, split="tuning")
