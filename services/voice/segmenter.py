@@ -334,13 +334,13 @@ class Segmenter:
             if self._peaks is not None:
                 self._ep.gain = self._vad_gain(frame)
             if self._fresh_end_snr is not None and self._ep.in_speech:  # only an utterance's end asks for it
-                snr = self._snr_db()
-                self._ep.ender_trusted = snr is not None and snr >= self._fresh_end_snr
+                self._ep.ender_trusted = self._over(self._fresh_end_snr)
             speech = self._ep.process(frame)
             self._measure(frame, was_speech)
             seg = self._after(speech)
             quiet = self._ep.quiet_frames if self._speech and self.config.vad == "silero" else 0
-            if seg is None and self._clear_frames and quiet == self._clear_frames and self._clear():
+            clear_end = self._clear_frames and quiet == self._clear_frames
+            if seg is None and clear_end and self._over(self.config.clear_snr_db):
                 self._ep.end_now()
                 seg = self._emit()
             if seg is None and self._early_frames and quiet == self._early_frames:
@@ -416,9 +416,11 @@ class Segmenter:
             return None
         return 10.0 * math.log10(self._speech_power / self._speech_frames / median(self._floor))
 
-    def _clear(self) -> bool:
+    def _over(self, bar_db: float) -> bool:
+        """Whether the utterance's speech so far is at least `bar_db` over the noise floor (False when either is
+        unknown): clear enough for the short end window, or for the fresh state to end it."""
         snr = self._snr_db()
-        return snr is not None and snr >= self.config.clear_snr_db
+        return snr is not None and snr >= bar_db
 
     def _remember(self, frame: bytes) -> None:
         self._history += frame

@@ -306,14 +306,15 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
     settings = settings or VoiceSettings.from_env()
     segmenter = settings.segmenter()
     blas_threads = one_blas_thread()  # the whole process, before any engine multiplies a matrix
+    silero = settings.vad == "silero"  # the settings below are Silero's alone
     ctx.update_detail(source=settings.source, engine=settings.engine, vad=settings.vad, blas_threads=blas_threads,
                       gain_db=gain_from(settings.gain),
                       early_look_s=segmenter.early_quiet_s,
-                      clear_window_s=segmenter.clear_quiet_s if settings.vad == "silero" else None,
-                      vad_lift_dbfs=segmenter.vad_lift_dbfs if settings.vad == "silero" else None,
-                      vad_reset_s=segmenter.vad_reset_s if settings.vad == "silero" else None,
-                      vad_fresh_end_s=segmenter.vad_fresh_end_s if settings.vad == "silero" else None,
-                      vad_fresh_end_snr_db=segmenter.vad_fresh_end_snr_db if settings.vad == "silero" else None,
+                      clear_window_s=segmenter.clear_quiet_s if silero else None,
+                      vad_lift_dbfs=segmenter.vad_lift_dbfs if silero else None,
+                      vad_reset_s=segmenter.vad_reset_s if silero else None,
+                      vad_fresh_end_s=segmenter.vad_fresh_end_s if silero else None,
+                      vad_fresh_end_snr_db=segmenter.vad_fresh_end_snr_db if silero else None,
                       highpass_hz=segmenter.highpass_hz)
     # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
     own, echo = _robot_voice(ctx, settings)
