@@ -26,7 +26,10 @@ clipping, the sound card's delay and the state's error per sentence); the same s
 without the canceller, with it cancelling each sentence once its echo is found, held back meanwhile and cancelled from
 the sentence's first sample (`look_back`), with what was held also learnt from first (`learn_first`), and that with
 the way fitted on the canceller's memory subtracted first (`fit`: the service's default), with how many of the "stop"s
-began within 0.6 s of their sentence's echo and how many of those each way heard (`--way`: only the ways named).
+began within 0.6 s of their sentence's echo and how many of those each way heard (`--way`: only the ways named), and
+how many utterances not over the person's word each way heard as a command. `--after`: each "stop" said 0-0.3 s after
+the last sentence's echo ends instead. The segmenter is told where the canceller says the robot's voice lies, as in the
+service (`SegmenterConfig.floor_hold`; `--floor-hold off`: not held).
 
 `--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
 through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
@@ -188,13 +191,18 @@ class OverEcho:
     heard: Counter[str] = field(default_factory=Counter)
     early: int = 0
     early_heard: Counter[str] = field(default_factory=Counter)
+    stray: Counter[str] = field(default_factory=Counter)
+    """Utterances heard as a command that do not overlap the person's "stop" (`--cancel`): what is left of the robot's
+    voice taken for a word."""
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
                         peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
-                        rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None) -> OverEcho:
+                        rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None,
+                        after: bool = False) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
-    through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone; the stream (through the
+    through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone (`after`: said 0-0.3 s after
+    that sentence's echo ends, 30 dB under its loudest, as `voice_stop_latency.py`'s gaps); the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
     states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `ways` (of `WAYS`; all
     by default) hears (`OverEcho`), on the same streams."""
@@ -206,13 +214,17 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         echoes = [path.echo(v, rng) for v in said]
         scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
         starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
-        x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + SAMPLE_RATE)
+        x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + (2 if after else 1) * SAMPLE_RATE)
         played = []  # each sentence as its (jittered) state says it began
         for start, (echo, late), voice in zip(starts, echoes, said, strict=True):
             x[start : start + echo.size] += echo * scale
             played.append((t0 + start / SAMPLE_RATE + late, voice))
         last = int(starts[-1])
-        at = last + int(rng.uniform(0.2, max(0.3, said[-1].size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
+        if after:
+            loud = np.abs(echoes[-1][0]) > 10 ** (-30 / 20) * np.max(np.abs(echoes[-1][0]))
+            at = last + int(np.flatnonzero(loud)[-1]) + int(rng.uniform(0.0, 0.3) * SAMPLE_RATE)
+        else:
+            at = last + int(rng.uniform(0.2, max(0.3, said[-1].size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
         stop = at_level(stop, person)
         x[at : at + stop.size] += stop
         x = through_mic(np.clip(x, -1.0, 1.0), mic_rate)
@@ -223,9 +235,11 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         out.early += early
         for way in ways or list(WAYS):
             settings = WAYS[way]
-            z = x if settings is None else _cancelled(played, settings, pcm, block, t0)
-            heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
-                        for _, s, e, cmd, _ in stream(engine, z, config))
+            z, near = (x, None) if settings is None else _cancelled(played, settings, pcm, block, t0)
+            segs = stream(engine, z, config, robot=near)
+            over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
+            heard = any(cmd is Command.STOP and o for (*_, cmd, _), o in zip(segs, over, strict=True))
+            out.stray[way] += sum(cmd is not None and not o for (*_, cmd, _), o in zip(segs, over, strict=True))
             out.heard[way] += heard
             out.early_heard[way] += heard and early
     return out
@@ -275,9 +289,9 @@ def stop_over_recalled(engine: Engine, config: SegmenterConfig, voices: list[np.
         for way in RECALLS:
             fitted = way.startswith("fitted")
             recall = memories.get(way.replace("fitted", "recalled"))
-            z = x if way == "without" else _cancelled(said, {"fit": fitted}, pcm, block, t0, recall)
+            z, near = (x, None) if way == "without" else _cancelled(said, {"fit": fitted}, pcm, block, t0, recall)
             heard = any(cmd is Command.STOP and s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE
-                        for _, s, e, cmd, _ in stream(engine, z, config))
+                        for _, s, e, cmd, _ in stream(engine, z, config, robot=near))
             out.heard[way] += heard
             out.early_heard[way] += heard and early
     return out
@@ -304,17 +318,23 @@ def echo_memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: flo
 
 
 def _cancelled(said: list[tuple[float, np.ndarray]], settings: dict[str, bool], pcm: bytes, block: int,
-               t0: float, recall: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+               t0: float, recall: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """`pcm` through a new `EchoCanceller` (with `settings`; first `recall`ing a memory, if given) told of the sentences
-    `said` (when each began, its samples), in the microphone's blocks (what it holds at the end passed on)."""
+    `said` (when each began, its samples), in the microphone's blocks (what it holds at the end passed on), and per
+    sample whether the canceller said the robot's voice lay in the chunk it passed it on in (`robot_near`: the
+    segmenter holds its floor there, as in the service)."""
     played = Played()
     for began, samples in said:
         played.add(began, samples)
     canceller = EchoCanceller(played, **settings)
     if recall is not None:
         canceller.recall(*recall)
-    y = b"".join(canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE) for i in range(0, len(pcm), block))
-    return np.frombuffer(y + canceller(b"", None), "<i2") / 32768.0
+    out, near = [], []
+    for i in range(0, len(pcm) + block, block):  # the last call (the stream's end) passes on what was held
+        y = canceller(pcm[i : i + block], t0 + i / 2 / SAMPLE_RATE) if i < len(pcm) else canceller(b"", None)
+        out.append(y)
+        near.append(np.full(len(y) // 2, canceller.robot_near))
+    return np.frombuffer(b"".join(out), "<i2") / 32768.0, np.concatenate(near)
 
 
 def main() -> int:
@@ -339,6 +359,11 @@ def main() -> int:
     ap.add_argument("--recall", action="store_true",
                     help="with --over: the \"stop\"s said over the robot's first sentence of a run, the canceller "
                          "cold or recalling an earlier run's memory of the robot's voice (another room, the same one)")
+    ap.add_argument("--after", action="store_true",
+                    help="with --cancel: each \"stop\" said 0-0.3 s after the sentence's echo ends, not over it")
+    ap.add_argument("--floor-hold", choices=("on", "off"), default="on",
+                    help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
+                         "lies (SegmenterConfig.floor_hold; the service's default: on)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -356,7 +381,8 @@ def main() -> int:
     if args.room:
         rng = np.random.default_rng(args.seed)
         voices = [fftconvolve(v, responses(own_room(rng, rt60))[0]) for v in voices]
-    engine, policy, config = make_engine(args.engine), Policy.from_knowledge(), SegmenterConfig()
+    engine, policy = make_engine(args.engine), Policy.from_knowledge()
+    config = SegmenterConfig(floor_hold=args.floor_hold == "on")
     rows = []
     for peak in [float(p) for p in args.peaks.split(",") if p]:
         rng = np.random.default_rng(args.seed)
@@ -392,9 +418,10 @@ def main() -> int:
             row["stop_alone"], row["stops"] = alone, len(stops)
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
-                                           args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways)
+                                           args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways,
+                                           args.after)
                 row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
-                           stops_early_heard=dict(over.early_heard))
+                           stops_early_heard=dict(over.early_heard), stray_commands_echo=dict(over.stray))
             if args.recall:
                 over = stop_over_recalled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                           args.mic_rate, rt60, np.random.default_rng(args.seed))
@@ -402,6 +429,7 @@ def main() -> int:
                            stops_early_heard_recalled=dict(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
                                                   "stop_over_echo", "stops_early", "stops_early_heard",
+                                                  "stray_commands_echo",
                                                   "stop_over_recalled", "stops_early_recalled", "stops_early_heard_recalled")
                               if k in row}),
                   flush=True)
@@ -417,12 +445,13 @@ def main() -> int:
               + ", ".join(f"{r['stop_over_voice']}/{r['stops']} over {r['peak_dbfs']:.0f} dBFS" for r in rows)
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
-        print(f"the same \"stop\"s over the robot's voice through a room and a small loudspeaker (after {args.warm} "
-              f"sentences), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
+        print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
+              f"small loudspeaker (after {args.warm} sentences; floor hold {args.floor_hold}), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
-                  f"{' / '.join(str(r['stops_early_heard'][w]) for w in ways)})" for r in rows))
+                  f"{' / '.join(str(r['stops_early_heard'][w]) for w in ways)}; commands heard elsewhere: "
+                  f"{' / '.join(str(r['stray_commands_echo'][w]) for w in ways)})" for r in rows))
     if args.over is not None and args.recall:
         print(f"the same \"stop\"s over the robot's first sentence of a run, {' / '.join(RECALLS)} (the echo "
               "canceller's memory of three sentences of an earlier run): " + ", ".join(

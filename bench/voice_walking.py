@@ -86,15 +86,18 @@ def noise_source(seconds: float, rng: np.random.Generator, recording: np.ndarray
     return unit_rms(np.resize(recording[start:], n))
 
 
-def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig,
-           switched: Counter[str] | None = None) -> list[tuple[float, float, float, Command | None, float]]:
+def stream(engine: Engine, x: np.ndarray, config: SegmenterConfig, switched: Counter[str] | None = None,
+           robot: np.ndarray | None = None) -> list[tuple[float, float, float, Command | None, float]]:
     """Feed `x` (float, ±1) to a fresh segmenter in 30 ms chunks: (emitted at s, start s, end s, command,
-    confidence) per segment. `switched`: counts the stream under "highpass_on" if the high-pass was switched on."""
+    confidence) per segment. `switched`: counts the stream under "highpass_on" if the high-pass was switched on.
+    `robot`: per sample of `x`, whether the echo canceller said the robot's voice lay there (`Segmenter.feed`'s
+    `robot`, for a chunk with any such sample)."""
     pcm = rounded_pcm(x)
     seg = Segmenter(config, recognise=engine.recognise)  # the early look, as in the service
     out = []
     for k in range(0, len(pcm), CHUNK):
-        for s in seg.feed(pcm[k : k + CHUNK]):
+        near = robot is not None and bool(np.any(robot[k // 2 : (k + CHUNK) // 2]))
+        for s in seg.feed(pcm[k : k + CHUNK], near):
             rec = s.recognition or engine.recognise(s.pcm)
             out.append(((k + CHUNK) / 2 / SAMPLE_RATE, s.start_s, s.end_s, rec.command, rec.confidence))
     for s in seg.flush():

@@ -165,6 +165,13 @@ EchoMemoryOption = Annotated[
                       "6 s, microphone and reference) in the state folder and learn from it at start (on or off) "
                       "[default: on]"),
 ]
+FloorHoldOption = Annotated[
+    str | None,
+    typer.Option("--floor-hold", envvar="HRI_VOICE_FLOOR_HOLD",
+                 help="live stream (Silero), with the canceller on: the noise floor is held while the robot's own "
+                      "voice lies in the stream, so what the canceller leaves of it is not taken for the room's noise "
+                      "(on or off) [default: on]"),
+]
 EchoFitOption = Annotated[
     str | None,
     typer.Option("--echo-fit", envvar="HRI_VOICE_ECHO_FIT",
@@ -196,7 +203,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          highpass: HighpassOption = None, gain: GainOption = None,
          mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
          echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
-         echo_fit: EchoFitOption = None) -> None:
+         echo_fit: EchoFitOption = None, floor_hold: FloorHoldOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
         return
@@ -207,7 +214,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end,
                              vad_fresh_end_snr=vad_fresh_end_snr, highpass=highpass,
                              gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
-                             echo_memory=echo_memory, echo_fit=echo_fit)
+                             echo_memory=echo_memory, echo_fit=echo_fit, floor_hold=floor_hold)
     try:
         check_settings(settings)
     except EngineError as exc:

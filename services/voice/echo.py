@@ -261,6 +261,10 @@ class EchoCanceller:
     run faster than real time)."""
     fits: int = 0
     """Fits put in use."""
+    robot_near: bool = False
+    """Whether the robot's voice may lie in the samples last passed on: a placed sentence within the filter's reach of
+    them, or one whose echo may have begun and has not been found yet. The segmenter holds its noise floor over them
+    (`SegmenterConfig.floor_hold`): what the canceller leaves of the robot's voice is not the room's noise."""
     fit_ms: float | None = None
     """How long the last fit took, the new filter's lesson included."""
     on_silent: Callable[[EchoCanceller], None] | None = field(default=None, repr=False)
@@ -292,6 +296,7 @@ class EchoCanceller:
         """`chunk` (16-bit PCM, 16 kHz) whose first sample was captured at wall-clock `captured` (None: not known
         yet, or the stream has ended: passed on as it is, after what was held back)."""
         if captured is None:
+            self.robot_near = False  # the stream has ended (or its clock is not known yet): nothing is placed
             held, self._held = self._held, b""
             pending, self._pending = self._pending.tobytes(), self._pending[:0]
             self._keep(np.frombuffer(held + chunk, "<i2"))
@@ -311,6 +316,7 @@ class EchoCanceller:
         if self._unplaced and self.look_back:  # held until the echo is found, then cancelled from its start
             self._pending = mic
             return b""
+        self.robot_near = near or self._unplaced
         out = mic.copy()
         refs = np.round(np.clip(ref, -1.0, 1.0) * 32767).astype(np.int16)
         if self._pending.size:

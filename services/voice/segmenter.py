@@ -149,6 +149,13 @@ class SegmenterConfig:
     when quiet. With the second VAD (round voice37d) the walking rows are today's to the word."""
     noise_floor_s: float = 1.0
     """How much of the most recent audio outside utterances the noise floor is the median of."""
+    floor_hold: bool = True
+    """Silero: audio fed as the robot's own voice (`feed(robot=True)`: the echo canceller's word, `EchoCanceller.
+    robot_near`) does not feed the noise floor, which is held at the room's level from before the robot spoke
+    (`HRI_VOICE_FLOOR_HOLD`); False: it feeds it like any audio outside utterances. What the canceller leaves of the
+    robot's voice lies 13 dB over a quiet room's hiss (stop 95: a "stop" said just after the robot's sentence was
+    20-28 dB over the floor so raised, 34-37 dB said alone), so neither the clear window nor the fresh state ended
+    such a word and it came 358 ms after its end instead of 103 ms (round voice51, voice README)."""
     early_quiet_s: float | None = None
     """Silero, with `recognise`: the early look after this much quiet (None: no early look; `HRI_VOICE_EARLY_LOOK`).
     Off by default: neither held-out round met its rule. Round 16 (0.09 s, `early_confidence` 0.7) cut the stream
@@ -234,6 +241,7 @@ class Segmenter:
         self._speech: list[bytes] = []
         self._start = 0.0
         self._resume_s: float | None = None  # where speech cut at max_utterance_s goes on (stream time, s)
+        self._robot = False  # the chunk being heard is the robot's own voice (`feed`)
         self._consumed = 0  # bytes handed to the endpointer
         self._history = bytearray()  # the most recent raw audio, for pre- and post-roll
         self._history_start = 0  # stream offset (bytes) of _history[0]
@@ -263,11 +271,14 @@ class Segmenter:
         """Whether the stream is heard through the high-pass (`highpass_hz`, switched on by `highpass_from_dbfs`)."""
         return self._highpass is not None and self._offset_on
 
-    def feed(self, pcm: bytes) -> list[Segment]:
+    def feed(self, pcm: bytes, robot: bool = False) -> list[Segment]:
+        """The utterances that ended within `pcm`. `robot`: the robot's own voice may lie in it (the echo canceller
+        says so): with `floor_hold` its frames do not feed the noise floor."""
         if self._highpass is not None and (self._offset_on or self._offset_seen(pcm)):
             pcm = self._highpass(pcm)
+        self._robot = robot and self.config.floor_hold
         out = self._heard(pcm)
-        return out if self._second is None else self._with_second(out, self._second.feed(pcm))
+        return out if self._second is None else self._with_second(out, self._second.feed(pcm, robot))
 
     def _offset_seen(self, pcm: bytes) -> bool:
         """`highpass_from_dbfs`: whether the stream's mean outside utterances, over the last `noise_floor_s` with
@@ -388,7 +399,8 @@ class Segmenter:
         return float(start)
 
     def _measure(self, frame: bytes, was_speech: bool) -> None:
-        """Frames outside utterances feed the noise floor; an utterance's speech frames its speech level."""
+        """Frames outside utterances feed the noise floor (the robot's own voice held out, `floor_hold`); an
+        utterance's speech frames its speech level."""
         if self.config.vad != "silero":
             return
         x = np.frombuffer(frame, dtype="<i2").astype(np.float64) / 32768.0
@@ -396,7 +408,7 @@ class Segmenter:
         if self._ep.in_speech and self._ep.quiet_frames == 0:
             self._speech_power += power
             self._speech_frames += 1
-        elif not self._ep.in_speech and not was_speech:
+        elif not self._ep.in_speech and not was_speech and not self._robot:
             self._floor.append(power)
 
     def _vad_gain(self, frame: bytes) -> float:

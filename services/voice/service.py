@@ -25,6 +25,7 @@ import numpy as np
 
 from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
 from services.runtime import ServiceContext, default_state_dir
+from services.runtime.flags import parse_flag
 from services.voice.audio import SAMPLE_RATE, AudioError
 from services.voice.echo import ENV as ECHO_ENV
 from services.voice.echo import (
@@ -110,6 +111,9 @@ class VoiceSettings:
     vad_fresh_end_snr: str | None = None
     """`HRI_VOICE_VAD_FRESH_END_SNR`: how far (dB) an utterance's speech must be over the noise floor for the second
     state to end it (`SegmenterConfig.vad_fresh_end_snr_db`), or `off` (every utterance it heard); None: the default."""
+    floor_hold: str | None = None
+    """`HRI_VOICE_FLOOR_HOLD`: the segmenter's noise floor held while the echo canceller says the robot's voice lies in
+    the stream (`SegmenterConfig.floor_hold`), `on` or `off`; None: the default (on)."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
@@ -156,6 +160,7 @@ class VoiceSettings:
             vad_reset=os.environ.get("HRI_VOICE_VAD_RESET") or None,
             vad_fresh_end=os.environ.get("HRI_VOICE_VAD_FRESH_END") or None,
             vad_fresh_end_snr=os.environ.get("HRI_VOICE_VAD_FRESH_END_SNR") or None,
+            floor_hold=os.environ.get("HRI_VOICE_FLOOR_HOLD") or None,
             highpass=os.environ.get("HRI_VOICE_HIGHPASS") or None,
             gain=os.environ.get("HRI_VOICE_GAIN") or None,
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
@@ -175,8 +180,12 @@ class VoiceSettings:
 
     def segmenter(self) -> SegmenterConfig:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
-        seconds shorter than the end window, a VAD lift, a VAD reset or a high-pass out of its range."""
+        seconds shorter than the end window, a VAD lift, a VAD reset or a high-pass out of its range, or a floor hold
+        that is not on or off."""
         base = SegmenterConfig(vad=self.vad)
+        floor_hold = base.floor_hold if self.floor_hold is None else parse_flag(self.floor_hold)
+        if floor_hold is None:
+            raise EngineError(f"HRI_VOICE_FLOOR_HOLD={self.floor_hold!r}: on or off")
 
         def quiet_s(value: float) -> bool:
             return 0.0 < value < base.quiet_s
@@ -200,6 +209,7 @@ class VoiceSettings:
                                                     "noise floor from which the VAD's second state ends an utterance",
                                                     "HRI_VOICE_VAD_FRESH_END_SNR", self.vad_fresh_end_snr,
                                                     base.vad_fresh_end_snr_db),
+                       floor_hold=floor_hold,
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 
@@ -315,6 +325,7 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       vad_reset_s=segmenter.vad_reset_s if silero else None,
                       vad_fresh_end_s=segmenter.vad_fresh_end_s if silero else None,
                       vad_fresh_end_snr_db=segmenter.vad_fresh_end_snr_db if silero else None,
+                      floor_hold=segmenter.floor_hold if silero else None,
                       highpass_hz=segmenter.highpass_hz)
     # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
     own, echo = _robot_voice(ctx, settings)

@@ -27,7 +27,7 @@ import wave
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO, Literal
+from typing import BinaryIO, Literal, Protocol
 
 from services.voice.audio import SAMPLE_RATE, SAMPLE_WIDTH, AudioError, duration_s, read_wav
 from services.voice.clock import StreamClock
@@ -101,9 +101,18 @@ Recognise = Callable[[bytes], Recognition]
 
 HighpassState = Callable[[bool, float], None]
 """Told whether a live stream is heard through the high-pass, and the offset that switched it on (full scale 1.0)."""
-Echo = Callable[[bytes, float | None], bytes]
-"""A live stream's chunk and when its first sample was captured (wall clock; None until known, and at the stream's
-end) -> the chunk with the robot's own voice cancelled (`echo.EchoCanceller`), with what it held back before it."""
+class Echo(Protocol):
+    """The echo canceller as a live stream uses it (`echo.EchoCanceller`)."""
+
+    def __call__(self, chunk: bytes, captured: float | None) -> bytes:
+        """A live stream's chunk and when its first sample was captured (wall clock; None until known, and at the
+        stream's end) -> the chunk with the robot's own voice cancelled, with what it held back before it."""
+        ...
+
+    @property
+    def robot_near(self) -> bool:
+        """Whether the robot's voice may lie in what the last call passed on (the segmenter holds its floor there)."""
+        ...
 
 
 def stream_utterances(
@@ -113,7 +122,7 @@ def stream_utterances(
     """VAD-cut a stream of PCM chunks into utterances (with `recognise`, the segmenter's early look is on).
     `on_highpass` is told the high-pass's state as the stream starts and again if a DC offset switches it on
     (`SegmenterConfig.highpass_from_dbfs`). `echo` (`echo.EchoCanceller`) takes each chunk, with when it was captured,
-    before the segmenter does."""
+    before the segmenter does, and says where the robot's voice lies (`SegmenterConfig.floor_hold`)."""
     seg = Segmenter(config or SegmenterConfig(), recognise=recognise)
     highpass_on = seg.highpass_on
     if on_highpass is not None:
@@ -129,9 +138,11 @@ def stream_utterances(
         seconds = len(chunk) / (SAMPLE_RATE * SAMPLE_WIDTH)
         heard_s += seconds
         clock.heard(heard_s)
+        robot = False
         if echo is not None:
             chunk = echo(chunk, clock.wall(heard_s - seconds))
-        yield from utterances(seg.feed(chunk))
+            robot = echo.robot_near
+        yield from utterances(seg.feed(chunk, robot))
         if on_highpass is not None and seg.highpass_on and not highpass_on:
             highpass_on = True
             on_highpass(True, seg.offset_seen_so_far()[1])
