@@ -29,7 +29,7 @@ the way fitted on the canceller's memory subtracted first (`fit`: the service's 
 began within 0.6 s of their sentence's echo and how many of those each way heard (`--way`: only the ways named), and
 how many utterances not over the person's word each way heard as a command. `--after`: each "stop" said 0-0.3 s after
 the last sentence's echo ends instead. The segmenter is told where the canceller says the robot's voice lies, as in the
-service (`SegmenterConfig.floor_hold`; `--floor-hold off`: not held).
+service (`SegmenterConfig.floor_hold`, off by default; `--floor-hold on`: held).
 
 `--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
 through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
@@ -53,7 +53,7 @@ import re
 import sys
 import tempfile
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -194,6 +194,9 @@ class OverEcho:
     stray: Counter[str] = field(default_factory=Counter)
     """Utterances heard as a command that do not overlap the person's "stop" (`--cancel`): what is left of the robot's
     voice taken for a word."""
+    stray_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
+    """Each of those: the command, and where the utterance ends against the end of the last sentence's echo (s, 30 dB
+    under its loudest; the service drops every command but "stop" that ends before `own_voice.TAIL_S` after it)."""
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
@@ -220,9 +223,10 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
             x[start : start + echo.size] += echo * scale
             played.append((t0 + start / SAMPLE_RATE + late, voice))
         last = int(starts[-1])
+        loud = np.abs(echoes[-1][0]) > 10 ** (-30 / 20) * np.max(np.abs(echoes[-1][0]))
+        echo_ends = last + int(np.flatnonzero(loud)[-1])
         if after:
-            loud = np.abs(echoes[-1][0]) > 10 ** (-30 / 20) * np.max(np.abs(echoes[-1][0]))
-            at = last + int(np.flatnonzero(loud)[-1]) + int(rng.uniform(0.0, 0.3) * SAMPLE_RATE)
+            at = echo_ends + int(rng.uniform(0.0, 0.3) * SAMPLE_RATE)
         else:
             at = last + int(rng.uniform(0.2, max(0.3, said[-1].size / SAMPLE_RATE - 0.3)) * SAMPLE_RATE)
         stop = at_level(stop, person)
@@ -239,7 +243,10 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
             segs = stream(engine, z, config, robot=near)
             over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
             heard = any(cmd is Command.STOP and o for (*_, cmd, _), o in zip(segs, over, strict=True))
-            out.stray[way] += sum(cmd is not None and not o for (*_, cmd, _), o in zip(segs, over, strict=True))
+            stray = [(cmd.value, round(e - echo_ends / SAMPLE_RATE, 2))
+                     for (_, _, e, cmd, _), o in zip(segs, over, strict=True) if cmd is not None and not o]
+            out.stray[way] += len(stray)
+            out.stray_at.setdefault(way, []).extend(stray)
             out.heard[way] += heard
             out.early_heard[way] += heard and early
     return out
@@ -361,9 +368,9 @@ def main() -> int:
                          "cold or recalling an earlier run's memory of the robot's voice (another room, the same one)")
     ap.add_argument("--after", action="store_true",
                     help="with --cancel: each \"stop\" said 0-0.3 s after the sentence's echo ends, not over it")
-    ap.add_argument("--floor-hold", choices=("on", "off"), default="on",
+    ap.add_argument("--floor-hold", choices=("on", "off"),
                     help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
-                         "lies (SegmenterConfig.floor_hold; the service's default: on)")
+                         "lies, or not (SegmenterConfig.floor_hold; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -382,7 +389,9 @@ def main() -> int:
         rng = np.random.default_rng(args.seed)
         voices = [fftconvolve(v, responses(own_room(rng, rt60))[0]) for v in voices]
     engine, policy = make_engine(args.engine), Policy.from_knowledge()
-    config = SegmenterConfig(floor_hold=args.floor_hold == "on")
+    config = SegmenterConfig()
+    if args.floor_hold is not None:
+        config = replace(config, floor_hold=args.floor_hold == "on")
     rows = []
     for peak in [float(p) for p in args.peaks.split(",") if p]:
         rng = np.random.default_rng(args.seed)
@@ -421,7 +430,8 @@ def main() -> int:
                                            args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways,
                                            args.after)
                 row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
-                           stops_early_heard=dict(over.early_heard), stray_commands_echo=dict(over.stray))
+                           stops_early_heard=dict(over.early_heard), stray_commands_echo=dict(over.stray),
+                           stray_commands_echo_at=over.stray_at)
             if args.recall:
                 over = stop_over_recalled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                           args.mic_rate, rt60, np.random.default_rng(args.seed))
@@ -429,7 +439,7 @@ def main() -> int:
                            stops_early_heard_recalled=dict(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
                                                   "stop_over_echo", "stops_early", "stops_early_heard",
-                                                  "stray_commands_echo",
+                                                  "stray_commands_echo", "stray_commands_echo_at",
                                                   "stop_over_recalled", "stops_early_recalled", "stops_early_heard_recalled")
                               if k in row}),
                   flush=True)
@@ -446,7 +456,7 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
-              f"small loudspeaker (after {args.warm} sentences; floor hold {args.floor_hold}), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
+              f"small loudspeaker (after {args.warm} sentences; floor hold {'on' if config.floor_hold else 'off'}), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "

@@ -263,8 +263,8 @@ class EchoCanceller:
     """Fits put in use."""
     robot_near: bool = False
     """Whether the robot's voice may lie in the samples last passed on: a placed sentence within the filter's reach of
-    them, or one whose echo may have begun and has not been found yet. The segmenter holds its noise floor over them
-    (`SegmenterConfig.floor_hold`): what the canceller leaves of the robot's voice is not the room's noise."""
+    them, or one whose echo may have begun and has not been found yet. With `SegmenterConfig.floor_hold` the segmenter
+    holds its noise floor over them: what the canceller leaves of the robot's voice is not the room's noise."""
     fit_ms: float | None = None
     """How long the last fit took, the new filter's lesson included."""
     on_silent: Callable[[EchoCanceller], None] | None = field(default=None, repr=False)

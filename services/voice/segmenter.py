@@ -149,13 +149,14 @@ class SegmenterConfig:
     when quiet. With the second VAD (round voice37d) the walking rows are today's to the word."""
     noise_floor_s: float = 1.0
     """How much of the most recent audio outside utterances the noise floor is the median of."""
-    floor_hold: bool = True
+    floor_hold: bool = False
     """Silero: audio fed as the robot's own voice (`feed(robot=True)`: the echo canceller's word, `EchoCanceller.
     robot_near`) does not feed the noise floor, which is held at the room's level from before the robot spoke
     (`HRI_VOICE_FLOOR_HOLD`); False: it feeds it like any audio outside utterances. What the canceller leaves of the
-    robot's voice lies 13 dB over a quiet room's hiss (stop 95: a "stop" said just after the robot's sentence was
-    20-28 dB over the floor so raised, 34-37 dB said alone), so neither the clear window nor the fresh state ended
-    such a word and it came 358 ms after its end instead of 103 ms (round voice51, voice README)."""
+    robot's voice raises the floor 10-15 dB over a quiet room's hiss, so a "stop" said just after the robot's sentence
+    is not clear (20-28 dB over that floor, 34-37 dB said alone) and ends late. Held, such a "stop" comes about 200 ms
+    sooner through the service, but round voice51 (stop 95) did not pass: more of what the canceller left of a loud
+    robot voice was heard as a command (voice README, stop 95)."""
     early_quiet_s: float | None = None
     """Silero, with `recognise`: the early look after this much quiet (None: no early look; `HRI_VOICE_EARLY_LOOK`).
     Off by default: neither held-out round met its rule. Round 16 (0.09 s, `early_confidence` 0.7) cut the stream

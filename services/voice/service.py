@@ -113,7 +113,7 @@ class VoiceSettings:
     state to end it (`SegmenterConfig.vad_fresh_end_snr_db`), or `off` (every utterance it heard); None: the default."""
     floor_hold: str | None = None
     """`HRI_VOICE_FLOOR_HOLD`: the segmenter's noise floor held while the echo canceller says the robot's voice lies in
-    the stream (`SegmenterConfig.floor_hold`), `on` or `off`; None: the default (on)."""
+    the stream (`SegmenterConfig.floor_hold`), `on` or `off`; None: the default (off: round voice51 did not pass)."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
