@@ -196,7 +196,8 @@ class OverEcho:
     voice taken for a word."""
     stray_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
     """Each of those: the command, and where the utterance ends against the end of the last sentence's echo (s, 30 dB
-    under its loudest; the service drops every command but "stop" that ends before `own_voice.TAIL_S` after it)."""
+    under its loudest). The service publishes no command but "stop" heard while the robot speaks or within
+    `own_voice.TAIL_S` after (`own_voice.py`); this bench counts them all."""
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
@@ -456,7 +457,8 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
-              f"small loudspeaker (after {args.warm} sentences; floor hold {'on' if config.floor_hold else 'off'}), {' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
+              f"small loudspeaker (after {args.warm} sentences; floor hold {'on' if config.floor_hold else 'off'}), "
+              f"{' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "

@@ -154,9 +154,9 @@ class SegmenterConfig:
     robot_near`) does not feed the noise floor, which is held at the room's level from before the robot spoke
     (`HRI_VOICE_FLOOR_HOLD`); False: it feeds it like any audio outside utterances. What the canceller leaves of the
     robot's voice raises the floor 10-15 dB over a quiet room's hiss, so a "stop" said just after the robot's sentence
-    is not clear (20-28 dB over that floor, 34-37 dB said alone) and ends late. Held, such a "stop" comes about 200 ms
-    sooner through the service, but round voice51 (stop 95) did not pass: more of what the canceller left of a loud
-    robot voice was heard as a command (voice README, stop 95)."""
+    is not clear (20-28 dB over that floor, 34-37 dB said alone) and ends late. Held, such a "stop" comes about 180 ms
+    sooner through the service (p50 162 against 343 ms), but round voice51 (stop 95) did not pass: more of what the
+    canceller left of a loud robot voice was heard as a command (voice README, stop 95)."""
     early_quiet_s: float | None = None
     """Silero, with `recognise`: the early look after this much quiet (None: no early look; `HRI_VOICE_EARLY_LOOK`).
     Off by default: neither held-out round met its rule. Round 16 (0.09 s, `early_confidence` 0.7) cut the stream

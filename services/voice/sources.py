@@ -101,6 +101,8 @@ Recognise = Callable[[bytes], Recognition]
 
 HighpassState = Callable[[bool, float], None]
 """Told whether a live stream is heard through the high-pass, and the offset that switched it on (full scale 1.0)."""
+
+
 class Echo(Protocol):
     """The echo canceller as a live stream uses it (`echo.EchoCanceller`)."""
 
@@ -111,7 +113,7 @@ class Echo(Protocol):
 
     @property
     def robot_near(self) -> bool:
-        """Whether the robot's voice may lie in what the last call passed on (the segmenter holds its floor there)."""
+        """Whether the robot's voice may lie in what the last call passed on (`SegmenterConfig.floor_hold`)."""
         ...
 
 
