@@ -16,7 +16,6 @@ from services.voice.segmenter import Segment, Segmenter, SegmenterConfig
 from services.voice.service import VoiceSettings
 from tests.voice.streams import STEP
 
-pytest.importorskip("pyaec")
 needs_espeak = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 HOLD = SegmenterConfig(floor_hold=True)
 
