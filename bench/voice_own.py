@@ -206,7 +206,8 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
                         after: bool = False) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone (`after`: said 0-0.3 s after
-    that sentence's echo ends, 30 dB under its loudest, as `voice_stop_latency.py`'s gaps); the stream (through the
+    that sentence's echo ends, at its last sample within 30 dB of its loudest sample; `voice_stop_latency.py` places
+    its gaps the same 0-0.3 s after an end found per 10 ms frame, `voice_bench.speech_end_s`); the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
     states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `ways` (of `WAYS`; all
     by default) hears (`OverEcho`), on the same streams."""
