@@ -27,9 +27,13 @@ without the canceller, with it cancelling each sentence once its echo is found, 
 the sentence's first sample (`look_back`), with what was held also learnt from first (`learn_first`), and that with
 the way fitted on the canceller's memory subtracted first (`fit`: the service's default), with how many of the "stop"s
 began within 0.6 s of their sentence's echo and how many of those each way heard (`--way`: only the ways named), and
-how many utterances not over the person's word each way heard as a command. `--after`: each "stop" said 0-0.3 s after
-the last sentence's echo ends instead. The segmenter is told where the canceller says the robot's voice lies, as in the
-service (`SegmenterConfig.floor_hold`, off by default; `--floor-hold on`: held).
+how many utterances not over the person's word each way heard as a command, and how many of those the service would
+publish (its own-voice gate, `own_voice.OwnVoice`, asked with the sentences' states: "stop" always, any other command
+only outside the robot's voice and `own_voice.TAIL_S` after). `--after`: each "stop" said 0-0.3 s after the last
+sentence's echo ends instead. The segmenter is told where the canceller says the robot's voice lies, as in the service
+(`SegmenterConfig.floor_hold`, off by default; `--floor-hold on`: held). The sentences are taken in turn from the list
+(the same ones whatever the held-out seed); `--draw-sentences`: drawn at random from `--seed` for each "stop".
+`--cancel-only`: only these rows.
 
 `--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
 through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
@@ -75,7 +79,7 @@ from services.voice.audio import SAMPLE_RATE, rounded_pcm  # noqa: E402
 from services.voice.echo import LOCK_S, SEARCH_S, EchoCanceller, Played  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
 from services.voice.mic import CHUNK_S  # noqa: E402
-from services.voice.own_voice import TAIL_S  # noqa: E402
+from services.voice.own_voice import TAIL_S, OwnVoice  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 from services.voice.training.tts import wav_samples  # noqa: E402
 
@@ -197,25 +201,48 @@ class OverEcho:
     stray_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
     """Each of those: the command, and where the utterance ends against the end of the last sentence's echo (s, 30 dB
     under its loudest). The service publishes no command but "stop" heard while the robot speaks or within
-    `own_voice.TAIL_S` after (`own_voice.py`); this bench counts them all."""
+    `own_voice.TAIL_S` after (`own_voice.py`); `stray` counts them all, `published` only those it would publish (`publishes`)."""
+    published: Counter[str] = field(default_factory=Counter)
+    """Of `stray`, those the service's own-voice gate would publish."""
+    published_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
+
+
+def publishes(segs: list[tuple[float, float, float, Command | None, float]], spoke: list[tuple[float, float]],
+              pre_roll_s: float, tail_s: float = TAIL_S) -> list[bool]:
+    """For each of `stream`'s segments, whether the voice service would publish it with the robot speaking in the
+    spans `spoke` (stream seconds, as its speech states say): the service's own `OwnVoice` asked as the service asks
+    it (the utterance from its speech's onset, `pre_roll_s` into its audio, to when it was cut), "stop" always."""
+    now = [0.0]
+    own = OwnVoice(tail_s, clock=lambda: now[0])
+    for begin, end in sorted(spoke):
+        now[0] = begin
+        own.heard(True)
+        now[0] = end
+        own.heard(False)
+    return [cmd is Command.STOP or not own.overlaps(min(start + pre_roll_s, cut), cut)
+            for cut, start, _, cmd, _ in segs]
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
                         peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
                         rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None,
-                        after: bool = False) -> OverEcho:
+                        after: bool = False, draw: bool = False) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone (`after`: said 0-0.3 s after
     that sentence's echo ends, at its last sample within 30 dB of its loudest sample; `voice_stop_latency.py` places
     its gaps the same 0-0.3 s after an end found per 10 ms frame, `voice_bench.speech_end_s`); the stream (through the
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
     states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `ways` (of `WAYS`; all
-    by default) hears (`OverEcho`), on the same streams."""
+    by default) hears (`OverEcho`), on the same streams. The sentences are taken in turn, the `k`th "stop"'s from the
+    `k`th on; `draw`: drawn at random (`rng`) for each "stop"."""
     out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
         path = EchoPath.draw(rng, rt60)
-        said = [voices[(k + j) % len(voices)] for j in range(warm, -1, -1)]
+        if draw:
+            said = [voices[i] for i in rng.choice(len(voices), warm + 1, replace=False)]
+        else:
+            said = [voices[(k + j) % len(voices)] for j in range(warm, -1, -1)]
         echoes = [path.echo(v, rng) for v in said]
         scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
         starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
@@ -224,6 +251,7 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         for start, (echo, late), voice in zip(starts, echoes, said, strict=True):
             x[start : start + echo.size] += echo * scale
             played.append((t0 + start / SAMPLE_RATE + late, voice))
+        spoke = [(began - t0, began - t0 + voice.size / SAMPLE_RATE) for began, voice in played]
         last = int(starts[-1])
         loud = np.abs(echoes[-1][0]) > 10 ** (-30 / 20) * np.max(np.abs(echoes[-1][0]))
         echo_ends = last + int(np.flatnonzero(loud)[-1])
@@ -245,10 +273,13 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
             segs = stream(engine, z, config, robot=near)
             over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
             heard = any(cmd is Command.STOP and o for (*_, cmd, _), o in zip(segs, over, strict=True))
-            stray = [(cmd.value, round(e - echo_ends / SAMPLE_RATE, 2))
-                     for (_, _, e, cmd, _), o in zip(segs, over, strict=True) if cmd is not None and not o]
+            gate = publishes(segs, spoke, config.pre_roll_s)
+            stray = [((cmd.value, round(e - echo_ends / SAMPLE_RATE, 2)), p)
+                     for (_, _, e, cmd, _), o, p in zip(segs, over, gate, strict=True) if cmd is not None and not o]
             out.stray[way] += len(stray)
-            out.stray_at.setdefault(way, []).extend(stray)
+            out.stray_at.setdefault(way, []).extend(at for at, _ in stray)
+            out.published[way] += sum(p for _, p in stray)
+            out.published_at.setdefault(way, []).extend(at for at, p in stray if p)
             out.heard[way] += heard
             out.early_heard[way] += heard and early
     return out
@@ -370,6 +401,12 @@ def main() -> int:
                          "cold or recalling an earlier run's memory of the robot's voice (another room, the same one)")
     ap.add_argument("--after", action="store_true",
                     help="with --cancel: each \"stop\" said 0-0.3 s after the sentence's echo ends, not over it")
+    ap.add_argument("--draw-sentences", action="store_true",
+                    help="with --cancel: the robot's sentences before and under each \"stop\" drawn at random from "
+                         "--seed, not taken in turn (two held-out seeds then hear other sentences)")
+    ap.add_argument("--cancel-only", action="store_true",
+                    help="with --cancel: only the echo canceller's rows (not the sentences heard one by one, nor the "
+                         "\"stop\"s over the robot's voice with no room)")
     ap.add_argument("--floor-hold", choices=("on", "off"),
                     help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
                          "lies, or not (SegmenterConfig.floor_hold; default: the service's)")
@@ -394,8 +431,11 @@ def main() -> int:
     config = SegmenterConfig()
     if args.floor_hold is not None:
         config = replace(config, floor_hold=args.floor_hold == "on")
-    rows = []
-    for peak in [float(p) for p in args.peaks.split(",") if p]:
+    if args.cancel_only and not (args.over is not None and args.cancel):
+        ap.error("--cancel-only needs --over and --cancel")
+    peaks = [float(p) for p in args.peaks.split(",") if p]
+    rows: list[dict] = [{"peak_dbfs": peak} for peak in peaks] if args.cancel_only else []
+    for peak in [] if args.cancel_only else peaks:
         rng = np.random.default_rng(args.seed)
         heard = commanded = 0
         acted: Counter[str] = Counter()
@@ -421,19 +461,22 @@ def main() -> int:
     if args.over is not None:
         stops = [np.frombuffer(it.pcm, "<i2") / 32768.0 for it in heldout_items(args.over, args.workers)
                  if it.label == WORDS.index("stop") and it.condition == "clean" and it.family != "noise"]
-        alone = stop_over_voice(engine, config, voices, stops, None, args.person, args.floor, args.mic_rate,
-                                np.random.default_rng(args.seed))
+        alone = None if args.cancel_only else stop_over_voice(engine, config, voices, stops, None, args.person,
+                                                              args.floor, args.mic_rate, np.random.default_rng(args.seed))
         for row in rows:
-            row["stop_over_voice"] = stop_over_voice(engine, config, voices, stops, row["peak_dbfs"], args.person,
-                                                     args.floor, args.mic_rate, np.random.default_rng(args.seed))
-            row["stop_alone"], row["stops"] = alone, len(stops)
+            row["stops"] = len(stops)
+            if not args.cancel_only:
+                row["stop_over_voice"] = stop_over_voice(engine, config, voices, stops, row["peak_dbfs"], args.person,
+                                                         args.floor, args.mic_rate, np.random.default_rng(args.seed))
+                row["stop_alone"] = alone
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                            args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways,
-                                           args.after)
+                                           args.after, args.draw_sentences)
                 row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
                            stops_early_heard=dict(over.early_heard), stray_commands_echo=dict(over.stray),
-                           stray_commands_echo_at=over.stray_at)
+                           stray_commands_echo_at=over.stray_at, stray_commands_published=dict(over.published),
+                           stray_commands_published_at=over.published_at)
             if args.recall:
                 over = stop_over_recalled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                           args.mic_rate, rt60, np.random.default_rng(args.seed))
@@ -442,17 +485,19 @@ def main() -> int:
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
                                                   "stop_over_echo", "stops_early", "stops_early_heard",
                                                   "stray_commands_echo", "stray_commands_echo_at",
+                                                  "stray_commands_published", "stray_commands_published_at",
                                                   "stop_over_recalled", "stops_early_recalled", "stops_early_heard_recalled")
                               if k in row}),
                   flush=True)
     print()
-    print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
-          f"{'past tail':>9}  acted on")
-    for r in rows:
+    if not args.cancel_only:
+        print(f"{'own voice':>10} {'heard':>9} {'a command':>9} {'walk':>4} {'ask':>4} {'latest onset':>12} "
+              f"{'past tail':>9}  acted on")
+    for r in [] if args.cancel_only else rows:
         print(f"{r['peak_dbfs']:+6.0f} dBFS {r['heard_as_speech']:4d}/{r['sentences']:<4d} {r['heard_as_a_command']:9d} "
               f"{r['walks']:4d} {r['asks']:4d} {r['onset_after_voice_s_max']:+11.2f}s {len(r['escaped_the_tail']):9d}  "
               f"{r['acted_on']}")
-    if args.over is not None:
+    if args.over is not None and not args.cancel_only:
         print(f"a person's \"stop\" at {args.person:.0f} dBFS over the robot's voice (held-out seed {args.over}): "
               + ", ".join(f"{r['stop_over_voice']}/{r['stops']} over {r['peak_dbfs']:.0f} dBFS" for r in rows)
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
@@ -464,7 +509,8 @@ def main() -> int:
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
                   f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
                   f"{' / '.join(str(r['stops_early_heard'][w]) for w in ways)}; commands heard elsewhere: "
-                  f"{' / '.join(str(r['stray_commands_echo'][w]) for w in ways)})" for r in rows))
+                  f"{' / '.join(str(r['stray_commands_echo'][w]) for w in ways)}, of which the service would "
+                  f"publish {' / '.join(str(r['stray_commands_published'][w]) for w in ways)})" for r in rows))
     if args.over is not None and args.recall:
         print(f"the same \"stop\"s over the robot's first sentence of a run, {' / '.join(RECALLS)} (the echo "
               "canceller's memory of three sentences of an earlier run): " + ", ".join(

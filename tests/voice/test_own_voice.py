@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from schemas.messages import Decision, SpeechRequest, SpeechState, VoiceCommand
+from schemas.messages import Command, Decision, SpeechRequest, SpeechState, VoiceCommand
 from services.runtime import ServiceContext, TypedPublisher
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE, read_wav
@@ -96,6 +96,23 @@ def test_a_state_heard_before_the_answer_wins_over_it() -> None:
     quiet = OwnVoice(clock=clock)
     quiet.assume(False)
     assert not quiet.speaking()
+
+
+def test_the_own_voice_bench_counts_what_the_service_would_publish() -> None:
+    """`bench/voice_own.py`'s count of commands the service would publish asks `OwnVoice` as the service does: an
+    utterance from its speech's onset (`pre_roll_s` into its audio) to when it was cut, "stop" always published."""
+    from bench.voice_own import publishes
+
+    yes, stop = Command.YES, Command.STOP
+    segs = [(1.9, 1.0, 1.8, yes, 0.9),  # before the robot spoke
+            (3.2, 2.5, 3.1, yes, 0.9),  # inside its sentence: its own voice
+            (3.2, 2.5, 3.1, stop, 0.9),  # the same, but "stop"
+            (4.6, 3.95, 4.5, yes, 0.9),  # its onset (4.2) within the tail after the sentence (to 4.25)
+            (4.9, 4.05, 4.8, yes, 0.9),  # its onset (4.3) after the tail
+            (2.05, 1.7, 2.0, yes, 0.9)]  # its audio begins before the sentence; its onset (1.95) too, and it was
+    #                                      cut (2.05) after the sentence began: it overlaps the voice
+    assert publishes(segs, [(2.0, 4.0)], pre_roll_s=0.25) == [True, False, True, False, True, False]
+    assert publishes(segs, [], pre_roll_s=0.25) == [True] * 6
 
 
 @pytest.mark.parametrize(("raw", "tail"), [(None, TAIL_S), ("ignore", TAIL_S), ("hear", None), ("HEAR", None),
