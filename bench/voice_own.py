@@ -407,9 +407,10 @@ def main() -> int:
     ap.add_argument("--cancel-only", action="store_true",
                     help="with --cancel: only the echo canceller's rows (not the sentences heard one by one, nor the "
                          "\"stop\"s over the robot's voice with no room)")
-    ap.add_argument("--floor-hold", choices=("on", "off"),
+    ap.add_argument("--floor-hold", choices=("on", "off", "after"),
                     help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
-                         "lies, or not (SegmenterConfig.floor_hold; default: the service's)")
+                         "lies, or not, or held but judging an utterance only once the robot's voice has passed "
+                         "(SegmenterConfig.floor_hold, floor_hold_after; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -430,7 +431,7 @@ def main() -> int:
     engine, policy = make_engine(args.engine), Policy.from_knowledge()
     config = SegmenterConfig()
     if args.floor_hold is not None:
-        config = replace(config, floor_hold=args.floor_hold == "on")
+        config = replace(config, floor_hold=args.floor_hold != "off", floor_hold_after=args.floor_hold == "after")
     if args.cancel_only and not (args.over is not None and args.cancel):
         ap.error("--cancel-only needs --over and --cancel")
     peaks = [float(p) for p in args.peaks.split(",") if p]
@@ -503,7 +504,7 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
-              f"small loudspeaker (after {args.warm} sentences; floor hold {'on' if config.floor_hold else 'off'}), "
+              f"small loudspeaker (after {args.warm} sentences; floor hold {args.floor_hold or ('on' if config.floor_hold else 'off')}), "
               f"{' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "

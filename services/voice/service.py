@@ -113,7 +113,9 @@ class VoiceSettings:
     state to end it (`SegmenterConfig.vad_fresh_end_snr_db`), or `off` (every utterance it heard); None: the default."""
     floor_hold: str | None = None
     """`HRI_VOICE_FLOOR_HOLD`: the segmenter's noise floor held while the echo canceller says the robot's voice lies in
-    the stream (`SegmenterConfig.floor_hold`), `on` or `off`; None: the default (off: round voice51 did not pass)."""
+    the stream (`SegmenterConfig.floor_hold`), `on`, `off` or `after` (held, but judging an utterance only once the
+    robot's voice has passed: `SegmenterConfig.floor_hold_after`); None: the default (off: rounds voice51 and 51b did
+    not pass)."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""
@@ -183,9 +185,10 @@ class VoiceSettings:
         seconds shorter than the end window, a VAD lift, a VAD reset or a high-pass out of its range, or a floor hold
         that is not on or off."""
         base = SegmenterConfig(vad=self.vad)
-        floor_hold = base.floor_hold if self.floor_hold is None else parse_flag(self.floor_hold)
+        after = self.floor_hold is not None and self.floor_hold.strip().lower() == "after"
+        floor_hold = base.floor_hold if self.floor_hold is None else True if after else parse_flag(self.floor_hold)
         if floor_hold is None:
-            raise EngineError(f"HRI_VOICE_FLOOR_HOLD={self.floor_hold!r}: on or off")
+            raise EngineError(f"HRI_VOICE_FLOOR_HOLD={self.floor_hold!r}: on, off or after")
 
         def quiet_s(value: float) -> bool:
             return 0.0 < value < base.quiet_s
@@ -209,7 +212,7 @@ class VoiceSettings:
                                                     "noise floor from which the VAD's second state ends an utterance",
                                                     "HRI_VOICE_VAD_FRESH_END_SNR", self.vad_fresh_end_snr,
                                                     base.vad_fresh_end_snr_db),
-                       floor_hold=floor_hold,
+                       floor_hold=floor_hold, floor_hold_after=after or base.floor_hold_after,
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 
@@ -326,6 +329,7 @@ def serve(ctx: ServiceContext, settings: VoiceSettings | None = None) -> None:
                       vad_fresh_end_s=segmenter.vad_fresh_end_s if silero else None,
                       vad_fresh_end_snr_db=segmenter.vad_fresh_end_snr_db if silero else None,
                       floor_hold=segmenter.floor_hold if silero else None,
+                      floor_hold_after=segmenter.floor_hold_after if silero else None,
                       highpass_hz=segmenter.highpass_hz)
     # Before the engine loads (seconds): a sentence the robot begins meanwhile is still its own once listening starts.
     own, echo = _robot_voice(ctx, settings)

@@ -1,5 +1,5 @@
-"""The floor held over the robot's own voice (`SegmenterConfig.floor_hold`; round voice51 did not pass: off by
-default): what the echo canceller leaves of the robot's voice does not feed the segmenter's noise floor, so a word said
+"""The floor held over the robot's own voice (`SegmenterConfig.floor_hold`; rounds voice51 and 51b did not pass: off
+by default): what the echo canceller leaves of the robot's voice does not feed the segmenter's noise floor, so a word said
 just after the robot's sentence is judged against the room's floor from before it."""
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from tests.voice.streams import STEP
 
 needs_espeak = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
 HOLD = SegmenterConfig(floor_hold=True)
+AFTER = SegmenterConfig(floor_hold=True, floor_hold_after=True)
 
 
 def _word() -> np.ndarray:
@@ -70,6 +71,24 @@ def test_a_word_after_the_robots_voice_is_judged_against_the_floor_from_before_i
 
 
 @needs_espeak
+def test_held_only_after_the_robots_voice_a_word_within_it_is_judged_as_without_the_hold() -> None:
+    """`floor_hold_after`: a word after the residue is judged against the held floor, as with the hold throughout; the
+    same word while the robot's voice is still said to lie in the stream is judged against the floor with the residue
+    in it, and cut, as without the hold (where the hold throughout judges it against the held floor)."""
+    pcm, lo, hi = _after_residue(-45.0)
+    [(t_held, held)] = _heard(pcm, (lo, hi), HOLD)
+    [(t_after, after)] = _heard(pcm, (lo, hi), AFTER)
+    assert (t_after, after.snr_db, after.start_s, after.end_s) == (t_held, held.snr_db, held.start_s, held.end_s)
+    near = (lo, len(pcm))  # the robot's voice said to lie in the stream to its end, over the word too
+    [(t_unheld, unheld)] = _heard(pcm, near, SegmenterConfig(floor_hold=False))
+    [(t_within, within)] = _heard(pcm, near, AFTER)
+    [(t_held_within, held_within)] = _heard(pcm, near, HOLD)
+    assert (t_within, within.snr_db, within.end_s) == (t_unheld, unheld.snr_db, unheld.end_s)
+    assert held_within.snr_db is not None and unheld.snr_db is not None
+    assert held_within.snr_db > unheld.snr_db + 15.0 and t_held_within < t_unheld
+
+
+@needs_espeak
 def test_the_canceller_says_where_the_robots_voice_lies() -> None:
     """`robot_near`: False before the robot's sentence may begin, True while it plays and for the filter's reach after
     it, False again once that has passed; and `bench.voice_own._cancelled` says so per sample, as many as it passes."""
@@ -101,5 +120,9 @@ def test_the_setting() -> None:
     assert VoiceSettings().segmenter().floor_hold is False
     assert VoiceSettings(floor_hold="off").segmenter().floor_hold is False
     assert VoiceSettings(floor_hold="on").segmenter().floor_hold is True
+    assert VoiceSettings(floor_hold="on").segmenter().floor_hold_after is False
+    after = VoiceSettings(floor_hold="after").segmenter()
+    assert after.floor_hold is True and after.floor_hold_after is True
+    assert SegmenterConfig().floor_hold_after is False
     with pytest.raises(EngineError, match="HRI_VOICE_FLOOR_HOLD"):
         VoiceSettings(floor_hold="held").segmenter()
