@@ -15,7 +15,9 @@ robot's processes run:
   seconds after the sentence's echo ends (30 dB under its loudest);
 - latency: from the moment the microphone hands over the block holding the word's last sample (30 dB under its
   loudest) to the `VoiceCommand` "stop" arriving at the bench's session on the bus. A sound card hands a block over
-  once its last sample is captured, so the word ended up to 30 ms before that.
+  once its last sample is captured, so the word ended up to 30 ms before that. Only a "stop" that arrived once the
+  block holding the word's first sample was handed over is the person's; one before it is the robot's own voice heard
+  as "stop" (`self_stops`; since stop 96).
 
 Each condition runs in a voice service of its own with a fresh state folder: `fitted` (the default, `HRI_VOICE_ECHO_FIT`
 on), `not fitted` (off: no fit runs), and `alone` (the same "stop"s with no sentence before them). Per "stop" it
@@ -71,7 +73,13 @@ class Trial:
     gap_s: float | None
     """How long after the sentence's echo ended the "stop" began (None: no sentence)."""
     latency_ms: float | None = None
-    """End of the word -> `VoiceCommand` "stop" (None: not heard within 8 s)."""
+    """End of the word -> the first `VoiceCommand` "stop" that arrived once the word had begun (None: not heard within
+    8 s)."""
+    self_stops: int = 0
+    """"Stop"s that arrived before the word began: the robot's own voice heard as "stop", which the service publishes
+    (a person's "stop" over the robot's voice must stop it). Until stop 96 the bench took the first "stop" after the
+    sentence was asked for as the person's, so one such "stop" made the next trials take each person's word for the
+    trial before's (round voice51b)."""
     fitted: bool = False
     """A fit was put in use after this sentence."""
     fit_ms: float | None = None
@@ -93,6 +101,7 @@ class Condition:
             return round(float(np.percentile(a, q)), 1) if a.size else None
 
         return {"condition": self.name, "stops": len(self.trials), "heard": int(lat.size),
+                "self_stops": sum(t.self_stops for t in self.trials),
                 "p50_ms": pct(lat, 50), "p90_ms": pct(lat, 90), "max_ms": pct(lat, 100),
                 "decided_during_a_fit": int(during.size), "during_p50_ms": pct(during, 50),
                 "during_max_ms": pct(during, 100), "fits": len(fits),
@@ -144,6 +153,7 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
                     echo_end = start + int(speech_end_s(to_pcm(np.clip(echo, -1, 1))) * SAMPLE_RATE)
                     begin = mic.mix(word, (echo_end - mic.handed) / SAMPLE_RATE + gap)
                     mic.marks[f"{state.id}:echo"] = echo_end
+                    mic.marks[f"{state.id}:begin"] = begin
                     mic.marks[f"{state.id}:stop"] = begin + int(speech_end_s(to_pcm(word)) * SAMPLE_RATE)
 
             rig.ctx.subscribe(rig.ctx.keys.speech_state, SpeechState, on_state)
@@ -160,15 +170,22 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
                 if name == "alone":
                     with mic.lock:
                         begin = mic.mix(word, 0.3)
+                        mic.marks[f"{ident}:begin"] = begin
                         mic.marks[f"{ident}:stop"] = begin + int(speech_end_s(to_pcm(word)) * SAMPLE_RATE)
                 else:
                     planned[ident] = (word, gap)
                     say.put(SpeechRequest(text=sentences[int(pick.integers(len(sentences)))], id=ident))
-                wait_until(lambda since=since: any(c.command is Command.STOP for _, c in heard[since:]), 8.0)
+
+                def stops_after(begun: float | None, since: int = since) -> list[float]:
+                    """When each "stop" arrived once the word had begun (`begun`: None, not yet)."""
+                    return [t for t, c in heard[since:] if c.command is Command.STOP and begun is not None and t >= begun]
+
+                wait_until(lambda ident=ident: stops_after(mic.times.get(f"{ident}:begin")), 8.0)
                 time.sleep(1.5)  # the fit after the sentence, and the memory kept, are done
                 trial = Trial(None if name == "alone" else gap)
-                ended = mic.times.get(f"{ident}:stop")
-                got = [t for t, c in heard[since:] if c.command is Command.STOP]
+                ended, begun = mic.times.get(f"{ident}:stop"), mic.times.get(f"{ident}:begin")
+                got = stops_after(begun)
+                trial.self_stops = sum(c.command is Command.STOP for _, c in heard[since:]) - len(got)
                 if ended is not None and got:
                     trial.latency_ms = round((got[0] - ended) * 1000.0, 1)
                 health = rig.ctx.query_health("voice")
