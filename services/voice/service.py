@@ -212,7 +212,8 @@ class VoiceSettings:
                                                     "noise floor from which the VAD's second state ends an utterance",
                                                     "HRI_VOICE_VAD_FRESH_END_SNR", self.vad_fresh_end_snr,
                                                     base.vad_fresh_end_snr_db),
-                       floor_hold=floor_hold, floor_hold_after=after or base.floor_hold_after,
+                       floor_hold=floor_hold,
+                       floor_hold_after=base.floor_hold_after if self.floor_hold is None else after,
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 
