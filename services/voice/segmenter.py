@@ -155,8 +155,11 @@ class SegmenterConfig:
     (`HRI_VOICE_FLOOR_HOLD`); False: it feeds it like any audio outside utterances. What the canceller leaves of the
     robot's voice raises the floor 10-15 dB over a quiet room's hiss, so a "stop" said just after the robot's sentence
     is not clear (20-28 dB over that floor, 34-37 dB said alone) and ends late. Held, such a "stop" comes about 180 ms
-    sooner through the service (p50 162 against 343 ms), but round voice51 (stop 95) did not pass: more of what the
-    canceller left of a loud robot voice was heard as a command (voice README, stop 95)."""
+    sooner through the service (p50 162 against 343 ms), but rounds voice51 (stop 95) and voice51b (stop 96) did not
+    pass: what the canceller left of the robot's voice was cut into utterances sooner, and more of it heard as a
+    command (three "yes" inside a loud sentence; the robot's "All right, I will not walk." as "stop", which the service
+    publishes: the robot stopped itself; voice README, stops 95 and 96). `floor_hold_after` keeps the hold out of the
+    robot's voice itself."""
     floor_hold_after: bool = False
     """With `floor_hold`: the held floor judges an utterance (the clear window, the fresh state, the VAD's lift) only
     in chunks the robot's voice is not said to lie in; in those it may lie in, the floor fed by every chunk does, as
