@@ -170,8 +170,8 @@ FloorHoldOption = Annotated[
     typer.Option("--floor-hold", envvar="HRI_VOICE_FLOOR_HOLD",
                  help="live stream (Silero), with the canceller on: the noise floor is held while the robot's own "
                       "voice lies in the stream, so what the canceller leaves of it is not taken for the room's noise "
-                      "(on, off, or after: held, but judging an utterance only once the robot's voice has passed) "
-                      "[default: off]"),
+                      "(after: held, but judging an utterance only once the robot's voice has passed; on: held "
+                      "throughout; off) [default: after]"),
 ]
 EchoFitOption = Annotated[
     str | None,

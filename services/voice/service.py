@@ -114,8 +114,8 @@ class VoiceSettings:
     floor_hold: str | None = None
     """`HRI_VOICE_FLOOR_HOLD`: the segmenter's noise floor held while the echo canceller says the robot's voice lies in
     the stream (`SegmenterConfig.floor_hold`), `on`, `off` or `after` (held, but judging an utterance only once the
-    robot's voice has passed: `SegmenterConfig.floor_hold_after`); None: the default (off: rounds voice51 and 51b did
-    not pass)."""
+    robot's voice has passed: `SegmenterConfig.floor_hold_after`); None: the default (`after`, round voice51c; `on`,
+    held throughout, did not pass rounds voice51 and 51b)."""
     highpass: str | None = None
     """`HRI_VOICE_HIGHPASS`: the live stream's high-pass (Hz) before the VAD, switched on once the stream shows a DC
     offset, which it takes out (`SegmenterConfig.highpass_hz`, `highpass_from_dbfs`), or `off`; None: the default (30 Hz)."""

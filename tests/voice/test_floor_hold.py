@@ -1,6 +1,7 @@
-"""The floor held over the robot's own voice (`SegmenterConfig.floor_hold`; rounds voice51 and 51b did not pass: off
-by default): what the echo canceller leaves of the robot's voice does not feed the segmenter's noise floor, so a word said
-just after the robot's sentence is judged against the room's floor from before it."""
+"""The floor held over the robot's own voice (`SegmenterConfig.floor_hold`, `floor_hold_after`; on by default since
+round voice51c, held throughout did not pass rounds voice51 and 51b): what the echo canceller leaves of the robot's
+voice does not feed the segmenter's noise floor, so a word said just after the robot's sentence is judged against the
+room's floor from before it."""
 
 from __future__ import annotations
 
@@ -17,8 +18,9 @@ from services.voice.service import VoiceSettings
 from tests.voice.streams import STEP
 
 needs_espeak = pytest.mark.skipif(not synth.espeak_available(), reason="espeak-ng not installed")
-HOLD = SegmenterConfig(floor_hold=True)
+HOLD = SegmenterConfig(floor_hold=True, floor_hold_after=False)
 AFTER = SegmenterConfig(floor_hold=True, floor_hold_after=True)
+UNHELD = SegmenterConfig(floor_hold=False)
 
 
 def _word() -> np.ndarray:
@@ -60,7 +62,7 @@ def test_a_word_after_the_robots_voice_is_judged_against_the_floor_from_before_i
     pcm, lo, hi = _after_residue(-45.0)
     [(_, alone)] = _heard(alone_pcm, (lo, hi), HOLD)
     [(t_held, held)] = _heard(pcm, (lo, hi), HOLD)
-    [(t_unheld, unheld)] = _heard(pcm, (lo, hi), SegmenterConfig())
+    [(t_unheld, unheld)] = _heard(pcm, (lo, hi), UNHELD)
     assert alone.snr_db is not None and held.snr_db is not None and unheld.snr_db is not None
     assert held.snr_db == pytest.approx(alone.snr_db, abs=1.0) and held.snr_db >= SegmenterConfig.clear_snr_db
     assert unheld.snr_db < held.snr_db - 15.0 and unheld.snr_db < SegmenterConfig.clear_snr_db
@@ -116,13 +118,13 @@ def test_the_canceller_says_where_the_robots_voice_lies() -> None:
 
 
 def test_the_setting() -> None:
-    assert SegmenterConfig().floor_hold is False  # round voice51 did not pass
-    assert VoiceSettings().segmenter().floor_hold is False
+    assert SegmenterConfig().floor_hold is True  # round voice51c
+    assert VoiceSettings().segmenter().floor_hold is True
     assert VoiceSettings(floor_hold="off").segmenter().floor_hold is False
     assert VoiceSettings(floor_hold="on").segmenter().floor_hold is True
-    assert VoiceSettings(floor_hold="on").segmenter().floor_hold_after is False
+    assert VoiceSettings(floor_hold="on").segmenter().floor_hold_after is False  # held throughout
     after = VoiceSettings(floor_hold="after").segmenter()
     assert after.floor_hold is True and after.floor_hold_after is True
-    assert SegmenterConfig().floor_hold_after is False
+    assert SegmenterConfig().floor_hold_after is True
     with pytest.raises(EngineError, match="HRI_VOICE_FLOOR_HOLD"):
         VoiceSettings(floor_hold="held").segmenter()
