@@ -31,7 +31,8 @@ how many utterances not over the person's word each way heard as a command, and 
 publish (its own-voice gate, `own_voice.OwnVoice`, asked with the sentences' states: "stop" always, any other command
 only outside the robot's voice and `own_voice.TAIL_S` after). `--after`: each "stop" said 0-0.3 s after the last
 sentence's echo ends instead. The segmenter is told where the canceller says the robot's voice lies, as in the service
-(`SegmenterConfig.floor_hold`, off by default; `--floor-hold on`: held). The sentences are taken in turn from the list
+(`SegmenterConfig.floor_hold`, `floor_hold_after`: since stop 96 held and trusted once the robot's voice has passed;
+`--floor-hold on`: held throughout, `off`: not held). The sentences are taken in turn from the list
 (the same ones whatever the held-out seed); `--draw-sentences`: drawn at random from `--seed` for each "stop".
 `--cancel-only`: only these rows.
 
