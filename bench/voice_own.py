@@ -202,7 +202,8 @@ class OverEcho:
     stray_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
     """Each of those: the command, and where the utterance ends against the end of the last sentence's echo (s, 30 dB
     under its loudest). The service publishes no command but "stop" heard while the robot speaks or within
-    `own_voice.TAIL_S` after (`own_voice.py`); `stray` counts them all, `published` only those it would publish (`publishes`)."""
+    `own_voice.TAIL_S` after (`own_voice.py`); `stray` counts them all, `published` only those it would publish
+    (`publishes`)."""
     published: Counter[str] = field(default_factory=Counter)
     """Of `stray`, those the service's own-voice gate would publish."""
     published_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
@@ -419,6 +420,8 @@ def main() -> int:
         rt60 = rt60_range(args.rt60)
     except ValueError as exc:
         ap.error(str(exc))
+    if args.cancel_only and not (args.over is not None and args.cancel):
+        ap.error("--cancel-only needs --over and --cancel")
     ways = args.way or list(WAYS)
     sentences = agent_sentences() + explanation_sentences()
     tts = EspeakNg(DEFAULT_VOICE, DEFAULT_RATE, DEFAULT_VOLUME)
@@ -433,8 +436,6 @@ def main() -> int:
     config = SegmenterConfig()
     if args.floor_hold is not None:
         config = replace(config, floor_hold=args.floor_hold != "off", floor_hold_after=args.floor_hold == "after")
-    if args.cancel_only and not (args.over is not None and args.cancel):
-        ap.error("--cancel-only needs --over and --cancel")
     peaks = [float(p) for p in args.peaks.split(",") if p]
     rows: list[dict] = [{"peak_dbfs": peak} for peak in peaks] if args.cancel_only else []
     for peak in [] if args.cancel_only else peaks:
@@ -463,8 +464,8 @@ def main() -> int:
     if args.over is not None:
         stops = [np.frombuffer(it.pcm, "<i2") / 32768.0 for it in heldout_items(args.over, args.workers)
                  if it.label == WORDS.index("stop") and it.condition == "clean" and it.family != "noise"]
-        alone = None if args.cancel_only else stop_over_voice(engine, config, voices, stops, None, args.person,
-                                                              args.floor, args.mic_rate, np.random.default_rng(args.seed))
+        alone = None if args.cancel_only else stop_over_voice(
+            engine, config, voices, stops, None, args.person, args.floor, args.mic_rate, np.random.default_rng(args.seed))
         for row in rows:
             row["stops"] = len(stops)
             if not args.cancel_only:
@@ -505,7 +506,8 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
-              f"small loudspeaker (after {args.warm} sentences; floor hold {args.floor_hold or ('on' if config.floor_hold else 'off')}), "
+              f"small loudspeaker (after {args.warm} sentences; floor hold "
+              f"{args.floor_hold or ('on' if config.floor_hold else 'off')}), "
               f"{' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "

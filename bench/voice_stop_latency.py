@@ -178,7 +178,8 @@ def run_condition(name: str, n: int, gaps: list[float], peak: float, person: flo
 
                 def stops_after(begun: float | None, since: int = since) -> list[float]:
                     """When each "stop" arrived once the word had begun (`begun`: None, not yet)."""
-                    return [t for t, c in heard[since:] if c.command is Command.STOP and begun is not None and t >= begun]
+                    return [t for t, c in heard[since:]
+                            if c.command is Command.STOP and begun is not None and t >= begun]
 
                 wait_until(lambda ident=ident: stops_after(mic.times.get(f"{ident}:begin")), 8.0)
                 time.sleep(1.5)  # the fit after the sentence, and the memory kept, are done
