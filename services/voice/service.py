@@ -183,10 +183,15 @@ class VoiceSettings:
     def segmenter(self) -> SegmenterConfig:
         """The live stream's segmenter; `EngineError` for an early look or a clear window that is not `off` or
         seconds shorter than the end window, a VAD lift, a VAD reset or a high-pass out of its range, or a floor hold
-        that is not on or off."""
+        that is not on, off or after."""
         base = SegmenterConfig(vad=self.vad)
-        after = self.floor_hold is not None and self.floor_hold.strip().lower() == "after"
-        floor_hold = base.floor_hold if self.floor_hold is None else True if after else parse_flag(self.floor_hold)
+        floor_hold: bool | None
+        if self.floor_hold is None:
+            floor_hold, after = base.floor_hold, base.floor_hold_after
+        elif self.floor_hold.strip().lower() == "after":
+            floor_hold, after = True, True
+        else:  # on: held throughout; off: not held
+            floor_hold, after = parse_flag(self.floor_hold), False
         if floor_hold is None:
             raise EngineError(f"HRI_VOICE_FLOOR_HOLD={self.floor_hold!r}: on, off or after")
 
@@ -212,8 +217,7 @@ class VoiceSettings:
                                                     "noise floor from which the VAD's second state ends an utterance",
                                                     "HRI_VOICE_VAD_FRESH_END_SNR", self.vad_fresh_end_snr,
                                                     base.vad_fresh_end_snr_db),
-                       floor_hold=floor_hold,
-                       floor_hold_after=base.floor_hold_after if self.floor_hold is None else after,
+                       floor_hold=floor_hold, floor_hold_after=after,
                        highpass_hz=_off_or(lambda v: 1.0 <= v <= 300.0, "the high-pass's frequency (Hz) from 1 to 300",
                                            "HRI_VOICE_HIGHPASS", self.highpass, base.highpass_hz))
 
