@@ -82,7 +82,7 @@ def test_held_only_after_the_robots_voice_a_word_within_it_is_judged_as_without_
     [(t_after, after)] = _heard(pcm, (lo, hi), AFTER)
     assert (t_after, after.snr_db, after.start_s, after.end_s) == (t_held, held.snr_db, held.start_s, held.end_s)
     near = (lo, len(pcm))  # the robot's voice said to lie in the stream to its end, over the word too
-    [(t_unheld, unheld)] = _heard(pcm, near, SegmenterConfig(floor_hold=False))
+    [(t_unheld, unheld)] = _heard(pcm, near, UNHELD)
     [(t_within, within)] = _heard(pcm, near, AFTER)
     [(t_held_within, held_within)] = _heard(pcm, near, HOLD)
     assert (t_within, within.snr_db, within.end_s) == (t_unheld, unheld.snr_db, unheld.end_s)
