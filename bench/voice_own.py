@@ -77,10 +77,12 @@ from services.reasoner.explain import WORDS as EXPLAINED_WORDS  # noqa: E402
 from services.speech.config import DEFAULT_RATE, DEFAULT_VOICE, DEFAULT_VOLUME  # noqa: E402
 from services.speech.tts import EspeakNg  # noqa: E402
 from services.voice.audio import SAMPLE_RATE, rounded_pcm  # noqa: E402
-from services.voice.echo import LOCK_S, SEARCH_S, EchoCanceller, Played  # noqa: E402
+from services.voice.echo import LOCK_S, SEARCH_S, EchoCanceller, Played, Sentence  # noqa: E402
 from services.voice.engine import Engine, make_engine  # noqa: E402
+from services.voice.espeak_words import words  # noqa: E402
 from services.voice.mic import CHUNK_S  # noqa: E402
-from services.voice.own_voice import TAIL_S, OwnVoice  # noqa: E402
+from services.voice.own_voice import OWN_STOP_DEFAULT, TAIL_S, OwnVoice, own_stop_from, said_stop  # noqa: E402
+from services.voice.robot_voice import speech_end_s, stop_words  # noqa: E402
 from services.voice.segmenter import SegmenterConfig  # noqa: E402
 from services.voice.training.tts import wav_samples  # noqa: E402
 
@@ -207,13 +209,27 @@ class OverEcho:
     published: Counter[str] = field(default_factory=Counter)
     """Of `stray`, those the service's own-voice gate would publish."""
     published_at: dict[str, list[tuple[str, float]]] = field(default_factory=dict)
+    heard_published: Counter[str] = field(default_factory=Counter)
+    """Of `heard`, the "stop"s the service would publish (with `HRI_VOICE_OWN_STOP=ignore`, not one that began where
+    the robot itself said "stop", `own_voice.said_stop`)."""
+    own_stop_dropped: dict[str, Counter[str]] = field(default_factory=dict)
+    """What that gate kept from being published: the person's "stop"s ("person": heard, but only in utterances it
+    dropped) and stray "stop"s ("stray"). With it off (`hear`), none; the figures with it off are those with it on
+    plus these."""
+    own_stop_onsets: dict[str, list[tuple[str, float, float]]] = field(default_factory=dict)
+    """Each "stop" heard over a sentence in which the robot says "stop" (the person's, "person", or another, "stray"):
+    where its speech began against the robot's own nearest "stop" in the stream (s after its beginning, after its
+    end), as the canceller placed the sentence."""
 
 
 def publishes(segs: list[tuple[float, float, float, Command | None, float]], spoke: list[tuple[float, float]],
-              pre_roll_s: float, tail_s: float = TAIL_S) -> list[bool]:
+              pre_roll_s: float, tail_s: float = TAIL_S, placed: list[Sentence] | None = None,
+              t0: float = 0.0) -> list[bool]:
     """For each of `stream`'s segments, whether the voice service would publish it with the robot speaking in the
     spans `spoke` (stream seconds, as its speech states say): the service's own `OwnVoice` asked as the service asks
-    it (the utterance from its speech's onset, `pre_roll_s` into its audio, to when it was cut), "stop" always."""
+    it (the utterance from its speech's onset, `pre_roll_s` into its audio, to when it was cut), "stop" always; with
+    `placed` (the canceller's sentences, their echoes found on the wall clock `t0` + stream seconds: the service with
+    `HRI_VOICE_OWN_STOP=ignore`), a "stop" only where it did not begin at the robot's own (`own_voice.said_stop`)."""
     now = [0.0]
     own = OwnVoice(tail_s, clock=lambda: now[0])
     for begin, end in sorted(spoke):
@@ -221,14 +237,29 @@ def publishes(segs: list[tuple[float, float, float, Command | None, float]], spo
         own.heard(True)
         now[0] = end
         own.heard(False)
-    return [cmd is Command.STOP or not own.overlaps(min(start + pre_roll_s, cut), cut)
-            for cut, start, _, cmd, _ in segs]
+    return [(placed is None or not said_stop(placed, t0 + min(start + pre_roll_s, cut))) if cmd is Command.STOP
+            else not own.overlaps(min(start + pre_roll_s, cut), cut) for cut, start, _, cmd, _ in segs]
+
+
+def own_stop_onsets(segs: list[tuple[float, float, float, Command | None, float]], over: list[bool],
+                    placed: list[Sentence], pre_roll_s: float, t0: float) -> list[tuple[str, float, float]]:
+    """`OverEcho.own_stop_onsets` of one stream."""
+    words = [(s.heard_at + a - t0, s.heard_at + b - t0) for s in placed if s.heard_at is not None for a, b in s.stops]
+    out = []
+    for (cut, start, _, cmd, _), o in zip(segs, over, strict=True):
+        if cmd is Command.STOP and words:
+            onset = min(start + pre_roll_s, cut)
+            a, b = min(words, key=lambda w: abs(onset - w[0]))
+            out.append(("person" if o else "stray", round(onset - a, 3), round(onset - b, 3)))
+    return out
 
 
 def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np.ndarray], stops: list[np.ndarray],
                         peak: float, person: float, floor: float, mic_rate: int | None, rt60: tuple[float, float],
                         rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None,
-                        after: bool = False, draw: bool = False) -> OverEcho:
+                        after: bool = False, draw: bool = False,
+                        stops_said: list[tuple[tuple[float, float], ...]] | None = None,
+                        own_stop: bool = OWN_STOP_DEFAULT == "ignore") -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone (`after`: said 0-0.3 s after
     that sentence's echo ends, at its last sample within 30 dB of its loudest sample; `voice_stop_latency.py` places
@@ -236,15 +267,18 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
     microphone's path at `mic_rate`) to the service's `EchoCanceller`, the sentences placed where their (jittered)
     states say, 30 ms at a time, then to the segmenter and the engine. How many "stop"s each of `ways` (of `WAYS`; all
     by default) hears (`OverEcho`), on the same streams. The sentences are taken in turn, the `k`th "stop"'s from the
-    `k`th on; `draw`: drawn at random (`rng`) for each "stop"."""
+    `k`th on; `draw`: drawn at random (`rng`) for each "stop". `stops_said`: when the robot says "stop" in each of
+    `voices` (`robot_voice.stop_words`), as the service knows it; `own_stop`: the service's `HRI_VOICE_OWN_STOP=ignore`
+    (a "stop" that begins at the robot's own is not published), with `stops_said`."""
     out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
         path = EchoPath.draw(rng, rt60)
         if draw:
-            said = [voices[i] for i in rng.choice(len(voices), warm + 1, replace=False)]
+            picked = [int(i) for i in rng.choice(len(voices), warm + 1, replace=False)]
         else:
-            said = [voices[(k + j) % len(voices)] for j in range(warm, -1, -1)]
+            picked = [(k + j) % len(voices) for j in range(warm, -1, -1)]
+        said = [voices[i] for i in picked]
         echoes = [path.echo(v, rng) for v in said]
         scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
         starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
@@ -270,12 +304,22 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         out.stops += 1
         out.early += early
         for way in ways or list(WAYS):
-            settings = WAYS[way]
-            z, near = (x, None) if settings is None else _cancelled(played, settings, pcm, block, t0)
+            settings, placed = WAYS[way], Played()
+            for (began, voice), i in zip(played, picked, strict=True):
+                placed.add(began, voice).stops = stops_said[i] if stops_said is not None else ()
+            z, near = (x, None) if settings is None else _cancelled(placed, settings, pcm, block, t0)
             segs = stream(engine, z, config, robot=near)
             over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
+            gate = publishes(segs, spoke, config.pre_roll_s, placed=placed.sentences() if own_stop else None, t0=t0)
             heard = any(cmd is Command.STOP and o for (*_, cmd, _), o in zip(segs, over, strict=True))
-            gate = publishes(segs, spoke, config.pre_roll_s)
+            published = any(cmd is Command.STOP and o and p for (*_, cmd, _), o, p in zip(segs, over, gate, strict=True))
+            out.heard_published[way] += published
+            dropped = out.own_stop_dropped.setdefault(way, Counter())
+            dropped["person"] += heard and not published
+            dropped["stray"] += sum(cmd is Command.STOP and not o and not p
+                                    for (*_, cmd, _), o, p in zip(segs, over, gate, strict=True))
+            out.own_stop_onsets.setdefault(way, []).extend(
+                own_stop_onsets(segs, over, placed.sentences(), config.pre_roll_s, t0))
             stray = [((cmd.value, round(e - echo_ends / SAMPLE_RATE, 2)), p)
                      for (_, _, e, cmd, _), o, p in zip(segs, over, gate, strict=True) if cmd is not None and not o]
             out.stray[way] += len(stray)
@@ -359,14 +403,15 @@ def echo_memory(said: list[np.ndarray], path: EchoPath, scale: float, floor: flo
     return canceller.memory()
 
 
-def _cancelled(said: list[tuple[float, np.ndarray]], settings: dict[str, bool], pcm: bytes, block: int,
+def _cancelled(said: list[tuple[float, np.ndarray]] | Played, settings: dict[str, bool], pcm: bytes, block: int,
                t0: float, recall: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """`pcm` through a new `EchoCanceller` (with `settings`; first `recall`ing a memory, if given) told of the sentences
-    `said` (when each began, its samples), in the microphone's blocks (what it holds at the end passed on), and per
-    sample whether the canceller said the robot's voice lay in the chunk it passed it on in (`robot_near`: the
-    segmenter holds its floor there, as in the service)."""
-    played = Played()
-    for began, samples in said:
+    `said` (when each began, its samples; or a `Played` holding them, in which the canceller then places them), in the
+    microphone's blocks (what it holds at the end passed on), and per sample whether the canceller said the robot's
+    voice lay in the chunk it passed it on in (`robot_near`: the segmenter holds its floor there, as in the
+    service)."""
+    played = said if isinstance(said, Played) else Played()
+    for began, samples in [] if isinstance(said, Played) else said:
         played.add(began, samples)
     canceller = EchoCanceller(played, **settings)
     if recall is not None:
@@ -413,6 +458,9 @@ def main() -> int:
                     help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
                          "lies, or not, or held but judging an utterance only once the robot's voice has passed "
                          "(SegmenterConfig.floor_hold, floor_hold_after; default: the service's)")
+    ap.add_argument("--own-stop", choices=("ignore", "hear"),
+                    help="with --cancel: a \"stop\" that begins where the robot itself says \"stop\" is not "
+                         "published (ignore), or is (hear) (HRI_VOICE_OWN_STOP; default: the service's)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
@@ -428,6 +476,9 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="hri-own-voice-") as tmp:
         voices = [spoken(s, tts, Path(tmp)) for s in sentences]
     dry = list(voices)
+    # when the robot says "stop" in each sentence, as the service finds it (espeak-ng's word events)
+    stops_said = [stop_words(text, words(text, DEFAULT_VOICE, DEFAULT_RATE), speech_end_s(v))
+                  for text, v in zip(sentences, dry, strict=True)]
     ends = [LEAD_S + v.size / SAMPLE_RATE for v in voices]  # where the loudspeaker falls silent, stream seconds
     if args.room:
         rng = np.random.default_rng(args.seed)
@@ -475,8 +526,11 @@ def main() -> int:
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                            args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways,
-                                           args.after, args.draw_sentences)
-                row.update(stop_over_echo=dict(over.heard), stops_early=over.early,
+                                           args.after, args.draw_sentences, stops_said, own_stop_from(args.own_stop))
+                row.update(stop_over_echo=dict(over.heard), stop_over_echo_published=dict(over.heard_published),
+                           own_stop_onsets=over.own_stop_onsets,
+                           own_stop_dropped={w: dict(c) for w, c in over.own_stop_dropped.items()},
+                           stops_early=over.early,
                            stops_early_heard=dict(over.early_heard), stray_commands_echo=dict(over.stray),
                            stray_commands_echo_at=over.stray_at, stray_commands_published=dict(over.published),
                            stray_commands_published_at=over.published_at)
@@ -486,7 +540,9 @@ def main() -> int:
                 row.update(stop_over_recalled=dict(over.heard), stops_early_recalled=over.early,
                            stops_early_heard_recalled=dict(over.early_heard))
             print(json.dumps({k: row[k] for k in ("peak_dbfs", "stop_over_voice", "stop_alone", "stops",
-                                                  "stop_over_echo", "stops_early", "stops_early_heard",
+                                                  "stop_over_echo", "stop_over_echo_published", "own_stop_dropped",
+                                                  "own_stop_onsets",
+                                                  "stops_early", "stops_early_heard",
                                                   "stray_commands_echo", "stray_commands_echo_at",
                                                   "stray_commands_published", "stray_commands_published_at",
                                                   "stop_over_recalled", "stops_early_recalled", "stops_early_heard_recalled")
@@ -511,7 +567,9 @@ def main() -> int:
               f"{' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(
                   f"{' / '.join(str(r['stop_over_echo'][w]) for w in ways)} of {r['stops']} at {r['peak_dbfs']:.0f} "
-                  f"dBFS (of the {r['stops_early']} begun within {EARLY_S:.1f} s of the sentence's echo: "
+                  f"dBFS (published: {' / '.join(str(r['stop_over_echo_published'][w]) for w in ways)}, "
+                  f"own-stop setting {args.own_stop or OWN_STOP_DEFAULT}; of the {r['stops_early']} begun within "
+                  f"{EARLY_S:.1f} s of the sentence's echo: "
                   f"{' / '.join(str(r['stops_early_heard'][w]) for w in ways)}; commands heard elsewhere: "
                   f"{' / '.join(str(r['stray_commands_echo'][w]) for w in ways)}, of which the service would "
                   f"publish {' / '.join(str(r['stray_commands_published'][w]) for w in ways)})" for r in rows))

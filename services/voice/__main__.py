@@ -152,6 +152,13 @@ OwnVoiceOption = Annotated[
                       "tail after (the speech service's speech/state), 'stop' excepted; or the tail in seconds (0 to "
                       "5); or 'hear' it like anyone's voice [default: ignore, a 0.25 s tail]"),
 ]
+OwnStopOption = Annotated[
+    str | None,
+    typer.Option("--own-stop", envvar="HRI_VOICE_OWN_STOP",
+                 help="a live source with the canceller on: 'ignore' a \"stop\" whose speech began where the robot "
+                      "itself says \"stop\" (espeak-ng's word events, placed where the canceller found the sentence's "
+                      "echo), or 'hear' it [default: hear]"),
+]
 EchoCancelOption = Annotated[
     str | None,
     typer.Option("--echo-cancel", envvar="HRI_VOICE_ECHO_CANCEL",
@@ -203,7 +210,7 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
          vad_fresh_end_snr: VadFreshEndSnrOption = None,
          highpass: HighpassOption = None, gain: GainOption = None,
          mic_rate: MicRateOption = None, mic_channels: MicChannelsOption = None, own_voice: OwnVoiceOption = None,
-         echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
+         own_stop: OwnStopOption = None, echo_cancel: EchoCancelOption = None, echo_memory: EchoMemoryOption = None,
          echo_fit: EchoFitOption = None, floor_hold: FloorHoldOption = None) -> None:
     """Run the voice service until SIGTERM or Ctrl-C."""
     if ctx.invoked_subcommand is not None:
@@ -214,7 +221,8 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
                              vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end,
                              vad_fresh_end_snr=vad_fresh_end_snr, highpass=highpass,
-                             gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, echo_cancel=echo_cancel,
+                             gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, own_stop=own_stop,
+                             echo_cancel=echo_cancel,
                              echo_memory=echo_memory, echo_fit=echo_fit, floor_hold=floor_hold)
     try:
         check_settings(settings)

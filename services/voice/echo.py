@@ -158,6 +158,12 @@ class Sentence:
     ms from one sentence to the next, and a reference that far off unlearns the canceller's filter.)"""
     lost: bool = False
     """Its echo was looked for and not found: it is not cancelled."""
+    heard_at: float | None = None
+    """When its echo began (wall clock, UNIX seconds): when the state said it began, and the lag at which its echo
+    was found; None until then."""
+    stops: tuple[tuple[float, float], ...] = ()
+    """When the robot says "stop" (or "stopped") in it: from, to, seconds into `samples` (`robot_voice.stop_words`);
+    set once known, after the sentence is added."""
 
 
 @dataclass
@@ -167,10 +173,12 @@ class Played:
     _sentences: deque[Sentence] = field(default_factory=lambda: deque(maxlen=KEPT))
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
-    def add(self, began: float, samples: np.ndarray) -> None:
+    def add(self, began: float, samples: np.ndarray) -> Sentence:
         """`samples` (float, 16 kHz) began at wall-clock `began`."""
+        sentence = Sentence(began, np.asarray(samples, dtype=np.float32))
         with self._lock:
-            self._sentences.append(Sentence(began, np.asarray(samples, dtype=np.float32)))
+            self._sentences.append(sentence)
+        return sentence
 
     def sentences(self) -> list[Sentence]:
         with self._lock:
@@ -480,6 +488,7 @@ class EchoCanceller:
             self.lost += 1
             return
         sentence.placed = lo + lag - int(self.lead_s * SAMPLE_RATE)
+        sentence.heard_at = sentence.began + (lo + lag - sentence.at) / SAMPLE_RATE
         self.locked += 1
         self.lag_ms = round((lo + lag - sentence.at) / SAMPLE_RATE * 1000.0, 1)
 

@@ -18,8 +18,10 @@ from __future__ import annotations
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+
+from services.voice.echo import Sentence
 
 TAIL_S = 0.25
 """Default seconds after the robot's voice ends during which an utterance that begins is still taken for it. The echo
@@ -31,6 +33,15 @@ forward?" begins a few hundred milliseconds after the question."""
 LONGEST_S = 30.0
 """A span still open after this long is taken as ended: a speech service that died mid-sentence does not leave the
 robot deaf (the longest sentence the reasoner says lasts about 4 s)."""
+
+
+OWN_STOP_ENV = "HRI_VOICE_OWN_STOP"
+OWN_STOP_DEFAULT = "hear"
+"""`HRI_VOICE_OWN_STOP` when unset."""
+OWN_STOP_BEFORE_S = 0.2
+OWN_STOP_AFTER_S = 0.2
+"""An utterance that begins from this long before the robot's own "stop" to this long after it ends is taken for it
+(`said_stop`)."""
 
 
 class OwnVoiceError(ValueError):
@@ -98,3 +109,23 @@ class OwnVoice:
             if self._since is not None:
                 spans.append((self._since, min(self._since + LONGEST_S, max(end, self._since))))
         return any(begin <= end and start <= finish + self.tail_s for begin, finish in spans)
+
+
+def own_stop_from(raw: str | None) -> bool:
+    """`HRI_VOICE_OWN_STOP`: `ignore` -> True (a "stop" that begins where the robot itself says "stop" is not
+    published, `said_stop`); `hear` -> False (every "stop" is); unset: `OWN_STOP_DEFAULT`."""
+    value = (raw or "").strip().lower() or OWN_STOP_DEFAULT
+    if value not in ("ignore", "hear"):
+        raise OwnVoiceError(f"{OWN_STOP_ENV}={raw!r}: 'ignore' (a \"stop\" that begins where the robot itself says "
+                            "\"stop\" is not published) or 'hear' (every \"stop\" is)")
+    return value == "ignore"
+
+
+def said_stop(sentences: Iterable[Sentence], onset: float, before_s: float = OWN_STOP_BEFORE_S,
+              after_s: float = OWN_STOP_AFTER_S) -> bool:
+    """Whether an utterance whose speech began at `onset` (wall clock) began where the robot itself said "stop": from
+    `before_s` before one of a sentence's `stops` to `after_s` after it, where the sentence's echo was found
+    (`Sentence.heard_at`, `echo.EchoCanceller.lock`). A sentence whose echo was not found, or whose words are not
+    known, counts for nothing: the utterance is then published, as any "stop" over the robot's voice."""
+    return any(s.heard_at + a - before_s <= onset <= s.heard_at + b + after_s
+               for s in sentences if s.heard_at is not None for a, b in s.stops)

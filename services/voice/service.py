@@ -51,7 +51,14 @@ from services.voice.engine import (
 )
 from services.voice.level import LevelError, Meter, dbfs, gain_from, offset_advice
 from services.voice.mic import MicError, MicFormat
-from services.voice.own_voice import OwnVoice, OwnVoiceError, tail_from
+from services.voice.own_voice import (
+    OWN_STOP_ENV,
+    OwnVoice,
+    OwnVoiceError,
+    own_stop_from,
+    said_stop,
+    tail_from,
+)
 from services.voice.robot_voice import RobotVoice
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
@@ -128,6 +135,9 @@ class VoiceSettings:
     own_voice: str | None = None
     """`HRI_VOICE_OWN_VOICE`: a live source's utterances that overlap the robot's own voice are not published, "stop"
     excepted (`own_voice.tail_from`: `ignore`, `hear`, or the tail in seconds); None: `ignore`."""
+    own_stop: str | None = None
+    """`HRI_VOICE_OWN_STOP`: with the echo canceller, a "stop" whose speech began where the robot itself says "stop" is
+    not published (`own_voice.said_stop`), `ignore` or `hear`; None: the default (`own_voice.OWN_STOP_DEFAULT`)."""
     echo_cancel: str | None = None
     """`HRI_VOICE_ECHO_CANCEL`: a live source's stream has the robot's own voice cancelled (`echo.EchoCanceller`),
     `on` or `off`; None: on."""
@@ -168,6 +178,7 @@ class VoiceSettings:
             mic_rate=os.environ.get("HRI_VOICE_MIC_RATE") or None,
             mic_channels=os.environ.get("HRI_VOICE_MIC_CHANNELS") or None,
             own_voice=os.environ.get("HRI_VOICE_OWN_VOICE") or None,
+            own_stop=os.environ.get(OWN_STOP_ENV) or None,
             echo_cancel=os.environ.get(ECHO_ENV) or None,
             echo_memory=os.environ.get(MEMORY_ENV) or None,
             echo_fit=os.environ.get(FIT_ENV) or None,
@@ -250,6 +261,7 @@ def check_settings(settings: VoiceSettings) -> None:
     try:
         gain_from(settings.gain)
         tail_from(settings.own_voice)
+        own_stop_from(settings.own_stop)
         echo_cancel_from(settings.echo_cancel)
         echo_memory_from(settings.echo_memory)
         echo_fit_from(settings.echo_fit)
@@ -308,6 +320,8 @@ class _Stats:
     """Of them, the utterances that ended there (a command accepted confidently enough)."""
     own_voice: int = 0
     """Utterances not published: they overlapped the robot's own voice (`own_voice.OwnVoice`)."""
+    own_stop: int = 0
+    """"stop"s not published: they began where the robot itself said "stop" (`own_voice.said_stop`)."""
     decode_s: float = 0.0
     audio_s: float = 0.0
 
@@ -315,7 +329,7 @@ class _Stats:
         return {
             "utterances": self.utterances, "accepted": self.accepted, "rejected_speech": self.rejected,
             "bad_audio": self.bad_audio, "early_looks": self.early_looks, "early_taken": self.early_taken,
-            "own_voice_dropped": self.own_voice,
+            "own_voice_dropped": self.own_voice, "own_stop_dropped": self.own_stop,
             "real_time_factor": round(self.decode_s / self.audio_s, 4) if self.audio_s else None,
         }
 
@@ -356,6 +370,7 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
     stats = _Stats()
     gain_db = gain_from(settings.gain)
     pre_roll_s = settings.segmenter().pre_roll_s
+    own_stop = own_stop_from(settings.own_stop)
     advised: dict[str, float] = {}
     highpass = settings.segmenter().highpass_hz is not None
 
@@ -425,8 +440,15 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
             advise(level.kind or "", advice, origin=utt.origin)
         # the utterance from its speech's onset (its audio begins `pre_roll_s` before) to when it was cut, wall clock
         began = utt.began if utt.began is not None else utt.stamp - utt.seconds
-        if own is not None and rec.command is not Command.STOP and own.overlaps(
-                min(began + pre_roll_s, utt.stamp), utt.stamp):
+        onset = min(began + pre_roll_s, utt.stamp)
+        if rec.command is Command.STOP and own_stop and echo is not None and said_stop(
+                echo.canceller.played.sentences(), onset):
+            stats.own_stop += 1  # the robot's own "stop", where the canceller placed its sentence: not a person's
+            ctx.log.info("heard where the robot itself said 'stop': not published", origin=utt.origin, text=rec.text,
+                         confidence=round(rec.confidence, 3))
+            ctx.update_detail(**stats.as_detail(), **echo_detail())
+            return
+        if own is not None and rec.command is not Command.STOP and own.overlaps(onset, utt.stamp):
             stats.own_voice += 1  # the robot's own voice, most likely: publishing it would make the robot answer itself
             ctx.log.info("heard while the robot spoke: not published", origin=utt.origin,
                          command=rec.command.value if rec.command else None, text=rec.text,
@@ -521,6 +543,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     if echo is not None:
         c = echo.canceller
         ctx.update_detail(echo_cancel="on", echo_fit="on" if c.fit else "off", echo_fits=c.fits,
+                          own_stop="ignored" if own_stop_from(settings.own_stop) else "heard",
                           echo_fit_db_last=c.fit_db)
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:

@@ -101,6 +101,7 @@ def test_each_sentence_is_placed_where_its_echo_is_heard_and_one_not_heard_is_lo
     _stream(canceller, x)
     [sentence] = played.sentences()
     assert sentence.at == SAMPLE_RATE and sentence.placed == int(1.07 * SAMPLE_RATE) - int(LEAD_S * SAMPLE_RATE)
+    assert sentence.heard_at == pytest.approx(101.07)  # the wall clock of its echo (`own_voice.said_stop`)
     assert canceller.locked == 1 and canceller.lag_ms == pytest.approx(70.0) and canceller.frames > 0
     deaf = Played()
     deaf.add(101.0, voice)
