@@ -34,7 +34,11 @@ sentence's echo ends instead. The segmenter is told where the canceller says the
 (`SegmenterConfig.floor_hold`, `floor_hold_after`: since stop 96 held and trusted once the robot's voice has passed;
 `--floor-hold on`: held throughout, `off`: not held). The sentences are taken in turn from the list
 (the same ones whatever the held-out seed); `--draw-sentences`: drawn at random from `--seed` for each "stop".
-`--cancel-only`: only these rows.
+`--cancel-only`: only these rows. Each row also says how many of the person's "stop"s the service would publish, and
+what `HRI_VOICE_OWN_STOP=ignore` (`--own-stop`; the service's default otherwise) keeps back: a "stop" whose speech
+began at the robot's own "stop" (espeak-ng's word events, placed where the canceller found the sentence's echo,
+`own_voice.said_stop`), the person's and the stray ones counted apart (`own_stop_dropped`), and where each "stop"
+heard over such a sentence began against the robot's own (`own_stop_onsets`).
 
 `--recall` (with `--over`): each "stop" said over the robot's first sentence of a run (the voice service just started),
 through an `EchoPath` drawn for it; the same streams heard each of `RECALLS`: without the canceller, with the service's
@@ -259,7 +263,7 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
                         rng: np.random.Generator, warm: int = 3, ways: list[str] | None = None,
                         after: bool = False, draw: bool = False,
                         stops_said: list[tuple[tuple[float, float], ...]] | None = None,
-                        own_stop: bool = OWN_STOP_DEFAULT == "ignore") -> OverEcho:
+                        own_stop: bool = OWN_STOP_DEFAULT == "ignore", memory_seed: int | None = None) -> OverEcho:
     """`--cancel`: each of `stops` said over the last of `warm` + 1 sentences the robot says in a row (0.3 s apart)
     through an `EchoPath` drawn for it, the last at `peak` dBFS peak at the microphone (`after`: said 0-0.3 s after
     that sentence's echo ends, at its last sample within 30 dB of its loudest sample; `voice_stop_latency.py` places
@@ -269,7 +273,10 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
     by default) hears (`OverEcho`), on the same streams. The sentences are taken in turn, the `k`th "stop"'s from the
     `k`th on; `draw`: drawn at random (`rng`) for each "stop". `stops_said`: when the robot says "stop" in each of
     `voices` (`robot_voice.stop_words`), as the service knows it; `own_stop`: the service's `HRI_VOICE_OWN_STOP=ignore`
-    (a "stop" that begins at the robot's own is not published), with `stops_said`."""
+    (a "stop" that begins at the robot's own is not published), with `stops_said`. `memory_seed`: each stream's
+    canceller first recalls what one remembered of three other sentences through the same room and loudspeaker
+    (`echo_memory`), drawn from this seed and the stream's number, so the streams are those without it: the service
+    after its first run (its memory kept in the state folder, round voice48); None: the canceller starts cold."""
     out = OverEcho()
     gap, t0 = int(0.3 * SAMPLE_RATE), 1000.0
     for k, stop in enumerate(stops):
@@ -281,6 +288,12 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
         said = [voices[i] for i in picked]
         echoes = [path.echo(v, rng) for v in said]
         scale = 10 ** (peak / 20) / (np.max(np.abs(echoes[-1][0])) + 1e-12)
+        memory = None
+        if memory_seed is not None:
+            drawn = np.random.default_rng((memory_seed, k))
+            rest = [i for i in range(len(voices)) if i not in picked]
+            earlier = drawn.choice(rest, min(3, len(rest)), replace=False)
+            memory = echo_memory([voices[i] for i in earlier], path, scale, floor, mic_rate, drawn, t0)
         starts = np.cumsum([int(LEAD_S * SAMPLE_RATE)] + [e.size + gap for e, _ in echoes[:-1]])
         x = rng.normal(0.0, 10 ** (floor / 20), int(starts[-1]) + echoes[-1][0].size + (2 if after else 1) * SAMPLE_RATE)
         played = []  # each sentence as its (jittered) state says it began
@@ -307,7 +320,7 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
             settings, placed = WAYS[way], Played()
             for (began, voice), i in zip(played, picked, strict=True):
                 placed.add(began, voice).stops = stops_said[i] if stops_said is not None else ()
-            z, near = (x, None) if settings is None else _cancelled(placed, settings, pcm, block, t0)
+            z, near = (x, None) if settings is None else _cancelled(placed, settings, pcm, block, t0, memory)
             segs = stream(engine, z, config, robot=near)
             over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
             gate = publishes(segs, spoke, config.pre_roll_s, placed=placed.sentences() if own_stop else None, t0=t0)
@@ -458,6 +471,9 @@ def main() -> int:
                     help="with --cancel: the segmenter's noise floor held where the canceller says the robot's voice "
                          "lies, or not, or held but judging an utterance only once the robot's voice has passed "
                          "(SegmenterConfig.floor_hold, floor_hold_after; default: the service's)")
+    ap.add_argument("--memory", action="store_true",
+                    help="with --cancel: each stream's canceller first recalls its memory of three other sentences "
+                         "through the same room, as the service does after its first run (the same streams)")
     ap.add_argument("--own-stop", choices=("ignore", "hear"),
                     help="with --cancel: a \"stop\" that begins where the robot itself says \"stop\" is not "
                          "published (ignore), or is (hear) (HRI_VOICE_OWN_STOP; default: the service's)")
@@ -526,7 +542,8 @@ def main() -> int:
             if args.cancel:
                 over = stop_over_cancelled(engine, config, dry, stops, row["peak_dbfs"], args.person, args.floor,
                                            args.mic_rate, rt60, np.random.default_rng(args.seed), args.warm, ways,
-                                           args.after, args.draw_sentences, stops_said, own_stop_from(args.own_stop))
+                                           args.after, args.draw_sentences, stops_said, own_stop_from(args.own_stop),
+                                           args.seed if args.memory else None)
                 row.update(stop_over_echo=dict(over.heard), stop_over_echo_published=dict(over.heard_published),
                            own_stop_onsets=over.own_stop_onsets,
                            own_stop_dropped={w: dict(c) for w, c in over.own_stop_dropped.items()},
@@ -562,7 +579,8 @@ def main() -> int:
               + f"; {rows[0]['stop_alone']}/{rows[0]['stops']} alone")
     if args.over is not None and args.cancel:
         print(f"the same \"stop\"s {'just after' if args.after else 'over'} the robot's voice through a room and a "
-              f"small loudspeaker (after {args.warm} sentences; floor hold "
+              f"small loudspeaker (after {args.warm} sentences"
+              f"{'; the canceller recalling a memory of three others' if args.memory else ''}; floor hold "
               f"{args.floor_hold or ('on' if config.floor_hold else 'off')}), "
               f"{' / '.join(ways)} (the echo canceller's ways; learnt first, fitted: the default): "
               + ", ".join(

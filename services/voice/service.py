@@ -321,7 +321,7 @@ class _Stats:
     own_voice: int = 0
     """Utterances not published: they overlapped the robot's own voice (`own_voice.OwnVoice`)."""
     own_stop: int = 0
-    """"stop"s not published: they began where the robot itself said "stop" (`own_voice.said_stop`)."""
+    """The "stop"s not published: they began where the robot itself said "stop" (`own_voice.said_stop`)."""
     decode_s: float = 0.0
     audio_s: float = 0.0
 
@@ -543,8 +543,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     if echo is not None:
         c = echo.canceller
         ctx.update_detail(echo_cancel="on", echo_fit="on" if c.fit else "off", echo_fits=c.fits,
-                          own_stop="ignored" if own_stop_from(settings.own_stop) else "heard",
-                          echo_fit_db_last=c.fit_db)
+                          echo_fit_db_last=c.fit_db, own_stop="ignored" if own_stop_from(settings.own_stop) else "heard")
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:
         ctx.update_detail(echo_cancel="off")

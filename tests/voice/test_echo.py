@@ -18,7 +18,7 @@ import pytest
 from scipy.signal import fftconvolve, resample_poly
 
 from schemas.messages import Command, SpeechRequest, SpeechState, VoiceCommand
-from services.runtime import ServiceContext
+from services.runtime import ServiceContext, TypedPublisher
 from services.speech.tts import EspeakNg
 from services.voice import synth
 from services.voice.audio import SAMPLE_RATE
@@ -387,6 +387,19 @@ def _kept_s(path: Path) -> float:
         return kept["mic"].size / SAMPLE_RATE
 
 
+def speech_service(bus: ServiceContext, start_service: Callable[..., object],
+                   tmp_path: Path) -> tuple[list[SpeechState], TypedPublisher[SpeechRequest], Path]:
+    """The real speech service, started and listening, keeping what it says in `tmp_path / "said"` (one WAV per
+    sentence id): its states as they arrive, what asks it to speak, and that folder."""
+    states: list[SpeechState] = []
+    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
+    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
+    out = tmp_path / "said"
+    start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
+    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    return states, say, out
+
+
 class RoomMicrophone(MixingMicrophone):
     """The robot's microphone, never silent, as a room mixes it: a faint hiss, and the robot's loudspeaker through
     `path` from the moment the speech service says a sentence began (`on_state`), with whatever else is `mix`ed in."""
@@ -411,12 +424,7 @@ def test_the_voice_service_cancels_the_robots_voice_from_the_speech_services_sen
     sentence's echo, before the canceller has found it, is heard: the stream is held back and cancelled from the
     sentence's first sample (without the look-back, nothing is heard). The canceller's memory of the robot's voice is
     kept in the state folder for the next run (on by default). Off, nothing of it runs."""
-    states: list[SpeechState] = []
-    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
-    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
-    out = tmp_path / "said"
-    start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
-    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    states, say, out = speech_service(bus, start_service, tmp_path)
     path, gain = echo_path(np.random.default_rng(7)), 10 ** (-12 / 20)
     state = tmp_path / "state"
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_ECHO_CANCEL=cancel,

@@ -130,14 +130,9 @@ def test_the_voice_service_does_not_publish_the_robots_own_stop(bus: ServiceCont
     "stopped" (what a canceller that leaves the robot's own word in the stream hands on): not published, counted.
     The same voice's "stop" half a second after that sentence is published. (That a "stop" over the robot's voice
     but away from its own is published too: `said_stop` and the bench's test above.)"""
-    from tests.voice.test_echo import RoomMicrophone, echo_path
+    from tests.voice.test_echo import RoomMicrophone, echo_path, speech_service
 
-    states: list[SpeechState] = []
-    bus.subscribe(bus.keys.speech_state, SpeechState, states.append)
-    say = bus.publisher(bus.keys.speech_say, SpeechRequest)
-    out = tmp_path / "said"
-    start_service("speech", env={"HRI_SPEECH_OUT": str(out)})
-    wait_for(lambda: any(s.id is None for s in states), timeout=20)
+    states, say, out = speech_service(bus, start_service, tmp_path)
     path, gain = echo_path(np.random.default_rng(7)), 10 ** (-12 / 20)
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_STOP="ignore",
                       HRI_STATE_DIR=str(tmp_path / "state"))
@@ -174,3 +169,35 @@ def test_the_voice_service_does_not_publish_the_robots_own_stop(bus: ServiceCont
     assert health is not None and health.detail["own_stop"] == "ignored" and health.detail["echo_locked"] == 4
     assert [c.command for c in heard] == [Command.STOP]  # the one after the sentence
     assert heard[0].stamp > next(s.stamp for s in states if s.id == "s3" and not s.speaking)
+
+
+@espeak
+def test_the_own_voice_bench_recalls_a_memory_on_the_same_streams(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`voice_own --memory`: each stream's canceller first recalls a memory of other sentences through the same room
+    (as the service after its first run), drawn apart from the streams, which are the same with it and without."""
+    import bench.voice_own as voice_own
+    from services.voice.engine import make_engine
+    from services.voice.segmenter import SegmenterConfig
+
+    recalled: list[object] = []
+    cancelled = voice_own._cancelled
+
+    def spy(said, settings, pcm, block, t0, recall=None):  # noqa: ANN001, ANN202
+        recalled.append(recall)
+        return cancelled(said, settings, pcm, block, t0, recall)
+
+    monkeypatch.setattr(voice_own, "_cancelled", spy)
+    voices = [synth.speak(s, "en-us", 175) for s in ("Sorry, I cannot do it.", "Shall I walk forward?",
+                                                     "You told me to stop just now.", "I saw an O just now.")]
+    stops = [synth.speak("stop", "en+f2", 140)]
+    engine, states = make_engine("spotter"), []
+    for memory_seed in (None, 5):
+        rng = np.random.default_rng(1)
+        voice_own.stop_over_cancelled(engine, SegmenterConfig(), voices, stops, -12.0, -26.0, -70.0, None,
+                                      (0.25, 0.6), rng, warm=1, ways=["learnt first, fitted"], memory_seed=memory_seed)
+        states.append(rng.bit_generator.state)
+    assert states[0] == states[1]  # the same streams
+    cold, warm = recalled
+    assert cold is None and warm is not None
+    mic, ref = warm
+    assert mic.size == ref.size > SAMPLE_RATE and np.any(ref)
