@@ -116,8 +116,8 @@ class RobotVoice:
         if STOP_WORD.search(text):  # after the reference is in place: the canceller waits for that, the gate not yet
             try:
                 sentence.stops = stop_words(text, self.words(text, voice, rate), speech_end_s(samples))
-            except SynthError:
-                self.unworded += 1
+            except (SynthError, AttributeError, OSError):  # the library failed (a missing symbol, say): the sentence
+                self.unworded += 1  # is cancelled all the same, and its "stop"s are published
 
     def detail(self) -> dict[str, object]:
         return {"echo_rendered": self.rendered, "echo_unrendered": self.unrendered, "echo_render_ms_last": self.last_ms,
