@@ -325,7 +325,8 @@ def stop_over_cancelled(engine: Engine, config: SegmenterConfig, voices: list[np
             over = [s < (at + stop.size) / SAMPLE_RATE and e > at / SAMPLE_RATE for _, s, e, _, _ in segs]
             gate = publishes(segs, spoke, config.pre_roll_s, placed=placed.sentences() if own_stop else None, t0=t0)
             heard = any(cmd is Command.STOP and o for (*_, cmd, _), o in zip(segs, over, strict=True))
-            published = any(cmd is Command.STOP and o and p for (*_, cmd, _), o, p in zip(segs, over, gate, strict=True))
+            published = any(cmd is Command.STOP and o and p
+                            for (*_, cmd, _), o, p in zip(segs, over, gate, strict=True))
             out.heard_published[way] += published
             dropped = out.own_stop_dropped.setdefault(way, Counter())
             dropped["person"] += heard and not published

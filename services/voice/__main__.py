@@ -221,9 +221,9 @@ def main(ctx: typer.Context, robot: RobotOption = None, connect: ConnectOption =
                              down_in_phrase=down_in_phrase, vad=vad, early_look=early_look, clear_window=clear_window,
                              vad_lift=vad_lift, vad_reset=vad_reset, vad_fresh_end=vad_fresh_end,
                              vad_fresh_end_snr=vad_fresh_end_snr, highpass=highpass,
-                             gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice, own_stop=own_stop,
-                             echo_cancel=echo_cancel,
-                             echo_memory=echo_memory, echo_fit=echo_fit, floor_hold=floor_hold)
+                             gain=gain, mic_rate=mic_rate, mic_channels=mic_channels, own_voice=own_voice,
+                             own_stop=own_stop, echo_cancel=echo_cancel, echo_memory=echo_memory, echo_fit=echo_fit,
+                             floor_hold=floor_hold)
     try:
         check_settings(settings)
     except EngineError as exc:

@@ -543,7 +543,8 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     if echo is not None:
         c = echo.canceller
         ctx.update_detail(echo_cancel="on", echo_fit="on" if c.fit else "off", echo_fits=c.fits,
-                          echo_fit_db_last=c.fit_db, own_stop="ignored" if own_stop_from(settings.own_stop) else "heard")
+                          echo_fit_db_last=c.fit_db,
+                          own_stop="ignored" if own_stop_from(settings.own_stop) else "heard")
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:
         ctx.update_detail(echo_cancel="off")
