@@ -237,6 +237,17 @@ class DetectorConfig:
     propose_sure_thresholds: tuple[float, ...] = (0.01, 0.85, 0.05)
     """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (the last
     bars rounds vision42-42c tried: X 0.01, O 0.85, TRIANGLE 0.05)"""
+    propose_o_clear: float = 0.0
+    """a proposed O kept only at its sure bar (`propose_sure`: its verifier probability is under
+    `propose_thresholds`' O) must have a clear middle: at most this share of the middle of its box (an ellipse of
+    `propose_o_middle` x its width and height) darker than half-way from its ring's ink to the middle's paper
+    (`middle_ink`; 0: not asked). An O mark's hole is blank card; a clock face has hands and a hub there, a
+    prohibition sign its bar, a power symbol its stroke, a face its eyes: round things whose ring a proposer and
+    a verifier, shown only the ring's outline, may take for an O. A proposal has no component, so the O's own
+    clear-margin test cannot judge it (round vision47)."""
+    propose_o_middle: float = 0.4
+    """the middle `propose_o_clear` looks at, as a share of the proposal box's width and height (an O's hole is
+    0.6-0.8 of its width with the tuning generator's strokes; the rest allows for the box's own error)"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -331,6 +342,9 @@ class DetectorConfig:
             if not all(v >= 0.0 for v in getattr(self, name)):
                 raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
                                  f"never kept)")
+        if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
+            raise ValueError(f"propose_o_clear {self.propose_o_clear}, propose_o_middle {self.propose_o_middle}: "
+                             "a share of the middle, 0 (off) to 1, and a share of the box, above 0 to 1")
         if self.propose_x_span < 0 or self.propose_x_ring <= 0 or self.propose_x_exits < 1:
             raise ValueError(f"propose_x_span {self.propose_x_span}, propose_x_ring {self.propose_x_ring}, "
                              f"propose_x_exits {self.propose_x_exits}: 0 (off) or more, above 0, 1 or more")
@@ -643,9 +657,20 @@ class MarkDetector:
             need = cfg.propose_thresholds[k]
             if 0 < cfg.propose_sure[k] <= p.score:
                 need = min(need, cfg.propose_sure_thresholds[k])
-            if row[k] >= need and not (p.shape is Shape.X and self._runs_on(p.box)):
-                out.append(Detection(p.shape, float(row[k]), p.box))
+            if row[k] < need or (p.shape is Shape.X and self._runs_on(p.box)):
+                continue
+            sure_only = row[k] < cfg.propose_thresholds[k]  # kept only because the proposer is sure
+            if p.shape is Shape.O and sure_only and cfg.propose_o_clear:
+                if self.middle_ink(gray, p.box) > cfg.propose_o_clear:
+                    continue
+            out.append(Detection(p.shape, float(row[k]), p.box))
         return out
+
+    def middle_ink(self, gray: np.ndarray, box: Box) -> float:
+        """`middle_ink` of a proposal's `box` (frame pixels) in the frame just detected, at the pyramid level the
+        verifier's crops were cut from (`proposal_crops`)."""
+        f = self._crop_level(box)
+        return middle_ink(self._greys.get(f, gray), _down(box, f), self.config.propose_o_middle)
 
     def _runs_on(self, box: Box) -> bool:
         """Whether the ink at the middle of `box` (frame pixels) runs on past it as crossing strokes do
@@ -702,8 +727,12 @@ class MarkDetector:
     def proposal_crops(self, gray: np.ndarray, box: Box) -> np.ndarray:
         """The verifier's crops of a proposal's `box` in the frame just detected (or harvested), cut at
         the coarsest pyramid level where the box is still 48 px (`gray`: the frame, if none is)."""
-        f = max((f for f in self._greys if max(box[2:]) / f >= 48), default=min(self._greys, default=1))
+        f = self._crop_level(box)
         return crops(self._greys.get(f, gray), _down(box, f))
+
+    def _crop_level(self, box: Box) -> int:
+        """The coarsest pyramid level of the frame just detected where `box` (frame pixels) is still 48 px."""
+        return max((f for f in self._greys if max(box[2:]) / f >= 48), default=min(self._greys, default=1))
 
     def _in_text(self, box: Box) -> bool:
         """Whether a component of about `box`'s size over it, at any pyramid level the text-line test
@@ -1193,6 +1222,36 @@ def _surround(g: np.ndarray, box: Box) -> tuple[float, float] | None:
     ring_sq = cv2.norm(region, cv2.NORM_L2SQR) - cv2.norm(inner, cv2.NORM_L2SQR)
     ring = ring_sum / n_ring
     return ring, math.sqrt(max(0.0, ring_sq / n_ring - ring * ring))
+
+
+def middle_ink(g: np.ndarray, box: Box, middle: float) -> float:
+    """The share of the ellipse of `middle` x `box`'s width and height at its centre that is darker than half-way
+    from the ink of the ring round it (the darkest tenth of the band from 0.55 to 1.1 x the box's half width and
+    height) to the middle's paper (its median): about 0 for an O's blank hole. 1 where the middle is not
+    `_MIDDLE_CONTRAST` grey levels lighter than that ink (a disc, a dark patch: no hole to see) or the box is all
+    but outside the frame (`DetectorConfig.propose_o_clear`)."""
+    x, y, w, h = box
+    cx, cy = x + w / 2, y + h / 2
+    x0, y0 = max(0, math.floor(cx - 0.55 * w)), max(0, math.floor(cy - 0.55 * h))
+    x1, y1 = min(g.shape[1], math.ceil(cx + 0.55 * w)), min(g.shape[0], math.ceil(cy + 0.55 * h))
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return 1.0
+    yy, xx = np.ogrid[y0:y1, x0:x1]
+    e = ((xx + 0.5 - cx) / max(1.0, w / 2)) ** 2 + ((yy + 0.5 - cy) / max(1.0, h / 2)) ** 2  # 1 on the box's ellipse
+    roi = g[y0:y1, x0:x1]
+    inner = roi[e <= middle**2]
+    band = roi[(e >= 0.55**2) & (e <= 1.1**2)]
+    if inner.size < 4 or band.size < 4:
+        return 1.0
+    paper = float(np.median(inner))
+    ink = float(np.percentile(band, 10))
+    if paper - ink < _MIDDLE_CONTRAST:
+        return 1.0
+    return float(np.count_nonzero(inner < (paper + ink) / 2)) / inner.size
+
+
+_MIDDLE_CONTRAST = 20.0
+"""grey levels a proposed O's middle must be lighter than its ring's ink (`middle_ink`)"""
 
 
 def _reach(cfg: DetectorConfig, extent: float) -> float:
