@@ -226,25 +226,29 @@ class DetectorConfig:
     whose second network learned crossing strokes (a cable in a loop, two taped lines) as not an X: chosen on tuning
     seed 7156 and crossing-probe seed 78 by the round's rule. Round vision45d's 0.3 with that veto found 6 more of 4,000
     held-out frames' X for 3 more false X, but 4 more blind X for 7 more false X: not taken"""
-    propose_sure: tuple[float, ...] = (0.0, 0.0, 0.0)
+    propose_sure: tuple[float, ...] = (0.0, 0.6, 0.0)
     """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
     `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
-    at half size and the verifier from the three crops. Off: rounds vision42-42c (the vision README) found more
-    marks on both generators the detector was not tuned on, and more false ones on the blind generator. An X at 0.7
-    (bar 0.01): held-out 5 of 52 missed X for one false X, blind 2 of 47 for 5 false X. An O at 0.6 (bar 0.75, then
-    0.85): held-out 29 of 183 and 24 of 191 missed O for no false O, blind 14 of 100 and 14 of 134 for one and two
-    false O. Triangle peaks of 0.6-0.8 also came on filled arrows on white labels (the arrow probe)"""
-    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.85, 0.05)
-    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (the last
-    bars rounds vision42-42c tried: X 0.01, O 0.85, TRIANGLE 0.05)"""
-    propose_o_clear: float = 0.0
+    at half size and the verifier from the three crops. O at 0.6 since round vision47b (bar 0.95, with
+    `propose_o_clear`; vision README): on fresh seeds 16 of 183 missed held-out O and 11 of 133 missed blind O found
+    in 4,000 frames each, no false mark added, no confirmed false O added on held-out clips. Rounds vision42-42c
+    (bars 0.75 and 0.85, no middle test) found more, and false O on the blind generator. X off: at 0.7 (bar 0.01)
+    held-out 5 of 52 missed X for one false X, blind 2 of 47 for 5 false X. TRIANGLE off: peaks of 0.6-0.8 also
+    came on filled arrows on white labels (the arrow probe)"""
+    propose_sure_thresholds: tuple[float, ...] = (0.01, 0.95, 0.05)
+    """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (O 0.95 since
+    round vision47b: the lowest bar that kept none of the false O the sure peak had kept on six blind seeds and
+    round vision47's tuning frames; X and TRIANGLE the last bars rounds vision42-42c tried)"""
+    propose_o_clear: float = 0.05
     """a proposed O kept only at its sure bar (`propose_sure`: its verifier probability is under
     `propose_thresholds`' O) must have a clear middle: at most this share of the middle of its box (an ellipse of
     `propose_o_middle` x its width and height) darker than half-way from its ring's ink to the middle's paper
     (`middle_ink`; 0: not asked). An O mark's hole is blank card; a clock face has hands and a hub there, a
-    prohibition sign its bar, a power symbol its stroke, a face its eyes: round things whose ring a proposer and
-    a verifier, shown only the ring's outline, may take for an O. A proposal has no component, so the O's own
-    clear-margin test cannot judge it (round vision47)."""
+    prohibition sign its bar, a fingertip its nail: round things whose outline a proposer and a verifier may take
+    for an O. A proposal has no component, so the O's own clear-margin test cannot judge it. Round vision47 (bar
+    0.75): every true O the sure peak kept on tuning and six blind seeds had a blank middle (0.00), a fingertip
+    0.13 and a clock face 0.09; at round vision47b's bar 0.95 the bar alone refused those seen, so this is a guard
+    for a clock or a fingertip the verifier is surer of."""
     propose_o_middle: float = 0.4
     """the middle `propose_o_clear` looks at, as a share of the proposal box's width and height (an O's hole is
     0.6-0.8 of its width with the tuning generator's strokes; the rest allows for the box's own error)"""

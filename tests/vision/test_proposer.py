@@ -365,14 +365,15 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
     seeds), is taken for an O; its middle is not blank, so with `propose_o_clear` 0.05 it is not. A small hand-drawn O
     that only the sure peak finds (tuning seed 7166, frame 29) is kept either way; without the sure peak neither is
     reported. Out-of-range settings are refused, naming them."""
+    from dataclasses import replace
+
     from services.vision.blind import BlindGenerator
     from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
     from services.vision.synthetic import SceneGenerator, Variation
 
-    off = DetectorConfig()
-    sure = DetectorConfig(propose_sure=(0.0, 0.6, 0.0), propose_sure_thresholds=(0.01, 0.75, 0.05))
-    clear = DetectorConfig(propose_sure=(0.0, 0.6, 0.0), propose_sure_thresholds=(0.01, 0.75, 0.05),
-                           propose_o_clear=0.05)
+    off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0), propose_o_clear=0.0)
+    sure = DetectorConfig(propose_sure=(0.0, 0.6, 0.0), propose_sure_thresholds=(0.01, 0.75, 0.05), propose_o_clear=0.0)
+    clear = replace(sure, propose_o_clear=0.05)
     blind = BlindGenerator(seed=863)
     for i in range(164):
         img, label = blind.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
