@@ -125,16 +125,19 @@ def test_the_own_voice_bench_drops_only_the_stop_begun_at_the_robots_own() -> No
 @espeak
 def test_the_voice_service_does_not_publish_the_robots_own_stop(bus: ServiceContext, router_endpoint: str,
                                                                robot_id: str, start_service, tmp_path: Path) -> None:
-    """The real speech service says four sentences, heard through a loudspeaker in a room as in `test_echo.py`. Over
-    the last, "I stopped because I saw a triangle just now.", another voice says "stop" just where the robot says
-    "stopped" (what a canceller that leaves the robot's own word in the stream hands on): not published, counted.
-    The same voice's "stop" half a second after that sentence is published. (That a "stop" over the robot's voice
-    but away from its own is published too: `said_stop` and the bench's test above.)"""
+    """The real speech service says three sentences, then "I stopped because I saw a triangle just now.", heard through
+    a loudspeaker in a room as in `test_echo.py`. Over that one another voice says "stop" just where the robot says
+    "stopped" (what a canceller that leaves the robot's own word in the stream hands on): never published, counted.
+    The same voice's "stop" with the robot silent is published. (That a "stop" over the robot's voice but away from its
+    own is published too: `said_stop` and the bench's test above.) On a loaded machine the segmenter may hear that
+    "stop" only inside one long utterance with the robot's voice, so that no "stop" reaches the gate (1 run in 4 beside
+    a busy core, at -26 and -32 dBFS alike): the sentence is then said again, at most twice; a "stop" published at any
+    time while the robot speaks fails at once."""
     from tests.voice.test_echo import RoomMicrophone, echo_path, speech_service
 
     states, say, out = speech_service(bus, start_service, tmp_path)
-    # the robot at -26 dBFS at the microphone, the other voice at -20: what the canceller leaves of the robot does not
-    # swallow that "stop" into a long utterance (at -12 dBFS it did, in 2 of 4 runs beside another test worker)
+    # the robot at -26 dBFS at the microphone, the other voice at -20 (at -12 dBFS the robot's residue swallowed that
+    # "stop" into a long utterance more often)
     path, gain = echo_path(np.random.default_rng(7)), 10 ** (-26 / 20)
     env = service_env(router_endpoint, robot_id, HRI_VOICE_SOURCE="stdin", HRI_VOICE_OWN_STOP="ignore",
                       HRI_STATE_DIR=str(tmp_path / "state"))
@@ -144,17 +147,19 @@ def test_the_voice_service_does_not_publish_the_robots_own_stop(bus: ServiceCont
     other *= 10 ** (-20 / 20) / np.max(np.abs(other))
     own_text = "I stopped because I saw a triangle just now."
     [own_word] = [w for w in words(own_text, "en-us", 175) if own_text[w.start :].startswith("stop")]
-    sentences = ("Sorry, I cannot do it.", "Shall I walk forward?", "I saw an X mark 3 seconds ago, and no O since.",
-                 own_text)
+    sentences = ("Sorry, I cannot do it.", "Shall I walk forward?", "I saw an X mark 3 seconds ago, and no O since.")
+
+    def dropped() -> int:
+        h = bus.query_health("voice")
+        return 0 if h is None else int(h.detail.get("own_stop_dropped", 0))
+
     with stdin_service(env, tmp_path / "voice.log") as proc, closing(RoomMicrophone(proc, out, lambda x: path(
             x) * gain / (np.max(np.abs(x)) + 1e-12))) as mic:
 
         def on_state(state: SpeechState) -> None:
             mic.on_state(state)
-            if state.speaking and state.id == "s3":  # at the robot's own "stop" (the path's delay is 30 ms)
+            if state.speaking and (state.id or "").startswith("own"):  # at its own "stop" (the path's delay: 30 ms)
                 mic.mix(other, after_s=0.03 + own_word.at_s)
-            if not state.speaking and state.id == "s3":  # half a second after it
-                mic.mix(other, after_s=0.03 + 0.5)
 
         bus.subscribe(bus.keys.speech_state, SpeechState, on_state)
         wait_for(lambda: (h := bus.query_health("voice")) is not None and "spotter_embedding" in h.detail, timeout=60)
@@ -163,14 +168,24 @@ def test_the_voice_service_does_not_publish_the_robots_own_stop(bus: ServiceCont
             say.put(SpeechRequest(text=text, id=f"s{k}"))
             wait_for(lambda k=k: any(s.id == f"s{k}" and not s.speaking for s in states), timeout=20)
             time.sleep(0.5)
+        for attempt in range(3):
+            say.put(SpeechRequest(text=own_text, id=f"own{attempt}"))
+            wait_for(lambda a=attempt: any(s.id == f"own{a}" and not s.speaking for s in states), timeout=20)
+            try:
+                wait_for(lambda: dropped() >= 1, timeout=4)
+            except AssertionError:
+                assert not heard  # not published, nor merely late: no "stop" reached the gate
+                continue
+            break
+        assert dropped() == 1 and not heard
+        said = time.time()
+        mic.mix(other, after_s=0.5)  # the same voice, the robot silent
         wait_for(lambda: bool(heard), timeout=10)
-        wait_for(lambda: (h := bus.query_health("voice")) is not None and h.detail.get("own_stop_dropped", 0) >= 1,
-                 timeout=10)
         time.sleep(1.0)  # anything else heard is in
         health = bus.query_health("voice")
-    assert health is not None and health.detail["own_stop"] == "ignored" and health.detail["echo_locked"] == 4
-    assert [c.command for c in heard] == [Command.STOP]  # the one after the sentence
-    assert heard[0].stamp > next(s.stamp for s in states if s.id == "s3" and not s.speaking)
+    assert health is not None and health.detail["own_stop"] == "ignored" and health.detail["echo_locked"] >= 4
+    assert [c.command for c in heard] == [Command.STOP]
+    assert heard[0].stamp > said
 
 
 @espeak
