@@ -252,6 +252,15 @@ class DetectorConfig:
     propose_o_middle: float = 0.4
     """the middle `propose_o_clear` looks at, as a share of the proposal box's width and height (an O's hole is
     0.6-0.8 of its width with the tuning generator's strokes; the rest allows for the box's own error)"""
+    propose_t_fill: float = 0.0
+    """a proposed TRIANGLE is refused where the ink at its middle is one solid blob with no corners: no hole, inside
+    the box, filling less than this share of its minimum enclosing triangle (a disc 0.6, a triangle about 1; 0: off)
+    and with an outline as round as an ellipse (`propose_t_round`; `middle_blob`). A dot sticker, a button or a
+    coloured disc on a small card is a small solid blob the proposer and the verifier may take for a filled triangle;
+    the component's own shape test (`filled_fill`) had already refused it (round vision48, vision README)."""
+    propose_t_round: float = 0.06
+    """the largest `_ellipse_residual` of that blob's outline that counts as round (a disc about 0.02-0.04, a filled
+    triangle about 0.1)"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -349,6 +358,9 @@ class DetectorConfig:
         if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
             raise ValueError(f"propose_o_clear {self.propose_o_clear}, propose_o_middle {self.propose_o_middle}: "
                              "a share of the middle, 0 (off) to 1, and a share of the box, above 0 to 1")
+        if not 0.0 <= self.propose_t_fill <= 1.0 or self.propose_t_round < 0:
+            raise ValueError(f"propose_t_fill {self.propose_t_fill}, propose_t_round {self.propose_t_round}: a share of "
+                             "the enclosing triangle, 0 (off) to 1, and an ellipse residual, 0 or more")
         if self.propose_x_span < 0 or self.propose_x_ring <= 0 or self.propose_x_exits < 1:
             raise ValueError(f"propose_x_span {self.propose_x_span}, propose_x_ring {self.propose_x_ring}, "
                              f"propose_x_exits {self.propose_x_exits}: 0 (off) or more, above 0, 1 or more")
@@ -667,6 +679,8 @@ class MarkDetector:
             if p.shape is Shape.O and sure_only and cfg.propose_o_clear:
                 if self.middle_ink(gray, p.box) > cfg.propose_o_clear:
                     continue
+            if p.shape is Shape.TRIANGLE and cfg.propose_t_fill and self.cornerless(gray, p.box):
+                continue
             out.append(Detection(p.shape, float(row[k]), p.box))
         return out
 
@@ -675,6 +689,13 @@ class MarkDetector:
         verifier's crops were cut from (`proposal_crops`)."""
         f = self._crop_level(box)
         return middle_ink(self._greys.get(f, gray), _down(box, f), self.config.propose_o_middle)
+
+    def cornerless(self, gray: np.ndarray, box: Box) -> bool:
+        """Whether the ink at the middle of a proposal's `box` (frame pixels) is one solid round blob, no triangle
+        (`middle_blob`, `DetectorConfig.propose_t_fill` and `propose_t_round`)."""
+        b = middle_blob(gray, box)
+        cfg = self.config
+        return b is not None and b.triangle_fill < cfg.propose_t_fill and b.roundness <= cfg.propose_t_round
 
     def _runs_on(self, box: Box) -> bool:
         """Whether the ink at the middle of `box` (frame pixels) runs on past it as crossing strokes do
@@ -1256,6 +1277,52 @@ def middle_ink(g: np.ndarray, box: Box, middle: float) -> float:
 
 _MIDDLE_CONTRAST = 20.0
 """grey levels a proposed O's middle must be lighter than its ring's ink (`middle_ink`)"""
+
+
+@dataclass(frozen=True)
+class BlobShape:
+    """The outline of the solid ink blob at a proposal's middle (`middle_blob`)."""
+
+    triangle_fill: float  # its area over its minimum enclosing triangle's: about 1 for a triangle, 0.6 for a disc
+    roundness: float  # `_ellipse_residual` of its outline: 0 for an ellipse, about 0.08-0.1 for a triangle
+    solidity: float  # its area over its convex hull's
+
+
+def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
+    """The shape of the one solid blob of ink at the middle of `box`: the ink (Otsu's split of the box and a tenth of
+    its size round it) connected to the middle fifth of the box, if it has no hole, lies inside the region (does not
+    run on past it, as a finger, a hand or a bigger shape would) and is at least 6 px across. None otherwise, and where
+    the region shows under `_MIDDLE_CONTRAST` grey levels (`DetectorConfig.propose_t_round`)."""
+    x, y, w, h = box
+    m = max(2, math.ceil(0.1 * max(w, h)))
+    x0, y0 = max(0, x - m), max(0, y - m)
+    x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
+    roi = g[y0:y1, x0:x1]
+    if roi.shape[0] < 8 or roi.shape[1] < 8 or int(roi.max()) - int(roi.min()) < _MIDDLE_CONTRAST:
+        return None
+    _, ink = cv2.threshold(roi, 0, 255, cv2.THRESH_BINARY_INV | cv2.THRESH_OTSU)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    cx, cy = x + w / 2 - x0, y + h / 2 - y0
+    mid = labels[
+        max(0, int(cy - 0.1 * h)) : max(1, math.ceil(cy + 0.1 * h)), max(0, int(cx - 0.1 * w)) : max(1, math.ceil(cx + 0.1 * w))
+    ]
+    ids, counts = np.unique(mid[mid > 0], return_counts=True)
+    if not len(ids):
+        return None
+    i = int(ids[np.argmax(counts)])
+    bx, by, bw, bh, _ = stats[i]
+    if bx == 0 or by == 0 or bx + bw >= roi.shape[1] or by + bh >= roi.shape[0] or max(bw, bh) < 6:
+        return None
+    contours, hier = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if len(contours) != 1:  # a hole: an outline, judged by its shape tests, not here
+        return None
+    outer = contours[0]
+    area = cv2.contourArea(outer)
+    hull = cv2.contourArea(cv2.convexHull(outer))
+    roundness = _ellipse_residual(outer)
+    if area <= 0 or hull <= 0 or roundness is None:
+        return None
+    return BlobShape(_triangle_fill(outer, area), roundness, area / hull)
 
 
 def _reach(cfg: DetectorConfig, extent: float) -> float:
