@@ -263,6 +263,12 @@ class DetectorConfig:
     propose_t_round: float = 0.06
     """the largest `_ellipse_residual` of that blob's outline that counts as round (a disc about 0.02-0.04, a filled
     triangle about 0.1)"""
+    o_clear: float = 0.0
+    """an O the verifier is not sure of (confidence under `o_clear_sure`) is refused where more than this share of the
+    middle of its box (`propose_o_middle`) is ink (`middle_ink`): an O mark's hole is blank card, a clock's hands and
+    hub, a face's eyes or a sign's bar are not (0: off; round vision49, vision README)"""
+    o_clear_sure: float = 0.95
+    """the confidence from which an O is reported whatever its middle holds (`o_clear`)"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -360,6 +366,9 @@ class DetectorConfig:
         if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
             raise ValueError(f"propose_o_clear {self.propose_o_clear}, propose_o_middle {self.propose_o_middle}: "
                              "a share of the middle, 0 (off) to 1, and a share of the box, above 0 to 1")
+        if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
+            raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
+                             "to 1, and a confidence, 0 to 1")
         if not 0.0 <= self.propose_t_fill <= 1.0 or self.propose_t_round < 0:
             raise ValueError(f"propose_t_fill {self.propose_t_fill}, propose_t_round {self.propose_t_round}: a share of "
                              "the enclosing triangle, 0 (off) to 1, and an ellipse residual, 0 or more")
@@ -655,14 +664,14 @@ class MarkDetector:
                 found += self._verify(pending)
                 pending = []
                 if any(d.shape is not Shape.O for d in found):
-                    return _merge(found, self.config.overlap)
+                    return self._blank_middles(gray, _merge(found, self.config.overlap))
         if pending:
             yield Step.TICK
             found += self._verify(pending)
         if self.proposer is not None and self.verifier is not None:
             yield Step.TICK
             found += self._proposed(gray, found)
-        return _merge(found, self.config.overlap)
+        return self._blank_middles(gray, _merge(found, self.config.overlap))
 
     def _proposed(self, gray: np.ndarray, found: list[Detection]) -> list[Detection]:
         """The proposer's peaks where nothing was detected (`_judged_proposals`), each kept if the verifier gives
@@ -691,6 +700,19 @@ class MarkDetector:
         verifier's crops were cut from (`proposal_crops`)."""
         f = self._crop_level(box)
         return middle_ink(self._greys.get(f, gray), _down(box, f), self.config.propose_o_middle)
+
+    def _blank_middles(self, gray: np.ndarray, found: list[Detection]) -> list[Detection]:
+        """`found` without the O whose middle is not blank (`DetectorConfig.o_clear`, `o_clear_sure`)."""
+        cfg = self.config
+        if not cfg.o_clear:
+            return found
+        return [
+            d
+            for d in found
+            if d.shape is not Shape.O
+            or d.confidence >= cfg.o_clear_sure
+            or middle_ink(gray, d.box, cfg.propose_o_middle) <= cfg.o_clear
+        ]
 
     def cornerless(self, gray: np.ndarray, box: Box) -> bool:
         """Whether the ink at the middle of a proposal's `box` (frame pixels) is one solid round blob, no triangle
