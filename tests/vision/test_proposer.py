@@ -428,7 +428,7 @@ def test_middle_blob_tells_a_disc_from_a_filled_triangle() -> None:
 
 def test_a_proposed_triangle_with_a_round_solid_middle_is_refused_with_propose_t_fill() -> None:
     """`propose_t_fill` (round vision48): a green dot sticker on a small white card (diagnostic blind seed 853, frame 59:
-    one of 14 such false triangles on that seed's 500 mark-free frames) is proposed as a TRIANGLE and the verifier
+    one of 13 such false triangles on that seed's 500 mark-free frames) is proposed as a TRIANGLE and the verifier
     agrees (0.93); its middle is a disc, so with `propose_t_fill` 0.7 it is refused (a filled triangle's middle fills
     more of its triangle: `test_middle_blob_tells_a_disc_from_a_filled_triangle`). Out-of-range settings are refused,
     naming them."""
