@@ -1326,11 +1326,11 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
     if roi.shape[0] < 8 or roi.shape[1] < 8 or int(roi.max()) - int(roi.min()) < _MIDDLE_CONTRAST:
         return None
     _, ink = cv2.threshold(roi, 0, 255, cv2.THRESH_BINARY_INV | cv2.THRESH_OTSU)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
-    cx, cy = x + w / 2 - x0, y + h / 2 - y0
-    mid = labels[
-        max(0, int(cy - 0.1 * h)) : max(1, math.ceil(cy + 0.1 * h)), max(0, int(cx - 0.1 * w)) : max(1, math.ceil(cx + 0.1 * w))
-    ]
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    cx, cy = x + w / 2 - x0, y + h / 2 - y0  # the box's centre in the region
+    rows = slice(max(0, int(cy - 0.1 * h)), max(1, math.ceil(cy + 0.1 * h)))
+    cols = slice(max(0, int(cx - 0.1 * w)), max(1, math.ceil(cx + 0.1 * w)))
+    mid = labels[rows, cols]  # the middle fifth of the box
     ids, counts = np.unique(mid[mid > 0], return_counts=True)
     if not len(ids):
         return None
@@ -1338,7 +1338,7 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
     bx, by, bw, bh, _ = stats[i]
     if bx == 0 or by == 0 or bx + bw >= roi.shape[1] or by + bh >= roi.shape[0] or max(bw, bh) < 6:
         return None
-    contours, hier = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     if len(contours) != 1:  # a hole: an outline, judged by its shape tests, not here
         return None
     outer = contours[0]
