@@ -44,9 +44,10 @@ import copy
 import enum
 import math
 import re
-from collections.abc import Generator, Iterable
+from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -270,6 +271,17 @@ class DetectorConfig:
     seeds false O 17 -> 12, on two fresh held-out seeds 14 -> 12, for one more missed held-out O in 1,000."""
     o_clear_sure: float = 0.95
     """the confidence from which an O is reported whatever its middle holds (`o_clear`)"""
+    open_side: float = 0.0
+    """a loose candidate without a hole that the verifier (or the second network) names a TRIANGLE is refused where
+    one side of its minimum enclosing triangle is open: drawn along less than this share (`open_side` the function's
+    cover) and, in its middle, about as light as the paper inside the triangle (shade under `open_side_shade`). Two
+    strokes meeting at an angle have a triangle for a hull: a clock's two hands, a check mark, a chevron; the blind
+    generator's clocks were its commonest false triangles (round vision50, vision README). A filled triangle draws
+    every side; an outline broken by a finger or blurred faint has the finger or the faint stroke across its open
+    side. 0: off."""
+    open_side_shade: float = 0.15
+    """the darkest an open side's middle may be, from the paper inside (0) to the outline's ink (1), for `open_side`
+    to refuse the candidate"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -829,9 +841,14 @@ class MarkDetector:
                 if kept is not None:  # named by the second network alone: the card tests must pass
                     claimed, prob = Shape.TRIANGLE, kept
                     assert p.blob is not None and p.own is not None
-                    det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box)
-                    stage = "kept" if det is not None else self._why
+                    if self._open(p):
+                        stage = "shape"
+                    else:
+                        det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box)
+                        stage = "kept" if det is not None else self._why
                     ok = False
+                if ok and claimed is Shape.TRIANGLE and self._open(p):
+                    ok, stage = False, "shape"
                 if ok and not (p.part and claimed is Shape.O):
                     assert p.blob is not None and p.own is not None
                     blob = p.blob
@@ -851,6 +868,16 @@ class MarkDetector:
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
         return out
+
+    def _open(self, p: _Pending) -> bool:
+        """Whether a loose candidate named a TRIANGLE is two strokes meeting at an angle, not a triangle: no hole, one
+        side of its enclosing triangle open and as light as the paper inside (`DetectorConfig.open_side`)."""
+        cfg = self.config
+        if cfg.open_side <= 0 or p.blob is None or p.blob.holes:
+            return False
+        x, y = p.box[:2]
+        side = open_side(p.level.g, p.blob.outer + np.array([x - 1, y - 1], np.int32))  # the level's pixels
+        return side is not None and side.cover < cfg.open_side and side.shade < cfg.open_side_shade
 
     def _second_triangles(
         self, pending: list[_Pending], patches: np.ndarray, claims: np.ndarray, probs: np.ndarray
@@ -1348,6 +1375,81 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
     if area <= 0 or hull <= 0 or roundness is None:
         return None
     return BlobShape(_triangle_fill(outer, area), roundness, area / hull)
+
+
+@dataclass(frozen=True)
+class OpenSide:
+    """The least-covered side of an outline taken for a triangle (`open_side`)."""
+
+    cover: float  # the share of points along it within reach of the outline's ink (about 1: drawn; 0.1-0.5: open)
+    shade: float  # how dark its middle is, from the paper round the outline (0) to the outline's ink (1)
+
+
+def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: int = 17) -> OpenSide | None:
+    """How much of its least-covered side an outline without a hole (`outer`, in `g`'s pixels) draws, as a triangle,
+    and how dark that side is in `g`. Cover: the share of points along each side of the outline's minimum enclosing
+    triangle (from a tenth to nine tenths of the side) that lie within `reach` times the outline's larger extent (at
+    least 2 px) of its ink, the lowest of the three. Shade: that side's middle fifth (the median of `g` there, a
+    twentieth of the extent inside it) against the paper halfway from it to the opposite corner and the outline's ink
+    (the darkest twentieth under it): 0 where the side is as light as the paper inside. A filled triangle, or an
+    outline broken by a gap, draws about all of each side; two strokes meeting at an angle (a clock's hands, a check
+    mark, a chevron), whose hull is a triangle too, leave the third side open and as light as the face they lie on,
+    while a faint blurred side or a finger across one is darker. None for a degenerate outline."""
+    pts = outer.reshape(-1, 2).astype(np.float32)
+    try:
+        _, tri = cv2.minEnclosingTriangle(pts.reshape(-1, 1, 2))
+    except cv2.error:
+        return None
+    if tri is None:
+        return None
+    corners = tri.reshape(3, 2).astype(np.float64)
+    extent = float(max(np.ptp(pts[:, 0]), np.ptp(pts[:, 1])))
+    x0, y0 = np.floor(np.minimum(pts.min(axis=0), corners.min(axis=0))).astype(int) - 2
+    x1, y1 = np.ceil(np.maximum(pts.max(axis=0), corners.max(axis=0))).astype(int) + 3
+    size = (int(y1 - y0), int(x1 - x0))
+    if extent < 4 or size[0] * size[1] > 16 * (extent + 5) ** 2:  # a degenerate triangle far larger than the outline
+        return None
+    origin = np.array([x0, y0])
+    ink_mask = np.zeros(size, np.uint8)
+    cv2.drawContours(ink_mask, [outer.reshape(-1, 1, 2).astype(np.int32) - origin.astype(np.int32)], -1, 255, cv2.FILLED)
+    far = cv2.distanceTransform(255 - ink_mask, cv2.DIST_L2, 3)  # each pixel's distance to the ink
+    limit = max(2.0, reach * extent)
+    t = np.linspace(0.1, 0.9, samples)[:, None]
+    covers = []
+    for k in range(3):
+        a, b = corners[k] - origin, corners[(k + 1) % 3] - origin
+        on = a + t * (b - a)
+        cols = np.clip(np.round(on[:, 0]).astype(int), 0, size[1] - 1)
+        rows = np.clip(np.round(on[:, 1]).astype(int), 0, size[0] - 1)
+        covers.append(float(np.mean(far[rows, cols] <= limit)))
+    k = int(np.argmin(covers))
+    a, b, c = corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]
+    inward = (c - (a + b) / 2) / max(1e-6, float(np.hypot(*(c - (a + b) / 2))))
+    across = np.linspace(-0.1, 0.1, 7) * extent  # a band across the side, a tenth of the extent each way
+    darkest = []
+    for u in np.linspace(0.4, 0.6, 5):  # the side's middle fifth
+        line = (a + u * (b - a))[None, :] + across[:, None] * inward[None, :]
+        dark = _grey_at(g, line, np.min)
+        if dark is not None:
+            darkest.append(dark)
+    ox, oy = int(x0), int(y0)
+    h, w = g.shape[:2]
+    sx0, sy0, sx1, sy1 = max(0, ox), max(0, oy), min(w, ox + size[1]), min(h, oy + size[0])
+    region = g[sy0:sy1, sx0:sx1]
+    under = region[ink_mask[sy0 - oy : sy1 - oy, sx0 - ox : sx1 - ox] > 0]
+    if not darkest or not under.size:
+        return OpenSide(covers[k], 1.0)
+    ink, paper = float(np.percentile(under, 5)), float(np.percentile(region, 90))
+    return OpenSide(covers[k], float(np.clip((paper - np.median(darkest)) / max(1.0, paper - ink), 0.0, 1.0)))
+
+
+def _grey_at(g: np.ndarray, points: np.ndarray, how: Callable[[np.ndarray], Any] = np.median) -> float | None:
+    """The median (or `how`) of `g`'s grey levels at `points` (x, y) that lie inside it; None if none does."""
+    cols, rows = np.round(points[:, 0]).astype(int), np.round(points[:, 1]).astype(int)
+    inside = (cols >= 0) & (rows >= 0) & (cols < g.shape[1]) & (rows < g.shape[0])
+    if not inside.any():
+        return None
+    return float(how(g[rows[inside], cols[inside]]))
 
 
 def _reach(cfg: DetectorConfig, extent: float) -> float:
