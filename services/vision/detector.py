@@ -382,6 +382,9 @@ class DetectorConfig:
         if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
             raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
                              "to 1, and a confidence, 0 to 1")
+        if not 0.0 <= self.open_side <= 1.0 or not 0.0 <= self.open_side_shade <= 1.0:
+            raise ValueError(f"open_side {self.open_side}, open_side_shade {self.open_side_shade}: a share of the side, "
+                             "0 (off) to 1, and a shade from the paper (0) to the ink (1)")
         if not 0.0 <= self.propose_t_fill <= 1.0 or self.propose_t_round < 0:
             raise ValueError(f"propose_t_fill {self.propose_t_fill}, propose_t_round {self.propose_t_round}: a share of "
                              "the enclosing triangle, 0 (off) to 1, and an ellipse residual, 0 or more")
