@@ -271,17 +271,18 @@ class DetectorConfig:
     seeds false O 17 -> 12, on two fresh held-out seeds 14 -> 12, for one more missed held-out O in 1,000."""
     o_clear_sure: float = 0.95
     """the confidence from which an O is reported whatever its middle holds (`o_clear`)"""
-    open_side: float = 0.0
+    open_side: float = 0.75
     """a loose candidate without a hole that the verifier (or the second network) names a TRIANGLE is refused where
-    one side of its minimum enclosing triangle is open: drawn along less than this share (`open_side` the function's
-    cover) and, in its middle, about as light as the paper inside the triangle (shade under `open_side_shade`). Two
+    one side of its minimum enclosing triangle is open: drawn along less than this share (the cover of `open_side`,
+    the function) and, in its middle, about as light as the paper round it (shade under `open_side_shade`). Two
     strokes meeting at an angle have a triangle for a hull: a clock's two hands, a check mark, a chevron; the blind
-    generator's clocks were its commonest false triangles (round vision50, vision README). A filled triangle draws
-    every side; an outline broken by a finger or blurred faint has the finger or the faint stroke across its open
-    side. 0: off."""
+    generator's clock hands were its commonest false triangles. A filled triangle draws every side; an outline
+    broken by a finger or blurred faint has the finger or the faint stroke across its open side. 0: off. On since
+    round vision50 (vision README): on two fresh blind seeds false triangles 44 -> 17 and false-mark frames 33 -> 19
+    of 1,000, one more triangle found; on two fresh held-out seeds every count the same."""
     open_side_shade: float = 0.15
-    """the darkest an open side's middle may be, from the paper inside (0) to the outline's ink (1), for `open_side`
-    to refuse the candidate"""
+    """the darkest an open side's middle may be, from the paper round the outline (0) to the outline's ink (1), for
+    `open_side` to refuse the candidate"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -874,7 +875,7 @@ class MarkDetector:
 
     def _open(self, p: _Pending) -> bool:
         """Whether a loose candidate named a TRIANGLE is two strokes meeting at an angle, not a triangle: no hole, one
-        side of its enclosing triangle open and as light as the paper inside (`DetectorConfig.open_side`)."""
+        side of its enclosing triangle open and as light as the paper round it (`DetectorConfig.open_side`)."""
         cfg = self.config
         if cfg.open_side <= 0 or p.blob is None or p.blob.holes:
             return False
@@ -1392,9 +1393,10 @@ def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: in
     """How much of its least-covered side an outline without a hole (`outer`, in `g`'s pixels) draws, as a triangle,
     and how dark that side is in `g`. Cover: the share of points along each side of the outline's minimum enclosing
     triangle (from a tenth to nine tenths of the side) that lie within `reach` times the outline's larger extent (at
-    least 2 px) of its ink, the lowest of the three. Shade: that side's middle fifth (the median of `g` there, a
-    twentieth of the extent inside it) against the paper halfway from it to the opposite corner and the outline's ink
-    (the darkest twentieth under it): 0 where the side is as light as the paper inside. A filled triangle, or an
+    least 2 px) of its ink, the lowest of the three. Shade: at five places along that side's middle fifth, the darkest
+    grey of `g` on a line across it (a tenth of the extent each way); their median against the paper (the brightest
+    tenth of the triangle's region) and the outline's ink (the darkest twentieth under it): 0 where the side is as
+    light as the paper, 1 where it is as dark as the ink. A filled triangle, or an
     outline broken by a gap, draws about all of each side; two strokes meeting at an angle (a clock's hands, a check
     mark, a chevron), whose hull is a triangle too, leave the third side open and as light as the face they lie on,
     while a faint blurred side or a finger across one is darker. None for a degenerate outline."""
