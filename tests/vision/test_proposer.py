@@ -12,6 +12,29 @@ from schemas.messages import Shape
 from services.vision.proposer import HEADS, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode, network_input
 from tests.vision.pools import PoolRefused, no_pool
 
+ORDER = (Shape.X, Shape.O, Shape.TRIANGLE, None)  # the benches' order: frame i of a seed shows ORDER[i % 4]
+
+
+def _blind_frame(seed: int, index: int) -> tuple[np.ndarray, object]:
+    """Frame `index` of the blind generator's `seed`, as the bench draws it, and its label (None: mark-free)."""
+    from services.vision.blind import BlindGenerator
+
+    blind = BlindGenerator(seed=seed)
+    for i in range(index + 1):
+        img, label = blind.frame(ORDER[i % 4])
+    return img, label
+
+
+def _tuning_frame(seed: int, index: int, **variation: float) -> tuple[np.ndarray, list]:
+    """Frame `index` of the tuning generator's `seed` (with `Variation` settings), as the bench draws it, and its
+    labels."""
+    from services.vision.synthetic import SceneGenerator, Variation
+
+    gen = SceneGenerator(seed=seed, variation=Variation(**variation))  # type: ignore[arg-type]
+    for i in range(index + 1):
+        img, labels = gen.render(gen.scene(ORDER[i % 4]))
+    return img, labels
+
 
 def _as_output(heat: np.ndarray, index: int, size: np.ndarray, offset: np.ndarray, w: int) -> np.ndarray:
     """What a perfect network would output for one frame's targets."""
@@ -368,18 +391,14 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
     are refused, naming them."""
     from dataclasses import replace
 
-    from services.vision.blind import BlindGenerator
     from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-    from services.vision.synthetic import SceneGenerator, Variation
 
     off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0), propose_o_clear=0.0, o_clear=0.0)
     sure = DetectorConfig(
         propose_sure=(0.0, 0.6, 0.0), propose_sure_thresholds=(0.01, 0.75, 0.05), propose_o_clear=0.0, o_clear=0.0
     )  # o_clear (round vision49) refuses the fingertip too: its middle is not blank and the verifier is not sure
     clear = replace(sure, propose_o_clear=0.05)
-    blind = BlindGenerator(seed=863)
-    for i in range(164):
-        img, label = blind.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
+    img, label = _blind_frame(863, 163)
     assert label is None
 
     def o_boxes(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
@@ -388,10 +407,7 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
     assert not o_boxes(off, img)
     assert len(o_boxes(sure, img)) == 1
     assert not o_boxes(clear, img)
-    gen = SceneGenerator(seed=7166, variation=Variation(hand_variety=0.5, hand_drawn=0.5))
-    for i in range(30):
-        scene = gen.scene((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
-        img, labels = gen.render(scene)
+    img, labels = _tuning_frame(7166, 29, hand_variety=0.5, hand_drawn=0.5)
     assert labels[0].shape is Shape.O
     for config, kept in ((off, False), (sure, True), (clear, True)):
         assert any(box_overlap(b, labels[0].box) >= 0.5 for b in o_boxes(config, img)) is kept
@@ -432,12 +448,9 @@ def test_a_proposed_triangle_with_a_round_solid_middle_is_refused_with_propose_t
     agrees (0.93); its middle is a disc, so with `propose_t_fill` 0.7 it is refused (a filled triangle's middle fills
     more of its triangle: `test_middle_blob_tells_a_disc_from_a_filled_triangle`). Out-of-range settings are refused,
     naming them."""
-    from services.vision.blind import BlindGenerator
     from services.vision.detector import DetectorConfig, MarkDetector
 
-    blind = BlindGenerator(seed=853)
-    for i in range(60):
-        img, label = blind.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
+    img, label = _blind_frame(853, 59)
     assert label is None
 
     def triangles(config: DetectorConfig) -> list[tuple[int, int, int, int]]:
@@ -455,14 +468,10 @@ def test_an_o_the_verifier_is_unsure_of_needs_a_blank_middle_with_o_clear() -> N
     hands and hub in the middle) is reported as an O at 0.695 by default; with `o_clear` 0.05 it is not. An O the
     verifier is sure of (`o_clear_sure` 0.95) is reported whatever its middle holds: a small tuning O touched by a
     fingertip (seed 7175, frame 201: 0.967; the finger widens its box, whose middle then takes in the ring: 0.23 ink). Out-of-range settings are refused."""
-    from services.vision.blind import BlindGenerator
     from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-    from services.vision.synthetic import SceneGenerator
 
     off, on = DetectorConfig(o_clear=0.0), DetectorConfig(o_clear=0.05)
-    blind = BlindGenerator(seed=853)
-    for i in range(88):
-        img, label = blind.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
+    img, label = _blind_frame(853, 87)
     assert label is None
 
     def o_boxes(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
@@ -470,9 +479,7 @@ def test_an_o_the_verifier_is_unsure_of_needs_a_blank_middle_with_o_clear() -> N
 
     assert len(o_boxes(off, img)) == 1
     assert not o_boxes(on, img)
-    gen = SceneGenerator(seed=7175)
-    for i in range(202):
-        img, labels = gen.render(gen.scene((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4]))
+    img, labels = _tuning_frame(7175, 201)
     assert labels[0].shape is Shape.O
     for config in (off, on):
         assert any(box_overlap(b, labels[0].box) >= 0.5 for b in o_boxes(config, img))
@@ -524,14 +531,10 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
     (0.97); their third side is open on the clock's face, so with `open_side` 0.75 they are refused. A filled tuning
     triangle whose side two fingers cover (seed 7181 with varied hands, frame 154: cover 0.53, but the fingers are
     darker than the card, shade 0.98) is reported either way. Out-of-range settings are refused, naming them."""
-    from services.vision.blind import BlindGenerator
     from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-    from services.vision.synthetic import SceneGenerator, Variation
 
     off, on = DetectorConfig(open_side=0.0), DetectorConfig(open_side=0.75)
-    blind = BlindGenerator(seed=863)
-    for i in range(12):
-        img, label = blind.frame((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4])
+    img, label = _blind_frame(863, 11)
     assert label is None
 
     def triangles(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
@@ -539,9 +542,7 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
 
     assert len(triangles(off, img)) == 1
     assert not triangles(on, img)
-    gen = SceneGenerator(seed=7181, variation=Variation(hand_variety=1.0, hand_drawn=1.0))
-    for i in range(155):
-        img, labels = gen.render(gen.scene((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4]))
+    img, labels = _tuning_frame(7181, 154, hand_variety=1.0, hand_drawn=1.0)
     assert labels[0].shape is Shape.TRIANGLE
     for config in (off, on):
         assert any(box_overlap(b, labels[0].box) >= 0.5 for b in triangles(config, img))
