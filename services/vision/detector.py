@@ -283,6 +283,10 @@ class DetectorConfig:
     open_side_shade: float = 0.15
     """the darkest an open side's middle may be, from the paper round the outline (0) to the outline's ink (1), for
     `open_side` to refuse the candidate"""
+    propose_open_side: float = 0.0
+    """the same of a proposed TRIANGLE (`open_side`, `open_side_shade`), judged on the largest blob of ink inside its box
+    without a hole (`box_outline`; a proposal has no component of its own): refused where one side is drawn along less
+    than this share and is as light as the paper. 0: off."""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -383,9 +387,11 @@ class DetectorConfig:
         if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
             raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
                              "to 1, and a confidence, 0 to 1")
-        if not 0.0 <= self.open_side <= 1.0 or not 0.0 <= self.open_side_shade <= 1.0:
-            raise ValueError(f"open_side {self.open_side}, open_side_shade {self.open_side_shade}: a share of the side, "
-                             "0 (off) to 1, and a shade from the paper (0) to the ink (1)")
+        if not (0.0 <= self.open_side <= 1.0 and 0.0 <= self.propose_open_side <= 1.0 and 0.0 <= self.open_side_shade
+                <= 1.0):
+            raise ValueError(f"open_side {self.open_side}, propose_open_side {self.propose_open_side}, open_side_shade "
+                             f"{self.open_side_shade}: shares of the side, 0 (off) to 1, and a shade from the paper (0) "
+                             "to the ink (1)")
         if not 0.0 <= self.propose_t_fill <= 1.0 or self.propose_t_round < 0:
             raise ValueError(f"propose_t_fill {self.propose_t_fill}, propose_t_round {self.propose_t_round}: a share of "
                              "the enclosing triangle, 0 (off) to 1, and an ellipse residual, 0 or more")
@@ -709,6 +715,8 @@ class MarkDetector:
                     continue
             if p.shape is Shape.TRIANGLE and cfg.propose_t_fill and self.cornerless(gray, p.box):
                 continue
+            if p.shape is Shape.TRIANGLE and cfg.propose_open_side and self.open_proposal(gray, p.box):
+                continue
             out.append(Detection(p.shape, float(row[k]), p.box))
         return out
 
@@ -737,6 +745,15 @@ class MarkDetector:
         b = middle_blob(gray, box)
         cfg = self.config
         return b is not None and b.triangle_fill < cfg.propose_t_fill and b.roundness <= cfg.propose_t_round
+
+    def open_proposal(self, gray: np.ndarray, box: Box) -> bool:
+        """Whether the largest blob of ink in a proposal's `box` (frame pixels) is two strokes meeting at an angle, not
+        a triangle: no hole, one side open and as light as the paper (`box_outline`, `open_side`,
+        `DetectorConfig.propose_open_side`)."""
+        outline = box_outline(gray, box)
+        side = None if outline is None else open_side(gray, outline)
+        cfg = self.config
+        return side is not None and side.cover < cfg.propose_open_side and side.shade < cfg.open_side_shade
 
     def _runs_on(self, box: Box) -> bool:
         """Whether the ink at the middle of `box` (frame pixels) runs on past it as crossing strokes do
@@ -1349,15 +1366,11 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
     its size round it) connected to the middle fifth of the box, if it has no hole, lies inside the region (does not
     run on past it, as a finger, a hand or a bigger shape would) and is at least 6 px across. None otherwise, and where
     the region shows under `_MIDDLE_CONTRAST` grey levels (`DetectorConfig.propose_t_fill`)."""
-    x, y, w, h = box
-    m = max(2, math.ceil(0.1 * max(w, h)))
-    x0, y0 = max(0, x - m), max(0, y - m)
-    x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
-    roi = g[y0:y1, x0:x1]
-    if roi.shape[0] < 8 or roi.shape[1] < 8 or int(roi.max()) - int(roi.min()) < _MIDDLE_CONTRAST:
+    ink = _box_ink(g, box)
+    if ink is None:
         return None
-    _, ink = cv2.threshold(roi, 0, 255, cv2.THRESH_BINARY_INV | cv2.THRESH_OTSU)
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    (x0, y0), labels, stats = ink
+    x, y, w, h = box
     cx, cy = x + w / 2 - x0, y + h / 2 - y0  # the box's centre in the region
     rows = slice(max(0, int(cy - 0.1 * h)), max(1, math.ceil(cy + 0.1 * h)))
     cols = slice(max(0, int(cx - 0.1 * w)), max(1, math.ceil(cx + 0.1 * w)))
@@ -1367,7 +1380,7 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
         return None
     i = int(ids[np.argmax(counts)])
     bx, by, bw, bh, _ = stats[i]
-    if bx == 0 or by == 0 or bx + bw >= roi.shape[1] or by + bh >= roi.shape[0] or max(bw, bh) < 6:
+    if bx == 0 or by == 0 or bx + bw >= labels.shape[1] or by + bh >= labels.shape[0] or max(bw, bh) < 6:
         return None
     contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     if len(contours) != 1:  # a hole: an outline, judged by its shape tests, not here
@@ -1387,6 +1400,47 @@ class OpenSide:
 
     cover: float  # the share of points along it within reach of the outline's ink (about 1: drawn; 0.1-0.5: open)
     shade: float  # how dark its middle is, from the paper round the outline (0) to the outline's ink (1)
+
+
+def _box_ink(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarray, np.ndarray] | None:
+    """The ink of `box` and a tenth of its size round it (Otsu's split of that region), as connected components: the
+    region's origin in `g`, its labels and their stats. None where the region is under 8 px a side or shows under
+    `_MIDDLE_CONTRAST` grey levels."""
+    x, y, w, h = box
+    m = max(2, math.ceil(0.1 * max(w, h)))
+    x0, y0 = max(0, x - m), max(0, y - m)
+    x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
+    roi = g[y0:y1, x0:x1]
+    if roi.shape[0] < 8 or roi.shape[1] < 8 or int(roi.max()) - int(roi.min()) < _MIDDLE_CONTRAST:
+        return None
+    _, ink = cv2.threshold(roi, 0, 255, cv2.THRESH_BINARY_INV | cv2.THRESH_OTSU)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    return (x0, y0), labels, stats
+
+
+def box_outline(g: np.ndarray, box: Box) -> np.ndarray | None:
+    """The outline (in `g`'s pixels) of the largest blob of ink in `box` (`_box_ink`) that lies inside the region (does
+    not run on past it) and is at least 6 px across, if it has no hole; None otherwise (an outline's hole: judged by
+    the verifier alone). What `open_side` judges of a proposal, which has no component of its own
+    (`DetectorConfig.propose_open_side`)."""
+    ink = _box_ink(g, box)
+    if ink is None:
+        return None
+    (x0, y0), labels, stats = ink
+    h, w = labels.shape
+    inside = [
+        i
+        for i in range(1, len(stats))
+        if stats[i, 0] > 0 and stats[i, 1] > 0 and stats[i, 0] + stats[i, 2] < w and stats[i, 1] + stats[i, 3] < h
+        and max(stats[i, 2], stats[i, 3]) >= 6
+    ]
+    if not inside:
+        return None
+    i = max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA])
+    contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if len(contours) != 1:
+        return None
+    return contours[0] + np.array([x0, y0], np.int32)
 
 
 def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: int = 17) -> OpenSide | None:
