@@ -549,3 +549,47 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
     for bad in ({"open_side": -0.1}, {"open_side": 1.5}, {"open_side_shade": 2.0}):
         with pytest.raises(ValueError, match="open_side.*open_side_shade"):
             DetectorConfig(**bad)  # type: ignore[arg-type]
+
+
+def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
+    """`box_outline` (round vision50b), what `open_side` judges of a proposal: the largest blob of ink inside the box
+    and a tenth round it, if it has no hole. Two strokes at an angle on a card give their outline, open on one side;
+    an outlined triangle (a hole), ink running on past the box and a blank card give nothing to judge."""
+    import cv2
+
+    from services.vision.detector import box_outline, open_side
+
+    def card(draw: object) -> np.ndarray:
+        g = np.full((100, 100), 120, np.uint8)
+        cv2.rectangle(g, (10, 10), (90, 90), 230, -1)
+        draw(g)  # type: ignore[operator]
+        return cv2.GaussianBlur(g, (0, 0), 0.8)
+
+    box = (20, 20, 60, 60)
+    tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
+    v = card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
+    outline = box_outline(v, box)
+    assert outline is not None
+    side = open_side(v, outline)
+    assert side is not None and side.cover < 0.6 and side.shade < 0.15
+    assert box_outline(card(lambda g: cv2.polylines(g, [tri], True, 40, 4)), box) is None
+    assert box_outline(card(lambda g: cv2.line(g, (0, 50), (99, 50), 40, 6)), box) is None
+    assert box_outline(card(lambda g: None), box) is None
+
+
+def test_a_proposed_triangle_that_is_two_strokes_is_refused_with_propose_open_side() -> None:
+    """`propose_open_side` (round vision50b): a check mark on a card (diagnostic blind seed 853, frame 391) is proposed
+    as a TRIANGLE and the verifier agrees (0.90); its outline is open on one side and light there (cover 0.41, shade
+    0.06), so with `propose_open_side` 0.6 it is refused. Out-of-range settings are refused, naming them."""
+    from services.vision.detector import DetectorConfig, MarkDetector
+
+    img, label = _blind_frame(853, 391)
+    assert label is None
+
+    def triangles(config: DetectorConfig) -> list[tuple[int, int, int, int]]:
+        return [d.box for d in MarkDetector(config).detect(img) if d.shape is Shape.TRIANGLE]
+
+    assert len(triangles(DetectorConfig(propose_open_side=0.0))) == 1
+    assert not triangles(DetectorConfig(propose_open_side=0.6))
+    with pytest.raises(ValueError, match="propose_open_side"):
+        DetectorConfig(propose_open_side=1.5)
