@@ -283,10 +283,12 @@ class DetectorConfig:
     open_side_shade: float = 0.15
     """the darkest an open side's middle may be, from the paper round the outline (0) to the outline's ink (1), for
     `open_side` to refuse the candidate"""
-    propose_open_side: float = 0.0
+    propose_open_side: float = 0.6
     """the same of a proposed TRIANGLE (`open_side`, `open_side_shade`), judged on the largest blob of ink inside its box
     without a hole (`box_outline`; a proposal has no component of its own): refused where one side is drawn along less
-    than this share and is as light as the paper. 0: off."""
+    than this share and is as light as the paper (a clock's hands, a chevron or a check mark on a card). 0: off. On
+    since round vision50b (vision README): on two fresh blind seeds false triangles 12 -> 9 and false-mark frames 15 ->
+    13 of 1,000; on two fresh held-out seeds every count the same."""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
