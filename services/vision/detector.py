@@ -44,10 +44,9 @@ import copy
 import enum
 import math
 import re
-from collections.abc import Callable, Generator, Iterable
+from collections.abc import Generator, Iterable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numpy as np
@@ -1451,11 +1450,12 @@ def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: in
     triangle (from a tenth to nine tenths of the side) that lie within `reach` times the outline's larger extent (at
     least 2 px) of its ink, the lowest of the three. Shade: at five places along that side's middle fifth, the darkest
     grey of `g` on a line across it (a tenth of the extent each way); their median against the paper (the brightest
-    tenth of the triangle's region) and the outline's ink (the darkest twentieth under it): 0 where the side is as
-    light as the paper, 1 where it is as dark as the ink. A filled triangle, or an
-    outline broken by a gap, draws about all of each side; two strokes meeting at an angle (a clock's hands, a check
-    mark, a chevron), whose hull is a triangle too, leave the third side open and as light as the face they lie on,
-    while a faint blurred side or a finger across one is darker. None for a degenerate outline."""
+    tenth of the region round the outline and its triangle) and the outline's ink (the darkest twentieth under it): 0
+    where the side is as light as the paper, 1 where it is as dark as the ink (and where `g` holds none of it). A
+    filled triangle, or an outline broken by a gap, draws about all of each side; two strokes meeting at an angle (a
+    clock's hands, a check mark, a chevron), whose hull is a triangle too, leave the third side open and as light as
+    the face they lie on, while a faint blurred side or a finger across one is darker. None for a degenerate
+    outline."""
     pts = outer.reshape(-1, 2).astype(np.float32)
     try:
         _, tri = cv2.minEnclosingTriangle(pts.reshape(-1, 1, 2))
@@ -1490,7 +1490,7 @@ def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: in
     darkest = []
     for u in np.linspace(0.4, 0.6, 5):  # the side's middle fifth
         line = (a + u * (b - a))[None, :] + across[:, None] * inward[None, :]
-        dark = _grey_at(g, line, np.min)
+        dark = _darkest_at(g, line)
         if dark is not None:
             darkest.append(dark)
     ox, oy = int(x0), int(y0)
@@ -1498,19 +1498,19 @@ def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: in
     sx0, sy0, sx1, sy1 = max(0, ox), max(0, oy), min(w, ox + size[1]), min(h, oy + size[0])
     region = g[sy0:sy1, sx0:sx1]
     under = region[ink_mask[sy0 - oy : sy1 - oy, sx0 - ox : sx1 - ox] > 0]
-    if not darkest or not under.size:
+    if not darkest or not under.size:  # the side lies outside the frame: nothing to call open
         return OpenSide(covers[k], 1.0)
     ink, paper = float(np.percentile(under, 5)), float(np.percentile(region, 90))
     return OpenSide(covers[k], float(np.clip((paper - np.median(darkest)) / max(1.0, paper - ink), 0.0, 1.0)))
 
 
-def _grey_at(g: np.ndarray, points: np.ndarray, how: Callable[[np.ndarray], Any] = np.median) -> float | None:
-    """The median (or `how`) of `g`'s grey levels at `points` (x, y) that lie inside it; None if none does."""
+def _darkest_at(g: np.ndarray, points: np.ndarray) -> float | None:
+    """The darkest of `g`'s grey levels at `points` (x, y) that lie inside it; None if none does."""
     cols, rows = np.round(points[:, 0]).astype(int), np.round(points[:, 1]).astype(int)
     inside = (cols >= 0) & (rows >= 0) & (cols < g.shape[1]) & (rows < g.shape[0])
     if not inside.any():
         return None
-    return float(how(g[rows[inside], cols[inside]]))
+    return float(g[rows[inside], cols[inside]].min())
 
 
 def _reach(cfg: DetectorConfig, extent: float) -> float:
