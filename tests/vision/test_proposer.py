@@ -25,6 +25,13 @@ def _blind_frame(seed: int, index: int) -> tuple[np.ndarray, object]:
     return img, label
 
 
+def _boxes(config: object, frame: np.ndarray, shape: Shape) -> list[tuple[int, int, int, int]]:
+    """The boxes of the `shape` marks a detector with `config` reports in `frame`."""
+    from services.vision.detector import MarkDetector
+
+    return [d.box for d in MarkDetector(config).detect(frame) if d.shape is shape]  # type: ignore[arg-type]
+
+
 def _tuning_frame(seed: int, index: int, **variation: float) -> tuple[np.ndarray, list]:
     """Frame `index` of the tuning generator's `seed` (with `Variation` settings), as the bench draws it, and its
     labels."""
@@ -391,7 +398,7 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
     are refused, naming them."""
     from dataclasses import replace
 
-    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.detector import DetectorConfig, box_overlap
 
     off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0), propose_o_clear=0.0, o_clear=0.0)
     sure = DetectorConfig(
@@ -400,17 +407,13 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
     clear = replace(sure, propose_o_clear=0.05)
     img, label = _blind_frame(863, 163)
     assert label is None
-
-    def o_boxes(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
-        return [d.box for d in MarkDetector(config).detect(frame) if d.shape is Shape.O]
-
-    assert not o_boxes(off, img)
-    assert len(o_boxes(sure, img)) == 1
-    assert not o_boxes(clear, img)
+    assert not _boxes(off, img, Shape.O)
+    assert len(_boxes(sure, img, Shape.O)) == 1
+    assert not _boxes(clear, img, Shape.O)
     img, labels = _tuning_frame(7166, 29, hand_variety=0.5, hand_drawn=0.5)
     assert labels[0].shape is Shape.O
     for config, kept in ((off, False), (sure, True), (clear, True)):
-        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in o_boxes(config, img)) is kept
+        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in _boxes(config, img, Shape.O)) is kept
     for bad in ({"propose_o_clear": -0.1}, {"propose_o_clear": 1.5}, {"propose_o_middle": 0.0}):
         with pytest.raises(ValueError, match="propose_o_clear.*propose_o_middle"):
             DetectorConfig(**bad)  # type: ignore[arg-type]
@@ -448,16 +451,12 @@ def test_a_proposed_triangle_with_a_round_solid_middle_is_refused_with_propose_t
     agrees (0.93); its middle is a disc, so with `propose_t_fill` 0.7 it is refused (a filled triangle's middle fills
     more of its triangle: `test_middle_blob_tells_a_disc_from_a_filled_triangle`). Out-of-range settings are refused,
     naming them."""
-    from services.vision.detector import DetectorConfig, MarkDetector
+    from services.vision.detector import DetectorConfig
 
     img, label = _blind_frame(853, 59)
     assert label is None
-
-    def triangles(config: DetectorConfig) -> list[tuple[int, int, int, int]]:
-        return [d.box for d in MarkDetector(config).detect(img) if d.shape is Shape.TRIANGLE]
-
-    assert len(triangles(DetectorConfig(propose_t_fill=0.0))) == 1
-    assert not triangles(DetectorConfig(propose_t_fill=0.7))
+    assert len(_boxes(DetectorConfig(propose_t_fill=0.0), img, Shape.TRIANGLE)) == 1
+    assert not _boxes(DetectorConfig(propose_t_fill=0.7), img, Shape.TRIANGLE)
     for bad in ({"propose_t_fill": -0.1}, {"propose_t_fill": 1.5}, {"propose_t_round": -1.0}):
         with pytest.raises(ValueError, match="propose_t_fill.*propose_t_round"):
             DetectorConfig(**bad)  # type: ignore[arg-type]
@@ -468,21 +467,17 @@ def test_an_o_the_verifier_is_unsure_of_needs_a_blank_middle_with_o_clear() -> N
     hands and hub in the middle) is reported as an O at 0.695 by default; with `o_clear` 0.05 it is not. An O the
     verifier is sure of (`o_clear_sure` 0.95) is reported whatever its middle holds: a small tuning O touched by a
     fingertip (seed 7175, frame 201: 0.967; the finger widens its box, whose middle then takes in the ring: 0.23 ink). Out-of-range settings are refused."""
-    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.detector import DetectorConfig, box_overlap
 
     off, on = DetectorConfig(o_clear=0.0), DetectorConfig(o_clear=0.05)
     img, label = _blind_frame(853, 87)
     assert label is None
-
-    def o_boxes(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
-        return [d.box for d in MarkDetector(config).detect(frame) if d.shape is Shape.O]
-
-    assert len(o_boxes(off, img)) == 1
-    assert not o_boxes(on, img)
+    assert len(_boxes(off, img, Shape.O)) == 1
+    assert not _boxes(on, img, Shape.O)
     img, labels = _tuning_frame(7175, 201)
     assert labels[0].shape is Shape.O
     for config in (off, on):
-        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in o_boxes(config, img))
+        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in _boxes(config, img, Shape.O))
     for bad in ({"o_clear": -0.1}, {"o_clear": 1.5}, {"o_clear_sure": 2.0}):
         with pytest.raises(ValueError, match="o_clear.*o_clear_sure"):
             DetectorConfig(**bad)  # type: ignore[arg-type]
@@ -531,21 +526,17 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
     (0.97); their third side is open on the clock's face, so with `open_side` 0.75 they are refused. A filled tuning
     triangle whose side two fingers cover (seed 7181 with varied hands, frame 154: cover 0.53, but the fingers are
     darker than the card, shade 0.98) is reported either way. Out-of-range settings are refused, naming them."""
-    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.detector import DetectorConfig, box_overlap
 
     off, on = DetectorConfig(open_side=0.0), DetectorConfig(open_side=0.75)
     img, label = _blind_frame(863, 11)
     assert label is None
-
-    def triangles(config: DetectorConfig, frame: np.ndarray) -> list[tuple[int, int, int, int]]:
-        return [d.box for d in MarkDetector(config).detect(frame) if d.shape is Shape.TRIANGLE]
-
-    assert len(triangles(off, img)) == 1
-    assert not triangles(on, img)
+    assert len(_boxes(off, img, Shape.TRIANGLE)) == 1
+    assert not _boxes(on, img, Shape.TRIANGLE)
     img, labels = _tuning_frame(7181, 154, hand_variety=1.0, hand_drawn=1.0)
     assert labels[0].shape is Shape.TRIANGLE
     for config in (off, on):
-        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in triangles(config, img))
+        assert any(box_overlap(b, labels[0].box) >= 0.5 for b in _boxes(config, img, Shape.TRIANGLE))
     for bad in ({"open_side": -0.1}, {"open_side": 1.5}, {"open_side_shade": 2.0}):
         with pytest.raises(ValueError, match="open_side.*open_side_shade"):
             DetectorConfig(**bad)  # type: ignore[arg-type]
@@ -581,15 +572,11 @@ def test_a_proposed_triangle_that_is_two_strokes_is_refused_with_propose_open_si
     """`propose_open_side` (round vision50b): a check mark on a card (diagnostic blind seed 853, frame 391) is proposed
     as a TRIANGLE and the verifier agrees (0.90); its outline is open on one side and light there (cover 0.41, shade
     0.06), so with `propose_open_side` 0.6 it is refused. Out-of-range settings are refused, naming them."""
-    from services.vision.detector import DetectorConfig, MarkDetector
+    from services.vision.detector import DetectorConfig
 
     img, label = _blind_frame(853, 391)
     assert label is None
-
-    def triangles(config: DetectorConfig) -> list[tuple[int, int, int, int]]:
-        return [d.box for d in MarkDetector(config).detect(img) if d.shape is Shape.TRIANGLE]
-
-    assert len(triangles(DetectorConfig(propose_open_side=0.0))) == 1
-    assert not triangles(DetectorConfig(propose_open_side=0.6))
+    assert len(_boxes(DetectorConfig(propose_open_side=0.0), img, Shape.TRIANGLE)) == 1
+    assert not _boxes(DetectorConfig(propose_open_side=0.6), img, Shape.TRIANGLE)
     with pytest.raises(ValueError, match="propose_open_side"):
         DetectorConfig(propose_open_side=1.5)
