@@ -752,9 +752,13 @@ class MarkDetector:
         a triangle: no hole, one side open and as light as the paper (`box_outline`, `open_side`,
         `DetectorConfig.propose_open_side`)."""
         outline = box_outline(gray, box)
-        side = None if outline is None else open_side(gray, outline)
-        cfg = self.config
-        return side is not None and side.cover < cfg.propose_open_side and side.shade < cfg.open_side_shade
+        return outline is not None and self._two_strokes(gray, outline, self.config.propose_open_side)
+
+    def _two_strokes(self, g: np.ndarray, outline: np.ndarray, bar: float) -> bool:
+        """Whether `outline` (in `g`'s pixels) leaves one side of its enclosing triangle open, drawn along less than
+        `bar` of it, and as light as the paper there (`open_side`, `DetectorConfig.open_side_shade`)."""
+        side = open_side(g, outline)
+        return side is not None and side.cover < bar and side.shade < self.config.open_side_shade
 
     def _runs_on(self, box: Box) -> bool:
         """Whether the ink at the middle of `box` (frame pixels) runs on past it as crossing strokes do
@@ -898,8 +902,7 @@ class MarkDetector:
         if cfg.open_side <= 0 or p.blob is None or p.blob.holes:
             return False
         x, y = p.box[:2]
-        side = open_side(p.level.g, p.blob.outer + np.array([x - 1, y - 1], np.int32))  # the level's pixels
-        return side is not None and side.cover < cfg.open_side and side.shade < cfg.open_side_shade
+        return self._two_strokes(p.level.g, p.blob.outer + np.array([x - 1, y - 1], np.int32), cfg.open_side)
 
     def _second_triangles(
         self, pending: list[_Pending], patches: np.ndarray, claims: np.ndarray, probs: np.ndarray
@@ -1380,13 +1383,11 @@ def middle_blob(g: np.ndarray, box: Box) -> BlobShape | None:
     if not len(ids):
         return None
     i = int(ids[np.argmax(counts)])
-    bx, by, bw, bh, _ = stats[i]
-    if bx == 0 or by == 0 or bx + bw >= labels.shape[1] or by + bh >= labels.shape[0] or max(bw, bh) < 6:
+    if not _lies_inside(stats, i, labels.shape):
         return None
-    contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    if len(contours) != 1:  # a hole: an outline, judged by its shape tests, not here
+    outer = _hole_free_outline(labels, i)
+    if outer is None:  # a hole: an outline, judged by its shape tests, not here
         return None
-    outer = contours[0]
     area = cv2.contourArea(outer)
     hull = cv2.contourArea(cv2.convexHull(outer))
     roundness = _ellipse_residual(outer)
@@ -1428,20 +1429,24 @@ def box_outline(g: np.ndarray, box: Box) -> np.ndarray | None:
     if ink is None:
         return None
     (x0, y0), labels, stats = ink
-    h, w = labels.shape
-    inside = [
-        i
-        for i in range(1, len(stats))
-        if stats[i, 0] > 0 and stats[i, 1] > 0 and stats[i, 0] + stats[i, 2] < w and stats[i, 1] + stats[i, 3] < h
-        and max(stats[i, 2], stats[i, 3]) >= 6
-    ]
+    inside = [i for i in range(1, len(stats)) if _lies_inside(stats, i, labels.shape)]
     if not inside:
         return None
-    i = max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA])
+    outer = _hole_free_outline(labels, max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA]))
+    return None if outer is None else outer + np.array([x0, y0], np.int32)
+
+
+def _lies_inside(stats: np.ndarray, i: int, region: tuple[int, ...]) -> bool:
+    """Whether blob `i` of a region of this shape (rows, columns) touches none of its edges (does not run on past
+    it, as a finger, a hand or a bigger shape would) and is at least 6 px across (`middle_blob`, `box_outline`)."""
+    bx, by, bw, bh = (int(v) for v in stats[i, :4])
+    return bx > 0 and by > 0 and bx + bw < region[1] and by + bh < region[0] and max(bw, bh) >= 6
+
+
+def _hole_free_outline(labels: np.ndarray, i: int) -> np.ndarray | None:
+    """The outline of blob `i` in `labels`, or None if it has a hole."""
     contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    if len(contours) != 1:
-        return None
-    return contours[0] + np.array([x0, y0], np.int32)
+    return contours[0] if len(contours) == 1 else None
 
 
 def open_side(g: np.ndarray, outer: np.ndarray, reach: float = 0.08, samples: int = 17) -> OpenSide | None:
