@@ -288,6 +288,20 @@ class DetectorConfig:
     than this share and is as light as the paper (a clock's hands, a chevron or a check mark on a card). 0: off. On
     since round vision50b (vision README): on two fresh blind seeds false triangles 12 -> 9 and false-mark frames 15 ->
     13 of 1,000; on two fresh held-out seeds every count the same."""
+    star_depth: float = 0.0
+    """an X or a TRIANGLE (a component's or a proposal's) is refused where the largest blob of ink in its box (holes
+    allowed; one running on past the box, joined to a finger or a card's edge, is not judged) has five or more notches
+    at least this share of its extent deep, spread round it so that no two neighbours lie more than `star_spread`
+    times an even spacing apart, the nearest `star_inner` or more of the way out (`notches`): a five-pointed star,
+    outlined or filled, a sticker or a sign on a card. An X has four such notches and a triangle none; the blind
+    generator's stars were taken for both. 0: off."""
+    star_spread: float = 1.6
+    """the widest angle between two neighbouring notches (`star_depth`), as a multiple of 360 degrees over their
+    number, for the notches to count as a star's"""
+    star_inner: float = 0.33
+    """the nearest of those notches must lie at least this share of the blob's reach from its centre: a star's notches
+    lie about half-way out (0.34-0.49 on the blind generator's stars), an X's where its strokes cross, near the centre,
+    even where a finger joined to a stroke adds a fifth notch (0.07-0.22 on the tuning generator's)"""
     propose_x_span: float = 0.0
     """a proposed X is refused where its strokes run on as a crossing's do (`propose_x_exits` of them): the ink at
     its middle belongs to a component (at the finest pyramid level) whose longest side is at least this many times
@@ -388,6 +402,9 @@ class DetectorConfig:
         if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
             raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
                              "to 1, and a confidence, 0 to 1")
+        if not (0.0 <= self.star_depth <= 1.0 and self.star_spread > 0 and 0.0 <= self.star_inner <= 1.0):
+            raise ValueError(f"star_depth {self.star_depth}, star_inner {self.star_inner}: shares, 0 to 1; star_spread "
+                             f"{self.star_spread}: over 0")
         if not (0.0 <= self.open_side <= 1.0 and 0.0 <= self.propose_open_side <= 1.0 and 0.0 <= self.open_side_shade
                 <= 1.0):
             raise ValueError(f"open_side {self.open_side}, propose_open_side {self.propose_open_side}, open_side_shade "
@@ -599,6 +616,7 @@ class MarkDetector:
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
         self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
+        self._gray: np.ndarray | None = None  # this frame's grey image at full working resolution (`star`)
         self._levels: list[_Level] = []  # this frame's pyramid levels, for the proposals' text test
         self._vetoes: list[Box] = []
         """this frame's components the context tests refused, in input pixels: no proposal over them is
@@ -651,7 +669,7 @@ class MarkDetector:
         """A second detector with the same settings and the same loaded networks (no more memory for
         them), for a second frame in flight: a frame's working state lives on its detector."""
         other = copy.copy(self)
-        other._greys, other._levels, other._vetoes = {}, [], []
+        other._greys, other._levels, other._vetoes, other._gray = {}, [], [], None
         return other
 
     def _detect_gray(self, gray: np.ndarray) -> Steps:
@@ -660,7 +678,7 @@ class MarkDetector:
         (then `Step.FINE` before the finest level: none was found in the others)."""
         found: list[Detection] = []
         pending: list[_Pending] = []
-        self._greys, self._vetoes, self._levels = {}, [], []
+        self._greys, self._vetoes, self._levels, self._gray = {}, [], [], gray
         levels = self.config.levels
         early = self.config.danger_first and self.verifier is not None
         if early:
@@ -718,6 +736,8 @@ class MarkDetector:
                 continue
             if p.shape is Shape.TRIANGLE and cfg.propose_open_side and self.open_proposal(gray, p.box):
                 continue
+            if p.shape is not Shape.O and self.star(p.box):
+                continue
             out.append(Detection(p.shape, float(row[k]), p.box))
         return out
 
@@ -753,6 +773,17 @@ class MarkDetector:
         `DetectorConfig.propose_open_side`)."""
         outline = box_outline(gray, box)
         return outline is not None and self._two_strokes(gray, outline, self.config.propose_open_side)
+
+    def star(self, box: Box) -> bool:
+        """Whether the largest blob of ink in `box` (frame pixels) of the frame being detected is a star: five or more
+        deep notches spread evenly round it (`notches`, `DetectorConfig.star_depth`)."""
+        cfg = self.config
+        if not cfg.star_depth or self._gray is None:
+            return False
+        n = notches(self._gray, box, cfg.star_depth)
+        if n is None or n.count < 5:
+            return False
+        return n.widest_gap <= cfg.star_spread * 360.0 / n.count and n.inner >= cfg.star_inner
 
     def _two_strokes(self, g: np.ndarray, outline: np.ndarray, bar: float) -> bool:
         """Whether `outline` (in `g`'s pixels) leaves one side of its enclosing triangle open, drawn along less than
@@ -888,6 +919,8 @@ class MarkDetector:
                         and prob >= self.config.card_rescue
                     ):
                         det, stage = Detection(claimed, prob, p.box), "kept"
+            if det is not None and det.shape is not Shape.O and self.star(_up(det.box, p.level.f)):
+                det, stage = None, "shape"
             if self._trace is not None and p.trace_at is not None:
                 t = self._trace[p.trace_at]
                 self._trace[p.trace_at] = Traced(t.box, claimed, stage, t.scale)
@@ -1516,6 +1549,55 @@ def _darkest_at(g: np.ndarray, points: np.ndarray) -> float | None:
     if not inside.any():
         return None
     return float(g[rows[inside], cols[inside]].min())
+
+
+@dataclass(frozen=True)
+class Notches:
+    """The deep notches of the largest blob of ink in a box (`notches`)."""
+
+    count: int  # notches at least `depth` times the blob's extent deep
+    widest_gap: float  # the widest angle (degrees) between two neighbouring notches, seen from the blob's centre
+    inner: float  # the nearest notch's distance from the centre, as a share of the farthest point of the outline's
+
+
+def notches(g: np.ndarray, box: Box, depth: float) -> Notches | None:
+    """The notches of the largest blob of ink in `box` (`_box_ink`) that lies inside the region (does not run on past
+    it) and is at least 6 px across, holes allowed: the convexity defects of its outer outline at least `depth` times
+    its larger extent deep, and the widest angle between two of them neighbouring round the blob's centre (360 for
+    one; 0 for none). An X has four deep notches and a triangle none, while a five-pointed star has five, evenly
+    spread (`DetectorConfig.star_depth`). None where there is no such blob or its outline is degenerate."""
+    ink = _box_ink(g, box)
+    if ink is None:
+        return None
+    _, labels, stats = ink
+    inside = [i for i in range(1, len(stats)) if _lies_inside(stats, i, labels.shape)]
+    if not inside:
+        return None
+    i = max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA])
+    contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    outer = max(contours, key=cv2.contourArea)
+    if len(outer) < 8:
+        return None
+    try:
+        defects = cv2.convexityDefects(outer, np.sort(cv2.convexHull(outer, returnPoints=False), axis=0))
+    except cv2.error:  # an outline that crosses itself
+        return None
+    extent = float(max(stats[i, cv2.CC_STAT_WIDTH], stats[i, cv2.CC_STAT_HEIGHT]))
+    if defects is None:
+        return Notches(0, 0.0, 0.0)
+    defects = defects.reshape(-1, 4)
+    deep = defects[defects[:, 3] / 256.0 >= depth * extent, 2]  # the deepest point of each deep notch
+    if not len(deep):
+        return Notches(0, 0.0, 0.0)
+    m = cv2.moments(outer)
+    if m["m00"] <= 0:
+        return None
+    centre = np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]])
+    at = outer[deep, 0, :].astype(np.float64) - centre
+    angles = np.sort(np.degrees(np.arctan2(at[:, 1], at[:, 0])))
+    gaps = np.diff(np.concatenate([angles, angles[:1] + 360.0]))
+    reach = float(np.hypot(*(outer[:, 0, :] - centre).T).max())
+    return Notches(len(deep), float(gaps.max()), float(np.hypot(*at.T).min()) / max(reach, 1e-6))
 
 
 def _reach(cfg: DetectorConfig, extent: float) -> float:
