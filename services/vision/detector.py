@@ -1458,15 +1458,25 @@ def box_outline(g: np.ndarray, box: Box) -> np.ndarray | None:
     not run on past it) and is at least 6 px across, if it has no hole; None otherwise (an outline's hole: judged by
     the verifier alone). What `open_side` judges of a proposal, which has no component of its own
     (`DetectorConfig.propose_open_side`)."""
+    blob = _largest_inside(g, box)
+    if blob is None:
+        return None
+    (x0, y0), labels, stats, i = blob
+    outer = _hole_free_outline(labels, i)
+    return None if outer is None else outer + np.array([x0, y0], np.int32)
+
+
+def _largest_inside(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarray, np.ndarray, int] | None:
+    """The largest blob of ink in `box` (`_box_ink`) that lies inside the region (`_lies_inside`): the region's origin
+    in `g`, its labels and stats, and the blob's label; None if there is none (`box_outline`, `notches`)."""
     ink = _box_ink(g, box)
     if ink is None:
         return None
-    (x0, y0), labels, stats = ink
+    origin, labels, stats = ink
     inside = [i for i in range(1, len(stats)) if _lies_inside(stats, i, labels.shape)]
     if not inside:
         return None
-    outer = _hole_free_outline(labels, max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA]))
-    return None if outer is None else outer + np.array([x0, y0], np.int32)
+    return origin, labels, stats, max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA])
 
 
 def _lies_inside(stats: np.ndarray, i: int, region: tuple[int, ...]) -> bool:
@@ -1557,7 +1567,7 @@ class Notches:
 
     count: int  # notches at least `depth` times the blob's extent deep
     widest_gap: float  # the widest angle (degrees) between two neighbouring notches, seen from the blob's centre
-    inner: float  # the nearest notch's distance from the centre, as a share of the farthest point of the outline's
+    inner: float  # the nearest notch's distance from the centre, as a share of the outline's farthest point's
 
     def star(self, spread: float, inner: float) -> bool:
         """Whether these are a star's notches: five or more, no two neighbours more than `spread` times an even spacing
@@ -1568,17 +1578,14 @@ class Notches:
 def notches(g: np.ndarray, box: Box, depth: float) -> Notches | None:
     """The notches of the largest blob of ink in `box` (`_box_ink`) that lies inside the region (does not run on past
     it) and is at least 6 px across, holes allowed: the convexity defects of its outer outline at least `depth` times
-    its larger extent deep, and the widest angle between two of them neighbouring round the blob's centre (360 for
-    one; 0 for none). An X has four deep notches and a triangle none, while a five-pointed star has five, evenly
-    spread (`DetectorConfig.star_depth`). None where there is no such blob or its outline is degenerate."""
-    ink = _box_ink(g, box)
-    if ink is None:
+    its larger extent deep, the widest angle between two of them neighbouring round the blob's centre (360 for one; 0
+    for none) and how far out the nearest lies. An X has four deep notches, where its strokes cross, and a triangle
+    none, while a five-pointed star has five, evenly spread, about half-way out (`DetectorConfig.star_depth`). None
+    where there is no such blob or its outline is degenerate."""
+    blob = _largest_inside(g, box)
+    if blob is None:
         return None
-    _, labels, stats = ink
-    inside = [i for i in range(1, len(stats)) if _lies_inside(stats, i, labels.shape)]
-    if not inside:
-        return None
-    i = max(inside, key=lambda j: stats[j, cv2.CC_STAT_AREA])
+    _, labels, stats, i = blob
     contours, _ = cv2.findContours((labels == i).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     outer = max(contours, key=cv2.contourArea)
     if len(outer) < 8:
