@@ -1592,7 +1592,7 @@ def notches(g: np.ndarray, box: Box, depth: float) -> Notches | None:
         return None
     try:
         defects = cv2.convexityDefects(outer, np.sort(cv2.convexHull(outer, returnPoints=False), axis=0))
-    except cv2.error:  # an outline that crosses itself
+    except cv2.error:  # OpenCV refuses a hull it finds not monotonous even sorted (a self-touching outline)
         return None
     extent = float(max(stats[i, cv2.CC_STAT_WIDTH], stats[i, cv2.CC_STAT_HEIGHT]))
     if defects is None:
