@@ -1481,7 +1481,7 @@ def _largest_inside(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarra
 
 def _lies_inside(stats: np.ndarray, i: int, region: tuple[int, ...]) -> bool:
     """Whether blob `i` of a region of this shape (rows, columns) touches none of its edges (does not run on past
-    it, as a finger, a hand or a bigger shape would) and is at least 6 px across (`middle_blob`, `box_outline`)."""
+    it, as a finger, a hand or a bigger shape would) and is at least 6 px across (`middle_blob`, `_largest_inside`)."""
     bx, by, bw, bh = (int(v) for v in stats[i, :4])
     return bx > 0 and by > 0 and bx + bw < region[1] and by + bh < region[0] and max(bw, bh) >= 6
 
