@@ -270,6 +270,11 @@ class DetectorConfig:
     seeds false O 17 -> 12, on two fresh held-out seeds 14 -> 12, for one more missed held-out O in 1,000."""
     o_clear_sure: float = 0.95
     """the confidence from which an O is reported whatever its middle holds (`o_clear`)"""
+    o_islands: float = 0.0
+    """an O is refused, however sure the verifier is, where separate blobs of ink lie wholly inside the middle of its
+    box (`hole_islands`: touching neither its ring nor anything beyond the middle) and cover more than this share of
+    its box: a face's eyes and mouth inside the outline of a head. An O mark's hole is blank card; a fingertip
+    reaching into it comes in across the ring, so it is not a separate blob. 0: off."""
     open_side: float = 0.75
     """a loose candidate without a hole that the verifier (or the second network) names a TRIANGLE is refused where
     one side of its minimum enclosing triangle is open: drawn along less than this share (the cover of `open_side`,
@@ -404,6 +409,8 @@ class DetectorConfig:
         if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
             raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
                              "to 1, and a confidence, 0 to 1")
+        if not 0.0 <= self.o_islands <= 1.0:
+            raise ValueError(f"o_islands {self.o_islands}: a share of the box, 0 (off) to 1")
         if not (0.0 <= self.star_depth <= 1.0 and self.star_spread > 0 and 0.0 <= self.star_inner <= 1.0):
             raise ValueError(f"star_depth {self.star_depth}, star_inner {self.star_inner}: shares, 0 to 1; star_spread "
                              f"{self.star_spread}: over 0")
@@ -750,16 +757,18 @@ class MarkDetector:
         return middle_ink(self._greys.get(f, gray), _down(box, f), self.config.propose_o_middle)
 
     def _blank_middles(self, gray: np.ndarray, found: list[Detection]) -> list[Detection]:
-        """`found` without the O whose middle is not blank (`DetectorConfig.o_clear`, `o_clear_sure`)."""
+        """`found` without the O whose middle is not blank: an unsure one with ink there (`DetectorConfig.o_clear`,
+        `o_clear_sure`), any with islands of ink in its hole (`o_islands`)."""
         cfg = self.config
-        if not cfg.o_clear:
-            return found
         return [
             d
             for d in found
             if d.shape is not Shape.O
-            or d.confidence >= cfg.o_clear_sure
-            or middle_ink(gray, d.box, cfg.propose_o_middle) <= cfg.o_clear
+            or (
+                (not cfg.o_clear or d.confidence >= cfg.o_clear_sure
+                 or middle_ink(gray, d.box, cfg.propose_o_middle) <= cfg.o_clear)
+                and (not cfg.o_islands or hole_islands(gray, d.box) <= cfg.o_islands)
+            )
         ]
 
     def cornerless(self, gray: np.ndarray, box: Box) -> bool:
@@ -1387,6 +1396,41 @@ def middle_ink(g: np.ndarray, box: Box, middle: float) -> float:
 
 _MIDDLE_CONTRAST = 20.0
 """grey levels a proposed O's middle must be lighter than its ring's ink (`middle_ink`)"""
+
+
+def hole_islands(g: np.ndarray, box: Box) -> float:
+    """The share of `box`'s area covered by islands of ink in an O's hole: the blobs of ink (`_box_ink`) other than
+    the largest, each at least `_ISLAND_LEAST` of the box, whose bounding boxes lie wholly inside the ellipse of
+    `_ISLAND_REACH` x the box's width and height at its centre. About 0 for an O mark, whose hole is blank card (a
+    fingertip or a card's edge reaching in comes from outside the middle); a face's eyes and mouth are islands. 0
+    where the box shows no ink to split."""
+    ink = _box_ink(g, box)
+    if ink is None:
+        return 0.0
+    (x0, y0), _, stats = ink
+    if len(stats) < 3:
+        return 0.0
+    x, y, w, h = box
+    area = float(w * h)
+    cx, cx_half = x + w / 2 - x0, _ISLAND_REACH * w / 2
+    cy, cy_half = y + h / 2 - y0, _ISLAND_REACH * h / 2
+    ring = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    total = 0
+    for i in range(1, len(stats)):
+        bx, by, bw, bh, a = (int(v) for v in stats[i])
+        if i == ring or a < _ISLAND_LEAST * area:
+            continue
+        corners = ((bx, by), (bx + bw, by), (bx, by + bh), (bx + bw, by + bh))
+        if all(((px - cx) / cx_half) ** 2 + ((py - cy) / cy_half) ** 2 <= 1 for px, py in corners):
+            total += a
+    return total / area
+
+
+_ISLAND_LEAST = 0.002
+"""the smallest blob `hole_islands` counts, as a share of the box (a speck of noise or JPEG is smaller)"""
+_ISLAND_REACH = 0.8
+"""the middle `hole_islands` looks in, as a share of the box's width and height (an O's hole with the tuning
+generator's strokes is 0.6-0.8 of its width)"""
 
 
 @dataclass(frozen=True)
