@@ -469,7 +469,8 @@ def test_an_o_the_verifier_is_unsure_of_needs_a_blank_middle_with_o_clear() -> N
     fingertip (seed 7175, frame 201: 0.967; the finger widens its box, whose middle then takes in the ring: 0.23 ink). Out-of-range settings are refused."""
     from services.vision.detector import DetectorConfig, box_overlap
 
-    off, on = DetectorConfig(o_clear=0.0), DetectorConfig(o_clear=0.05)
+    # o_islands 0: its hands and hub are islands in its hole too (round vision52), and this is o_clear's test
+    off, on = DetectorConfig(o_clear=0.0, o_islands=0.0), DetectorConfig(o_clear=0.05, o_islands=0.0)
     img, label = _blind_frame(853, 87)
     assert label is None
     assert len(_boxes(off, img, Shape.O)) == 1
