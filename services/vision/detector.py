@@ -296,6 +296,9 @@ class DetectorConfig:
     than this share and is as light as the paper (a clock's hands, a chevron or a check mark on a card). 0: off. On
     since round vision50b (vision README): on two fresh blind seeds false triangles 12 -> 9 and false-mark frames 15 ->
     13 of 1,000; on two fresh held-out seeds every count the same."""
+    propose_open_margin: float = 0.1
+    """the paper round a proposed TRIANGLE's box, as a share of its size, in which `propose_open_side` looks for its ink
+    (`box_outline`): a blob that runs on past that region is not judged"""
     star_depth: float = 0.1
     """an X or a TRIANGLE (a component's or a proposal's) is refused where the largest blob of ink in its box (holes
     allowed; one running on past the box, joined to a finger or a card's edge, is not judged) has five or more notches
@@ -412,6 +415,8 @@ class DetectorConfig:
         if not 0.0 <= self.o_clear <= 1.0 or not 0.0 <= self.o_clear_sure <= 1.0:
             raise ValueError(f"o_clear {self.o_clear}, o_clear_sure {self.o_clear_sure}: a share of the middle, 0 (off) "
                              "to 1, and a confidence, 0 to 1")
+        if not 0.0 <= self.propose_open_margin <= 2.0:
+            raise ValueError(f"propose_open_margin {self.propose_open_margin}: a share of the box's size, 0 to 2")
         if not 0.0 <= self.o_islands <= 1.0:
             raise ValueError(f"o_islands {self.o_islands}: a share of the box, 0 (off) to 1")
         if not (0.0 <= self.star_depth <= 1.0 and self.star_spread > 0 and 0.0 <= self.star_inner <= 1.0):
@@ -785,7 +790,7 @@ class MarkDetector:
         """Whether the largest blob of ink in a proposal's `box` (frame pixels) is two strokes meeting at an angle, not
         a triangle: no hole, one side open and as light as the paper (`box_outline`, `open_side`,
         `DetectorConfig.propose_open_side`)."""
-        outline = box_outline(gray, box)
+        outline = box_outline(gray, box, self.config.propose_open_margin)
         return outline is not None and self._two_strokes(gray, outline, self.config.propose_open_side)
 
     def star(self, box: Box) -> bool:
@@ -1484,12 +1489,14 @@ class OpenSide:
     shade: float  # how dark its middle is, from the paper round the outline (0) to the outline's ink (1)
 
 
-def _box_ink(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarray, np.ndarray] | None:
-    """The ink of `box` and a tenth of its size round it (Otsu's split of that region), as connected components: the
+def _box_ink(
+    g: np.ndarray, box: Box, margin: float = 0.1
+) -> tuple[tuple[int, int], np.ndarray, np.ndarray] | None:
+    """The ink of `box` and `margin` x its size round it (Otsu's split of that region), as connected components: the
     region's origin in `g`, its labels and their stats. None where the region is under 8 px a side or shows under
     `_MIDDLE_CONTRAST` grey levels."""
     x, y, w, h = box
-    m = max(2, math.ceil(0.1 * max(w, h)))
+    m = max(2, math.ceil(margin * max(w, h)))
     x0, y0 = max(0, x - m), max(0, y - m)
     x1, y1 = min(g.shape[1], x + w + m), min(g.shape[0], y + h + m)
     roi = g[y0:y1, x0:x1]
@@ -1500,12 +1507,12 @@ def _box_ink(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarray, np.n
     return (x0, y0), labels, stats
 
 
-def box_outline(g: np.ndarray, box: Box) -> np.ndarray | None:
-    """The outline (in `g`'s pixels) of the largest blob of ink in `box` (`_box_ink`) that lies inside the region (does
-    not run on past it) and is at least 6 px across, if it has no hole; None otherwise (an outline's hole: judged by
-    the verifier alone). What `open_side` judges of a proposal, which has no component of its own
-    (`DetectorConfig.propose_open_side`)."""
-    blob = _largest_inside(g, box)
+def box_outline(g: np.ndarray, box: Box, margin: float = 0.1) -> np.ndarray | None:
+    """The outline (in `g`'s pixels) of the largest blob of ink in `box` and `margin` x its size round it (`_box_ink`)
+    that lies inside that region (does not run on past it) and is at least 6 px across, if it has no hole; None
+    otherwise (an outline's hole: judged by the verifier alone). What `open_side` judges of a proposal, which has no
+    component of its own (`DetectorConfig.propose_open_side`, `propose_open_margin`)."""
+    blob = _largest_inside(g, box, margin)
     if blob is None:
         return None
     (x0, y0), labels, stats, i = blob
@@ -1513,10 +1520,13 @@ def box_outline(g: np.ndarray, box: Box) -> np.ndarray | None:
     return None if outer is None else outer + np.array([x0, y0], np.int32)
 
 
-def _largest_inside(g: np.ndarray, box: Box) -> tuple[tuple[int, int], np.ndarray, np.ndarray, int] | None:
-    """The largest blob of ink in `box` (`_box_ink`) that lies inside the region (`_lies_inside`): the region's origin
-    in `g`, its labels and stats, and the blob's label; None if there is none (`box_outline`, `notches`)."""
-    ink = _box_ink(g, box)
+def _largest_inside(
+    g: np.ndarray, box: Box, margin: float = 0.1
+) -> tuple[tuple[int, int], np.ndarray, np.ndarray, int] | None:
+    """The largest blob of ink in `box` and `margin` x its size round it (`_box_ink`) that lies inside that region
+    (`_lies_inside`): the region's origin in `g`, its labels and stats, and the blob's label; None if there is none
+    (`box_outline`, `notches`)."""
+    ink = _box_ink(g, box, margin)
     if ink is None:
         return None
     origin, labels, stats = ink
