@@ -543,6 +543,17 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
             DetectorConfig(**bad)  # type: ignore[arg-type]
 
 
+def _small_card(draw: object) -> np.ndarray:
+    """A 100 px grey frame with a light card from 10 to 90 px and `draw`'s ink on it, slightly blurred as a camera
+    sees it (`box_outline`'s tests)."""
+    import cv2
+
+    g = np.full((100, 100), 120, np.uint8)
+    cv2.rectangle(g, (10, 10), (90, 90), 230, -1)
+    draw(g)  # type: ignore[operator]
+    return cv2.GaussianBlur(g, (0, 0), 0.8)
+
+
 def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
     """`box_outline` (round vision50b), what `open_side` judges of a proposal: the largest blob of ink inside the box
     and a tenth round it, if it has no hole. Two strokes at an angle on a card give their outline, open on one side;
@@ -551,22 +562,43 @@ def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
 
     from services.vision.detector import box_outline, open_side
 
-    def card(draw: object) -> np.ndarray:
-        g = np.full((100, 100), 120, np.uint8)
-        cv2.rectangle(g, (10, 10), (90, 90), 230, -1)
-        draw(g)  # type: ignore[operator]
-        return cv2.GaussianBlur(g, (0, 0), 0.8)
-
     box = (20, 20, 60, 60)
     tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
-    v = card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
+    v = _small_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
     outline = box_outline(v, box)
     assert outline is not None
     side = open_side(v, outline)
     assert side is not None and side.cover < 0.6 and side.shade < 0.15
-    assert box_outline(card(lambda g: cv2.polylines(g, [tri], True, 40, 4)), box) is None
-    assert box_outline(card(lambda g: cv2.line(g, (0, 50), (99, 50), 40, 6)), box) is None
-    assert box_outline(card(lambda g: None), box) is None
+    assert box_outline(_small_card(lambda g: cv2.polylines(g, [tri], True, 40, 4)), box) is None
+    assert box_outline(_small_card(lambda g: cv2.line(g, (0, 50), (99, 50), 40, 6)), box) is None
+    assert box_outline(_small_card(lambda g: None), box) is None
+
+
+def test_box_outline_with_a_wider_margin_judges_strokes_that_run_past_a_tight_box() -> None:
+    """`box_outline`'s margin (`propose_open_margin`, round vision53): a proposer's box often sits tight on, or inside,
+    two strokes at an angle (a clock's hands, a check mark), so with a tenth round it they run on past the region and
+    there is nothing to judge; with half the box's size round it they lie inside and are open on one side. A filled
+    triangle under the same tight box is found whole and drawn along every side."""
+    import cv2
+
+    from services.vision.detector import DetectorConfig, box_outline, open_side
+
+    tight = (35, 35, 30, 30)
+    tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
+    v = _small_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
+    assert box_outline(v, tight, 0.1) is None
+    outline = box_outline(v, tight, 0.5)
+    assert outline is not None
+    side = open_side(v, outline)
+    assert side is not None and side.cover < 0.6 and side.shade < 0.15
+    filled = _small_card(lambda g: cv2.fillPoly(g, [tri], 40))
+    outline = box_outline(filled, tight, 0.5)
+    assert outline is not None
+    side = open_side(filled, outline)
+    assert side is not None and side.cover > 0.9
+    for bad in (-0.1, 2.5):
+        with pytest.raises(ValueError, match="propose_open_margin"):
+            DetectorConfig(propose_open_margin=bad)
 
 
 def test_a_proposed_triangle_that_is_two_strokes_is_refused_with_propose_open_side() -> None:
