@@ -11,7 +11,7 @@ from services.vision.detector import DetectorConfig, hole_islands
 from tests.vision.test_proposer import _blind_frame, _boxes
 from tests.vision.test_star import _card
 
-BOX = (30, 30, 140, 140)  # a ring of radius 70 round the card's middle
+BOX = (30, 30, 140, 140)  # round `_ring`: radius 64 at the middle of its 12 px stroke, 70 at its outer edge
 
 
 def _ring(g: np.ndarray) -> None:
