@@ -419,6 +419,17 @@ def test_a_proposed_o_kept_by_its_sure_peak_alone_needs_a_blank_middle() -> None
             DetectorConfig(**bad)  # type: ignore[arg-type]
 
 
+def _drawn_card(draw: object, size: int = 100, edge: int = 10) -> np.ndarray:
+    """A `size` px square grey frame with a light card from `edge` to `size - edge` px and `draw`'s ink on it, slightly
+    blurred as a camera sees it (the tests of `middle_blob`, `box_outline`, `notches` and `hole_islands`)."""
+    import cv2
+
+    g = np.full((size, size), 120, np.uint8)
+    cv2.rectangle(g, (edge, edge), (size - edge, size - edge), 230, -1)
+    draw(g)  # type: ignore[operator]
+    return cv2.GaussianBlur(g, (0, 0), 0.8)
+
+
 def test_middle_blob_tells_a_disc_from_a_filled_triangle() -> None:
     """`middle_blob` (round vision48): a small filled disc on a card fills about 0.6 of its enclosing triangle and its
     outline is an ellipse; a filled triangle fills most of its own and has corners. An outline (a hole), ink that
@@ -427,22 +438,16 @@ def test_middle_blob_tells_a_disc_from_a_filled_triangle() -> None:
 
     from services.vision.detector import middle_blob
 
-    def card(draw: object) -> np.ndarray:
-        g = np.full((80, 80), 120, np.uint8)
-        cv2.rectangle(g, (20, 20), (60, 60), 230, -1)
-        draw(g)  # type: ignore[operator]
-        return cv2.GaussianBlur(g, (0, 0), 0.8)
-
     box = (22, 22, 37, 37)
-    disc = middle_blob(card(lambda g: cv2.circle(g, (40, 40), 8, 60, -1, cv2.LINE_AA)), box)
+    disc = middle_blob(_drawn_card(lambda g: cv2.circle(g, (40, 40), 8, 60, -1, cv2.LINE_AA), 80, 20), box)
     tri = np.array([[40, 28], [52, 50], [28, 50]], np.int32)
-    filled = middle_blob(card(lambda g: cv2.fillConvexPoly(g, tri, 60, cv2.LINE_AA)), box)
+    filled = middle_blob(_drawn_card(lambda g: cv2.fillConvexPoly(g, tri, 60, cv2.LINE_AA), 80, 20), box)
     assert disc is not None and filled is not None
     assert disc.triangle_fill < 0.68 and disc.roundness < 0.05 and disc.solidity > 0.9
     assert filled.triangle_fill > 0.8 and filled.roundness > 0.06
-    assert middle_blob(card(lambda g: cv2.polylines(g, [tri], True, 60, 3, cv2.LINE_AA)), box) is None
-    assert middle_blob(card(lambda g: cv2.line(g, (0, 40), (79, 40), 60, 6)), box) is None
-    assert middle_blob(card(lambda g: None), box) is None
+    assert middle_blob(_drawn_card(lambda g: cv2.polylines(g, [tri], True, 60, 3, cv2.LINE_AA), 80, 20), box) is None
+    assert middle_blob(_drawn_card(lambda g: cv2.line(g, (0, 40), (79, 40), 60, 6), 80, 20), box) is None
+    assert middle_blob(_drawn_card(lambda g: None, 80, 20), box) is None
 
 
 def test_a_proposed_triangle_with_a_round_solid_middle_is_refused_with_propose_t_fill() -> None:
@@ -543,17 +548,6 @@ def test_a_loose_triangle_with_an_open_side_is_refused_with_open_side() -> None:
             DetectorConfig(**bad)  # type: ignore[arg-type]
 
 
-def _small_card(draw: object) -> np.ndarray:
-    """A 100 px grey frame with a light card from 10 to 90 px and `draw`'s ink on it, slightly blurred as a camera
-    sees it (`box_outline`'s tests)."""
-    import cv2
-
-    g = np.full((100, 100), 120, np.uint8)
-    cv2.rectangle(g, (10, 10), (90, 90), 230, -1)
-    draw(g)  # type: ignore[operator]
-    return cv2.GaussianBlur(g, (0, 0), 0.8)
-
-
 def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
     """`box_outline` (round vision50b), what `open_side` judges of a proposal: the largest blob of ink inside the box
     and a tenth round it, if it has no hole. Two strokes at an angle on a card give their outline, open on one side;
@@ -564,14 +558,14 @@ def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
 
     box = (20, 20, 60, 60)
     tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
-    v = _small_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
+    v = _drawn_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
     outline = box_outline(v, box)
     assert outline is not None
     side = open_side(v, outline)
     assert side is not None and side.cover < 0.6 and side.shade < 0.15
-    assert box_outline(_small_card(lambda g: cv2.polylines(g, [tri], True, 40, 4)), box) is None
-    assert box_outline(_small_card(lambda g: cv2.line(g, (0, 50), (99, 50), 40, 6)), box) is None
-    assert box_outline(_small_card(lambda g: None), box) is None
+    assert box_outline(_drawn_card(lambda g: cv2.polylines(g, [tri], True, 40, 4)), box) is None
+    assert box_outline(_drawn_card(lambda g: cv2.line(g, (0, 50), (99, 50), 40, 6)), box) is None
+    assert box_outline(_drawn_card(lambda g: None), box) is None
 
 
 def test_box_outline_with_a_wider_margin_judges_strokes_that_run_past_a_tight_box() -> None:
@@ -585,13 +579,13 @@ def test_box_outline_with_a_wider_margin_judges_strokes_that_run_past_a_tight_bo
 
     tight = (35, 35, 30, 30)
     tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
-    v = _small_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
+    v = _drawn_card(lambda g: cv2.polylines(g, [tri], False, 40, 4))
     assert box_outline(v, tight, 0.1) is None
     outline = box_outline(v, tight, 0.5)
     assert outline is not None
     side = open_side(v, outline)
     assert side is not None and side.cover < 0.6 and side.shade < 0.15
-    filled = _small_card(lambda g: cv2.fillPoly(g, [tri], 40))
+    filled = _drawn_card(lambda g: cv2.fillPoly(g, [tri], 40))
     outline = box_outline(filled, tight, 0.5)
     assert outline is not None
     side = open_side(filled, outline)

@@ -10,17 +10,14 @@ import pytest
 
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, Notches, notches
-from tests.vision.test_proposer import _blind_frame, _boxes
+from tests.vision.test_proposer import _blind_frame, _boxes, _drawn_card
 
 BOX = (20, 20, 160, 160)
 
 
 def _card(draw: object) -> np.ndarray:
-    """A light card on a mid-grey ground with `draw`'s ink on it, slightly blurred as a camera sees it."""
-    g = np.full((200, 200), 120, np.uint8)
-    cv2.rectangle(g, (10, 10), (190, 190), 230, -1)
-    draw(g)  # type: ignore[operator]
-    return cv2.GaussianBlur(g, (0, 0), 0.8)
+    """A light card from 10 to 190 px on a 200 px grey frame with `draw`'s ink on it (`_drawn_card`)."""
+    return _drawn_card(draw, 200)
 
 
 def _star(points: int = 5, inner: float = 0.4) -> np.ndarray:
