@@ -569,13 +569,14 @@ def test_box_outline_is_the_largest_blob_inside_a_box_without_a_hole() -> None:
 
 
 def test_box_outline_with_a_wider_margin_judges_strokes_that_run_past_a_tight_box() -> None:
-    """`box_outline`'s margin (`propose_open_margin`, round vision53): a proposer's box often sits tight on, or inside,
-    two strokes at an angle (a clock's hands, a check mark), so with a tenth round it they run on past the region and
-    there is nothing to judge; with half the box's size round it they lie inside and are open on one side. A filled
-    triangle under the same tight box is found whole and drawn along every side."""
+    """`box_outline`'s margin (`propose_open_margin`, rounds vision53-54): a proposer's box often sits tight on, or
+    inside, two strokes at an angle (a clock's hands, a check mark), so with a tenth round it they run on past the region
+    and there is nothing to judge; with half the box's size round it (the default since round vision54) they lie inside
+    and are open on one side, and the default detector refuses them as a proposal. A filled triangle under the same
+    tight box is found whole and drawn along every side."""
     import cv2
 
-    from services.vision.detector import DetectorConfig, box_outline, open_side
+    from services.vision.detector import DetectorConfig, MarkDetector, box_outline, open_side
 
     tight = (35, 35, 30, 30)
     tri = np.array([[25, 75], [50, 25], [75, 75]], np.int32)
@@ -590,6 +591,9 @@ def test_box_outline_with_a_wider_margin_judges_strokes_that_run_past_a_tight_bo
     assert outline is not None
     side = open_side(filled, outline)
     assert side is not None and side.cover > 0.9
+    assert MarkDetector().open_proposal(v, tight)
+    assert not MarkDetector(DetectorConfig(propose_open_margin=0.1)).open_proposal(v, tight)
+    assert not MarkDetector().open_proposal(filled, tight)
     for bad in (-0.1, 2.5):
         with pytest.raises(ValueError, match="propose_open_margin"):
             DetectorConfig(propose_open_margin=bad)
