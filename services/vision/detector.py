@@ -350,7 +350,8 @@ class DetectorConfig:
     this probability; the card tests then judge it like any loose candidate (with no rescue: the verifier did not
     vouch for it). Off: round vision35 (the vision README) found 9 more triangles in 4,000 held-out frames for 9
     more false ones, and 3 for 17 on the blind generator; round vision35b, with `hand_triangle_solid`, 6 held-out
-    for none, but 1 for 24 on the blind generator."""
+    for none, but 1 for 24 on the blind generator; round vision55, after the refusals of rounds vision48-54, 11 more
+    on tuning frames for 4 more false ones, and failed its tuning stage."""
     hand_triangle_floor: float = 0.3
     """the verifier's TRIANGLE probability a loose candidate needs before the second network is asked about it
     (`hand_triangle_loose`): most loose candidates are clutter the verifier is sure of, and asking about each
