@@ -226,15 +226,16 @@ class DetectorConfig:
     whose second network learned crossing strokes (a cable in a loop, two taped lines) as not an X: chosen on tuning
     seed 7156 and crossing-probe seed 78 by the round's rule. Round vision45d's 0.3 with that veto found 6 more of 4,000
     held-out frames' X for 3 more false X, but 4 more blind X for 7 more false X: not taken"""
-    propose_sure: tuple[float, ...] = (0.0, 0.6, 0.0)
+    propose_sure: tuple[float, ...] = (0.7, 0.6, 0.0)
     """X, O and TRIANGLE: a proposal of that shape whose heatmap peak reaches this (0: never) is kept at the lower of
     `propose_thresholds` and `propose_sure_thresholds`: two learned judges agree, the proposer from the whole frame
     at half size and the verifier from the three crops. O at 0.6 since round vision47b (bar 0.95, with
     `propose_o_clear`; vision README): on fresh seeds 16 of 183 missed held-out O and 11 of 133 missed blind O found
     in 4,000 frames each, no false mark added, no confirmed false O added on held-out clips. Rounds vision42-42c
-    (bars 0.75 and 0.85, no middle test) found more, and false O on the blind generator. X off: at 0.7 (bar 0.01)
-    held-out 5 of 52 missed X for one false X, blind 2 of 47 for 5 false X. TRIANGLE off: peaks of 0.6-0.8 also
-    came on filled arrows on white labels (the arrow probe)"""
+    (bars 0.75 and 0.85, no middle test) found more, and false O on the blind generator. X at 0.7 (bar 0.01) since
+    round vision56, a trade: on fresh seeds 11 of 55 missed held-out X found for 2 more false X, 8 of 50 blind for 4
+    more (round vision42, before the proposer's crossing veto and the star test: held-out 5 for 1, blind 2 for 5).
+    TRIANGLE off: peaks of 0.6-0.8 also came on filled arrows on white labels (the arrow probe)"""
     propose_sure_thresholds: tuple[float, ...] = (0.01, 0.95, 0.05)
     """the verifier's probability a proposed X, O and TRIANGLE needs when its peak reaches `propose_sure` (O 0.95 since
     round vision47b: the lowest bar that kept none of the false O the sure peak had kept on six blind seeds and

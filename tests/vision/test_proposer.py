@@ -283,9 +283,10 @@ def test_a_negative_blind_share_is_refused_before_any_render(tmp_path: Path) -> 
 
 
 def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
-    """`propose_sure` (round vision42): a small X under strong motion blur that the proposer peaks on at 0.7 or
-    more, but to which the verifier gives under its proposal bar (0.5), is kept at the sure bar instead; a sure
-    peak set for another shape changes nothing, and the verifier still judges at the sure bar."""
+    """`propose_sure` (round vision42; X's on by default since round vision56): a small X under strong motion blur
+    that the proposer peaks on at 0.7 or more, but to which the verifier gives under its proposal bar (0.5), is kept
+    at the sure bar instead; a sure peak set for another shape changes nothing, and the verifier still judges at the
+    sure bar."""
     from dataclasses import replace
 
     from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
@@ -303,6 +304,7 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
         assert not found(replace(sure_x, propose_sure=(0.0, 0.0, 0.7)), seed)
         assert not found(replace(sure_x, propose_sure_thresholds=(0.5, 0.99, 0.9)), seed)
         assert found(sure_x, seed)
+        assert found(DetectorConfig(), seed)  # the default keeps it
 
 
 def _crossing(seed: int) -> np.ndarray:

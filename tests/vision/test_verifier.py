@@ -121,8 +121,9 @@ def test_the_detector_uses_the_verifier_and_can_do_without() -> None:
     assert MarkDetector(DetectorConfig(verify=False)).verifier is None
     strict = Verifier.load(thresholds=(1.01, 1.01, 1.01))  # nothing is that sure: every candidate is refused
     assert strict.loose_thresholds == Verifier.load().loose_thresholds
-    # (and proposals, which the verifier judges with the detector's own `propose_thresholds`)
-    never = DetectorConfig(propose_thresholds=(1.01, 1.01, 1.01))
+    # (and proposals, which the verifier judges with the detector's own `propose_thresholds`, or at a sure peak with
+    # `propose_sure_thresholds`)
+    never = DetectorConfig(propose_thresholds=(1.01, 1.01, 1.01), propose_sure_thresholds=(1.01, 1.01, 1.01))
     assert MarkDetector(never, verifier=strict).detect(img) == []
 
 
