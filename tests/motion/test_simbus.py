@@ -32,7 +32,9 @@ def sim() -> Iterator[SimBus]:
 
 @pytest.fixture
 def port(sim: SimBus) -> Iterator[WaitingPortHandler]:
-    handler = WaitingPortHandler(sim.path, latency_ms=4.0)
+    # the driver's own reply allowance (16 ms of USB latency, a 34 ms window), not a tighter one: with 4 ms (a 10 ms
+    # window) the simulator's first reply was missed once on a loaded 2-core machine (CI and two benches at once)
+    handler = WaitingPortHandler(sim.path)
     assert handler.openPort()
     try:
         yield handler
@@ -119,7 +121,7 @@ def test_packet_reader_resynchronises_after_garbage() -> None:
 
 
 def test_sync_write_and_bulk_read_move_servos_realistically(sim: SimBus) -> None:
-    bus = Op2Bus(sim.path, latency_ms=4.0)
+    bus = Op2Bus(sim.path)  # the driver's reply allowance, as the `port` fixture
     bus.open()
     try:
         bus.power_on()
