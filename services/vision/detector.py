@@ -1494,8 +1494,13 @@ class OpenSide:
     shade: float  # how dark its middle is, from the paper round the outline (0) to the outline's ink (1)
 
 
+_BOX_MARGIN = 0.1
+"""the paper round a box, as a share of its size, that `_box_ink` takes with it unless told otherwise (`middle_blob`,
+`hole_islands`, `notches`; `open_proposal` passes `DetectorConfig.propose_open_margin` to `box_outline`)"""
+
+
 def _box_ink(
-    g: np.ndarray, box: Box, margin: float = 0.1
+    g: np.ndarray, box: Box, margin: float = _BOX_MARGIN
 ) -> tuple[tuple[int, int], np.ndarray, np.ndarray] | None:
     """The ink of `box` and `margin` x its size round it (Otsu's split of that region), as connected components: the
     region's origin in `g`, its labels and their stats. None where the region is under 8 px a side or shows under
@@ -1512,7 +1517,7 @@ def _box_ink(
     return (x0, y0), labels, stats
 
 
-def box_outline(g: np.ndarray, box: Box, margin: float = 0.1) -> np.ndarray | None:
+def box_outline(g: np.ndarray, box: Box, margin: float = _BOX_MARGIN) -> np.ndarray | None:
     """The outline (in `g`'s pixels) of the largest blob of ink in `box` and `margin` x its size round it (`_box_ink`)
     that lies inside that region (does not run on past it) and is at least 6 px across, if it has no hole; None
     otherwise (an outline's hole: judged by the verifier alone). What `open_side` judges of a proposal, which has no
@@ -1526,7 +1531,7 @@ def box_outline(g: np.ndarray, box: Box, margin: float = 0.1) -> np.ndarray | No
 
 
 def _largest_inside(
-    g: np.ndarray, box: Box, margin: float = 0.1
+    g: np.ndarray, box: Box, margin: float = _BOX_MARGIN
 ) -> tuple[tuple[int, int], np.ndarray, np.ndarray, int] | None:
     """The largest blob of ink in `box` and `margin` x its size round it (`_box_ink`) that lies inside that region
     (`_lies_inside`): the region's origin in `g`, its labels and stats, and the blob's label; None if there is none
