@@ -163,6 +163,12 @@ class DetectorConfig:
     and 25 found 0.7-1.1 % more marks on four tuning seeds with no more false marks there"""
     max_margin_texture: float = 0.35  # margin grey std / (margin - ink): a card is plain, gravel is not
     min_confidence: float = 0.5
+    loose_confidence: float = 0.5
+    """the confidence a loose candidate needs once the verifier has named it, its probability for that shape taking
+    the place of the shape tests' fit (`min_confidence` for those). At 0.5 it is the bar a named loose X needs in
+    effect, above the verifier's own loose X bar (`loose_thresholds` X, 0.1, where the verifier's two networks
+    agree): round vision58 found that 0.1 could not act. 0 leaves naming to the verifier's loose thresholds. O and
+    TRIANGLE are named only at 0.95 and 0.9, so it changes nothing for them."""
     frame_margin: float = 0.04  # pre-test: a thin frame this far around a component's box ...
     frame_max_ink: float = 0.5  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
@@ -414,6 +420,8 @@ class DetectorConfig:
             if not all(v >= 0.0 for v in getattr(self, name)):
                 raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
                                  f"never kept)")
+        if not 0.0 <= self.loose_confidence <= 1.0:
+            raise ValueError(f"loose_confidence: {self.loose_confidence}: a verifier probability, 0 (off) to 1")
         if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
             raise ValueError(f"propose_o_clear {self.propose_o_clear}, propose_o_middle {self.propose_o_middle}: "
                              "a share of the middle, 0 (off) to 1, and a share of the box, above 0 to 1")
@@ -480,7 +488,7 @@ STAGES: tuple[str, ...] = (
     "card",  # the card tests (band, contrast, card texture, other ink, a letter beside it)
     "O margin",  # the O's wide clear margin
     "hole",  # a ring's or triangle's hole is not paper
-    "confidence",  # below `min_confidence`
+    "confidence",  # below `min_confidence` (`loose_confidence` for a loose candidate the verifier named)
     "text line",  # a letter inside a line of text
     "verifier",  # the learned verifier disagreed
     "kept",
@@ -923,7 +931,7 @@ class MarkDetector:
                     if self._open(p):
                         stage = "shape"
                     else:
-                        det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box)
+                        det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box, named=True)
                         stage = "kept" if det is not None else self._why
                     ok = False
                 if ok and claimed is Shape.TRIANGLE and self._open(p):
@@ -933,7 +941,7 @@ class MarkDetector:
                     blob = p.blob
                     if p.part and claimed is Shape.X:  # a loop closed by a finger's edge: no hole
                         blob = _Blob(blob.outer, [], blob.area, blob.size)
-                    det = self._finish(p.level, p.i, blob, p.own, claimed, prob, box=p.box)
+                    det = self._finish(p.level, p.i, blob, p.own, claimed, prob, box=p.box, named=True)
                     stage = "kept" if det is not None else self._why
                     if (
                         det is None
@@ -1174,10 +1182,12 @@ class MarkDetector:
         shape: Shape,
         conf: float,
         box: Box | None = None,
+        named: bool = False,
     ) -> Detection | None:
         """The context tests of a component taken for `shape` (by the shape tests or, for a loose one,
-        the verifier): the card, the O's margin, the hole, the confidence and a line of text. `box`
-        and `own` are a part of component `i` cut off by `_split` (default: the whole component)."""
+        the verifier: `named`, its confidence the verifier's probability): the card, the O's margin, the hole,
+        the confidence and a line of text. `box` and `own` are a part of component `i` cut off by `_split`
+        (default: the whole component)."""
         cfg = self.config
         g, binary = level.g, level.binary
         x, y, w, h = box if box is not None else (int(v) for v in level.stats[i][:4])
@@ -1228,7 +1238,7 @@ class MarkDetector:
                     return None
             elif cv2.countNonZero(cv2.bitwise_and(holes, bin_roi)) > 0.03 * n_hole:
                 return None
-        if conf < cfg.min_confidence:
+        if conf < (cfg.loose_confidence if named else cfg.min_confidence):
             self._why = "confidence"
             return None
         if self._text_line(level, i):
