@@ -157,6 +157,10 @@ class DetectorConfig:
     its edge is then not the card (the default since round vision36e: with round vision36d's runs, 19 more held-out
     X and triangles in 8,000 frames, no false mark added, no slower)"""
     max_contrast_ratio: float = 0.72  # ink mean / surround mean must be below this
+    danger_contrast_ratio: float = 0.0
+    """the same limit for an X or a TRIANGLE (0: `max_contrast_ratio`), so that light ink (pink, orange, pale tape, in
+    grey) can stop the robot while an O, which lifts a danger, keeps the stricter limit (round vision59b); loose
+    candidates reach the verifier under the higher of the two, and the card tests apply the named shape's"""
     min_contrast: float = 25.0
     """paper (the band's median) minus ink mean, grey levels: print on paper, not a shadow. 35 until
     this round: under dim light (exposure 0.35-0.7) or with pale ink a printed mark has 25-35 levels,
@@ -420,6 +424,9 @@ class DetectorConfig:
             if not all(v >= 0.0 for v in getattr(self, name)):
                 raise ValueError(f"{name}: {getattr(self, name)}: the verifier's probabilities, 0 or more (above 1: "
                                  f"never kept)")
+        if not 0.0 <= self.danger_contrast_ratio < 1.0:
+            raise ValueError(f"danger_contrast_ratio: {self.danger_contrast_ratio}: a share of the paper's grey under 1 "
+                             "(0: max_contrast_ratio)")
         if not 0.0 <= self.loose_confidence <= 1.0:
             raise ValueError(f"loose_confidence: {self.loose_confidence}: a verifier probability, 0 (off) to 1")
         if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
@@ -1208,7 +1215,7 @@ class MarkDetector:
         ink = cv2.mean(g_roi, mask=comp)[0]
         extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(blob.outer)), 1.0))
         dist = _distance(filled, (x - x0, y - y0, w, h), _reach(cfg, extent))
-        paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape))
+        paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), danger=shape is not Shape.O)
         if isinstance(paper, str):
             self._card_refusal = paper
             self._vetoes.append(_up((x, y, w, h), level.f))
@@ -1340,7 +1347,7 @@ class MarkDetector:
         contrast = ring - ink
         if (
             contrast < cfg.loose_contrast
-            or ink > cfg.max_contrast_ratio * ring
+            or ink > max(cfg.max_contrast_ratio, cfg.danger_contrast_ratio) * ring
             or spread > cfg.loose_texture * contrast
         ):
             return False
@@ -1730,13 +1737,15 @@ def _on_card(
     dist: np.ndarray,
     cfg: DetectorConfig,
     may_rescue: bool,
+    danger: bool = False,
 ) -> float | str:
     """The card test: is the mark (filled outline `filled`, mean grey `ink`, `extent`, every pixel's
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
     grey level, or the first test that refused it, in this order: "band" (no band), "faint" (less
     than `min_contrast` between ink and paper: a shadow or a crease), "letter" (a letter-sized shape
     beside it: a word; "beside" instead where none is a letter of the mark's word by `letter_other_ink` and
-    `letter_card`), "ratio" (the ink not dark enough next to the paper), "band" (the band not
+    `letter_card`), "ratio" (the ink not dark enough next to the paper: `max_contrast_ratio`, or for a `danger`
+    mark, an X or triangle, `danger_contrast_ratio` where set), "band" (the band not
     paper), "texture" (the card near it not plain), "ink" (other ink on the card). The order matters
     only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
     the two it may not. "beside" is looked for only where the rescue could overrule it (`may_rescue`: the
@@ -1778,7 +1787,8 @@ def _on_card(
             if not _letter_beside(g_roi, filled, dist, extent, dark, cut, cfg.letter_gap, ink, other_ink, mine):
                 return "beside"
         return "letter"
-    if ink > cfg.max_contrast_ratio * paper:
+    limit = cfg.danger_contrast_ratio if danger and cfg.danger_contrast_ratio > 0 else cfg.max_contrast_ratio
+    if ink > limit * paper:
         return "ratio"
     band_paper, card = _card(g_roi, filled, band, cut)
     if cv2.countNonZero(band_paper) < cfg.min_band_paper * band_n:

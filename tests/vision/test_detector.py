@@ -199,7 +199,7 @@ def test_a_mark_under_dim_light_is_found(detector: MarkDetector) -> None:
     assert MarkDetector(DetectorConfig(min_contrast=35)).detect(dim) == []
 
 
-def _pale(shape: Shape) -> np.ndarray:
+def _pale(shape: Shape, ink: float = 180.0) -> np.ndarray:
     """A mark in pale ink on a white card on grey: 60 grey levels under the paper (clearly print, not a
     shadow) but above 0.72 of it, so the card tests' contrast ratio refuses it."""
     stroke = np.zeros((480, 640), np.uint8)
@@ -214,7 +214,7 @@ def _pale(shape: Shape) -> np.ndarray:
     paper = np.full((480, 640), 90.0)
     paper[90:390, 170:470] = 240.0
     a = stroke / 255.0
-    return cv2.cvtColor((paper * (1 - a) + 180.0 * a).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    return cv2.cvtColor((paper * (1 - a) + ink * a).astype(np.uint8), cv2.COLOR_GRAY2BGR)
 
 
 @pytest.mark.parametrize("shape", [Shape.X, Shape.TRIANGLE])
@@ -222,6 +222,23 @@ def test_a_pale_danger_mark_is_kept_on_the_verifiers_word(detector: MarkDetector
     frame = _pale(shape)
     assert MarkDetector(DetectorConfig(card_rescue=0)).detect(frame) == []  # the card tests refuse it
     assert [d.shape for d in detector.detect(frame)] == [shape]  # the verifier is sure: rescued
+
+
+@pytest.mark.parametrize("shape", [Shape.X, Shape.O, Shape.TRIANGLE])
+def test_danger_contrast_ratio_lets_light_ink_stop_the_robot_but_not_lift_a_danger(shape: Shape) -> None:
+    """Round vision59b: `danger_contrast_ratio` 0.8 takes an X or a triangle in ink 60 grey levels under a white card
+    but above 0.72 of it (pink, orange, pale tape, in grey) for a mark on the card tests' word alone (no rescue),
+    while an O in it is still refused (`max_contrast_ratio` 0.72) and ink above 0.8 of the paper still is for all
+    three. Out-of-range values are refused."""
+    plain = DetectorConfig(card_rescue=0)
+    danger = dataclasses.replace(plain, danger_contrast_ratio=0.8)
+    light = _pale(shape)
+    assert MarkDetector(plain).detect(light) == []
+    assert [d.shape for d in MarkDetector(danger).detect(light)] == ([] if shape is Shape.O else [shape])
+    assert MarkDetector(danger).detect(_pale(shape, ink=205.0)) == []
+    for bad in (-0.1, 1.0):
+        with pytest.raises(ValueError, match="danger_contrast_ratio"):
+            DetectorConfig(danger_contrast_ratio=bad)
 
 
 def test_a_pale_o_is_never_rescued(detector: MarkDetector) -> None:
