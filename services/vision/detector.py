@@ -171,8 +171,9 @@ class DetectorConfig:
     """the confidence a loose candidate needs once the verifier has named it, its probability for that shape taking
     the place of the shape tests' fit (`min_confidence` for those). At 0.5 it is the bar a named loose X needs in
     effect, above the verifier's own loose X bar (`loose_thresholds` X, 0.1, where the verifier's two networks
-    agree): round vision58 found that 0.1 could not act. 0 leaves naming to the verifier's loose thresholds. O and
-    TRIANGLE are named only at 0.95 and 0.9, so it changes nothing for them."""
+    agree): round vision58 found that 0.1 could not act. 0 leaves naming to the verifier's loose thresholds. The
+    verifier names a loose O or TRIANGLE only at 0.95 and 0.9 (and the second network a triangle at
+    `hand_triangle_loose`, 0.8 when on), so at 0.5 it changes nothing for them."""
     frame_margin: float = 0.04  # pre-test: a thin frame this far around a component's box ...
     frame_max_ink: float = 0.5  # ... may be at most this much ink
     max_side: int = 640  # larger frames are scaled down to this longest side first
