@@ -133,11 +133,9 @@ def test_a_named_loose_x_needs_loose_confidence() -> None:
     (tuning seed 7206 half by hand, frame 56, as the bench draws it) is named X at about 0.25: kept with
     `loose_confidence` 0, not by default. Out-of-range values are refused."""
     from services.vision.detector import box_overlap
-    from services.vision.synthetic import SceneGenerator, Variation
+    from tests.vision.test_proposer import _tuning_frame
 
-    gen = SceneGenerator(seed=7206, variation=Variation(hand_drawn=0.5))
-    for i in range(57):
-        img, labels = gen.render(gen.scene((Shape.X, Shape.O, Shape.TRIANGLE, None)[i % 4]))
+    img, labels = _tuning_frame(7206, 56, hand_drawn=0.5)
     box = labels[0].box
 
     def kept(config: DetectorConfig) -> list[float]:
