@@ -53,6 +53,10 @@ SEARCH_S = (-0.1, 0.3)
 """Where the echo is looked for, against when the speech service said the sentence began (by the stream's clock): the
 state arrives over the bus after the sound card started, or before it (a player's start-up), and the stream's clock is
 good to a block."""
+RENDER_WAIT_S = 1.5
+"""How long past a sentence's state the stream is held back at most while its reference is still being rendered
+(`Played.expect`; 14-18 ms a sentence, but the speech service's health is asked first, with a 1 s timeout, and a
+loaded machine takes longer): a renderer that hangs does not hold the stream for good."""
 MIN_CORRELATION = 0.3
 """A sentence whose echo correlates less with it (the microphone does not hear the loudspeaker: a headset; a person
 louder than the robot) is not cancelled."""
@@ -168,21 +172,49 @@ class Sentence:
 
 @dataclass
 class Played:
-    """The robot's played sound: sentences added as they begin (`robot_voice.RobotVoice`), read by the canceller."""
+    """The robot's played sound: sentences added as they begin (`robot_voice.RobotVoice`), read by the canceller.
+
+    A sentence is `expect`ed as its state arrives and `add`ed once rendered: until then the canceller holds the stream
+    back from where its echo may begin (`EchoCanceller.reference`), for up to `RENDER_WAIT_S`. Without that, a render
+    that took longer than usual (a loaded machine: 0.5 s is enough) let the sentence's first part through uncancelled,
+    and a person's "stop" said over it with it (it failed CI once, stop 104)."""
 
     _sentences: deque[Sentence] = field(default_factory=lambda: deque(maxlen=KEPT))
+    _awaited: list[float] = field(default_factory=list)
+    """When each sentence begun but not rendered yet began (wall clock)."""
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
+    def expect(self, began: float) -> None:
+        """A sentence began at wall-clock `began`; its samples are on their way (`add`, or `forget` if they never
+        come)."""
+        with self._lock:
+            self._awaited = [*self._awaited[-(KEPT - 1) :], began]
+
     def add(self, began: float, samples: np.ndarray) -> Sentence:
-        """`samples` (float, 16 kHz) began at wall-clock `began`."""
+        """`samples` (float, 16 kHz) began at wall-clock `began` (no longer awaited, if it was)."""
         sentence = Sentence(began, np.asarray(samples, dtype=np.float32))
         with self._lock:
             self._sentences.append(sentence)
+            self._drop(began)
         return sentence
+
+    def forget(self, began: float) -> None:
+        """The sentence `expect`ed at `began` will not be rendered (or already was): it is no longer awaited."""
+        with self._lock:
+            self._drop(began)
+
+    def _drop(self, began: float) -> None:
+        if began in self._awaited:
+            self._awaited.remove(began)
 
     def sentences(self) -> list[Sentence]:
         with self._lock:
             return list(self._sentences)
+
+    def awaited(self) -> list[float]:
+        """When each sentence `expect`ed and not yet added or forgotten began (wall clock)."""
+        with self._lock:
+            return list(self._awaited)
 
 
 def echo_lag(played: np.ndarray, heard: np.ndarray) -> tuple[int, float]:
@@ -445,7 +477,8 @@ class EchoCanceller:
         """The played sound for the stream's samples `first` to `first + n`, and whether any of it lies within the
         filter's reach of them. Each sentence is placed by `origin` (the wall clock of the stream's sample 0) when
         first seen, and `lock`ed to its echo once `LOCK_S` of it has been heard; until then (`_unplaced`, from where
-        its echo may begin) the stream is held back (`look_back`) or passes as heard, and the canceller is not fed."""
+        its echo may begin) the stream is held back (`look_back`) or passes as heard, and the canceller is not fed. A
+        sentence `Played.expect`ed and not rendered yet is treated so too, up to `RENDER_WAIT_S` past its state."""
         ref = np.zeros(n, dtype=np.float32)
         reach = int(self.filter_s * SAMPLE_RATE)
         near = False
@@ -465,6 +498,11 @@ class EchoCanceller:
             if lo < hi:
                 ref[lo - first : hi - first] += sentence.samples[lo - start : hi - start]
             near = near or (start < first + n and end + reach > first)
+        for began in self.played.awaited():  # begun, not rendered yet: held back as if its echo were being looked for
+            at = int(round((began - origin) * SAMPLE_RATE))
+            may_begin = at + int(SEARCH_S[0] * SAMPLE_RATE) - int(self.lead_s * SAMPLE_RATE)
+            if may_begin < first + n and first + n - at <= int(RENDER_WAIT_S * SAMPLE_RATE):
+                self._unplaced = True
         return ref, near
 
     def lock(self, sentence: Sentence) -> None:

@@ -77,15 +77,19 @@ class RobotVoice:
     """Sentences saying "stop" whose words espeak-ng's library would not time (`espeak_words`): a "stop" heard in
     them is published, as any."""
     last_ms: float | None = None
-    """How long the last sentence took to ask about and render: the canceller has no reference that long into it."""
+    """How long the last sentence took to ask about and render: the canceller holds the stream back meanwhile
+    (`echo.Played.expect`, up to `echo.RENDER_WAIT_S`)."""
     _begun: queue.Queue[tuple[float, str]] = field(default_factory=lambda: queue.Queue(maxsize=8))
 
     def heard(self, speaking: bool, text: str | None) -> None:
         """A `SpeechState`, as it arrives."""
         if speaking and text:
+            began = self.clock()
+            self.played.expect(began)  # the canceller holds the stream back until it is rendered (`Played.expect`)
             try:
-                self._begun.put_nowait((self.clock(), text))
+                self._begun.put_nowait((began, text))
             except queue.Full:  # the renderer is stuck: that sentence goes without a reference
+                self.played.forget(began)
                 self.unrendered += 1
 
     def run(self, stopping: threading.Event) -> None:
@@ -100,6 +104,12 @@ class RobotVoice:
                 self.unrendered += 1
 
     def render_one(self, began: float, text: str) -> None:
+        try:
+            self._render_one(began, text)
+        finally:  # rendered (`add` took it off already) or not: the canceller no longer waits for it
+            self.played.forget(began)
+
+    def _render_one(self, began: float, text: str) -> None:
         detail = self.ask() or {}
         engine, voice, rate = str(detail.get("engine") or ""), detail.get("voice"), detail.get("rate")
         if "espeak" not in engine.lower() or not isinstance(voice, str) or not isinstance(rate, int):
