@@ -527,14 +527,15 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
         ctx.update_detail(own_voice="not a live source", echo_cancel="not a live source")
         return None, None
     own = OwnVoice(tail_s=tail) if tail is not None else None
-    echo = None
+    echo: _Echo | None = None
+    memory_detail: dict[str, object] = {}
     if cancel:
         try:
             played = Played()
             speech_detail = lambda: (h := ctx.query_health("speech", timeout=1.0)) and h.detail  # noqa: E731
             echo = _Echo(EchoCanceller(played, fit=echo_fit_from(settings.echo_fit), background=True),
                          RobotVoice(played, speech_detail))
-            _echo_memory(ctx, settings, echo.canceller)
+            memory_detail = _echo_memory(ctx, settings, echo.canceller)
         except EchoError as exc:
             ctx.update_detail(echo_cancel=f"unavailable: {exc}")
             ctx.log.warning("echo canceller unavailable: the robot's own voice is not cancelled", error=str(exc))
@@ -544,7 +545,7 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
         c = echo.canceller
         ctx.update_detail(echo_cancel="on", echo_fit="on" if c.fit else "off", echo_fits=c.fits,
                           echo_fit_db_last=c.fit_db,
-                          own_stop="ignored" if own_stop_from(settings.own_stop) else "heard")
+                          own_stop="ignored" if own_stop_from(settings.own_stop) else "heard", **memory_detail)
         ctx.thread(lambda: echo.voice.run(ctx.stopping), "echo-reference")
     elif not cancel:
         ctx.update_detail(echo_cancel="off")
@@ -556,20 +557,21 @@ def _robot_voice(ctx: ServiceContext, settings: VoiceSettings) -> tuple[OwnVoice
     return own, echo
 
 
-def _echo_memory(ctx: ServiceContext, settings: VoiceSettings, canceller: EchoCanceller) -> None:
+def _echo_memory(ctx: ServiceContext, settings: VoiceSettings, canceller: EchoCanceller) -> dict[str, object]:
     """With `HRI_VOICE_ECHO_MEMORY` on: the canceller recalls the memory an earlier run kept in the state folder (an
     unreadable one is passed over with a warning, and the canceller starts cold, as on a first run; it is overwritten
-    once the robot has spoken) and keeps its own there each time the robot falls silent."""
+    once the robot has spoken) and keeps its own there each time the robot falls silent. Returns its health detail,
+    for the caller to publish with the canceller's own in one update (health is never seen half-filled)."""
     if not echo_memory_from(settings.echo_memory):
-        ctx.update_detail(echo_memory="off")
-        return
+        return {"echo_memory": "off"}
     memory = EchoMemory(default_state_dir(ctx.keys.robot) / MEMORY_FILE)
+    detail: dict[str, object] = {}
     try:
         if memory.recall(canceller):
             ctx.log.info("echo memory recalled", path=str(memory.path), seconds=canceller.recalled_s)
     except (OSError, ValueError) as exc:
         ctx.log.warning("echo memory unusable: the canceller starts cold", path=str(memory.path), error=str(exc))
-        ctx.update_detail(echo_memory_warning=f"unusable, starting cold: {exc}")
+        detail["echo_memory_warning"] = f"unusable, starting cold: {exc}"
     # written on a thread of its own: the stream's thread only copies the memory (a robot's SD card can stall a write
     # for longer than a "stop" should wait); a newer memory replaces one not yet written
     latest: queue.Queue[tuple[np.ndarray, np.ndarray]] = queue.Queue(maxsize=1)
@@ -597,7 +599,7 @@ def _echo_memory(ctx: ServiceContext, settings: VoiceSettings, canceller: EchoCa
     canceller.on_silent = keep
     writer = ctx.thread(write, "echo-memory")
     ctx.on_close(lambda: writer.join(timeout=2.0))  # the last memory written before the process exits
-    ctx.update_detail(echo_memory="on", echo_memory_path=str(memory.path), echo_recalled_s=canceller.recalled_s)
+    return {**detail, "echo_memory": "on", "echo_memory_path": str(memory.path), "echo_recalled_s": canceller.recalled_s}
 
 
 def _robot_said(state: SpeechState, own: OwnVoice | None, echo: _Echo | None) -> None:
