@@ -197,6 +197,9 @@ class ControlLoop:
         present = bus.read_positions()
         bus.set_torque(True)
         bus.set_bulk_ids(list(JOINT_IDS))
+        # health first: whoever sees a state with `bus_ok` and then asks health finds it OK too (the state publisher
+        # runs on its own timer and may send one at any moment after `bus_ok` is set)
+        self._health(HealthStatus.OK, error=None, bus_ok=True, device=bus.port_name, missing=[])
         with self._lock:
             self.present = present
             self.missing.clear()
@@ -204,7 +207,6 @@ class ControlLoop:
             self.bus_ok = True
         self.log.info("bus ready", port=bus.port_name, posture=self.executor.posture.value)
         self._bus_silent = False
-        self._health(HealthStatus.OK, error=None, bus_ok=True, device=bus.port_name, missing=[])
         self.attempted.set()
 
     # ------------------------------------------------------------------ ticks

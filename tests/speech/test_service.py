@@ -10,7 +10,7 @@ from collections.abc import Callable
 from pathlib import Path
 from subprocess import Popen
 
-from schemas.messages import HealthStatus, SpeechRequest
+from schemas.messages import Health, HealthStatus, SpeechRequest
 from services.runtime import ServiceContext
 from services.speech.audio import wav_info
 from tests.conftest import wait_for
@@ -37,9 +37,10 @@ def test_request_is_spoken_into_a_wav_bracketed_by_states(
     # Folder output: "speaking" lasts the audio's real duration.
     assert info.duration_s - 0.1 <= end - start <= info.duration_s + 1.0
     assert is_refusal(transcribe(make_decoder(), wav))
-    h = bus.query_health("speech")
-    assert h is not None and h.status == HealthStatus.OK
-    assert h.detail["spoken"] == 1 and h.detail["out"] == f"folder:{tmp_path / 'out'}"
+    # the count is reported just after the end's state goes out: waited for, not read at once
+    h = wait_for(lambda: (x := bus.query_health("speech")) is not None and x.detail.get("spoken") == 1 and x, timeout=5)
+    assert isinstance(h, Health) and h.status == HealthStatus.OK
+    assert h.detail["out"] == f"folder:{tmp_path / 'out'}"
     assert 0 < h.detail["ready_ms_last"] < 2000
 
 
@@ -66,8 +67,9 @@ def test_full_queue_drops_the_oldest_waiting(
     spoken = [i for s, i in states.events() if s]
     assert spoken == ["long", "q3", "q4"]
     assert not (tmp_path / "out" / "q0.wav").exists()
-    h = bus.query_health("speech")
-    assert h is not None and h.detail["dropped_full"] == 3 and h.detail["spoken"] == 3
+    # the count is reported just after the end's state goes out: waited for, not read at once
+    h = wait_for(lambda: (x := bus.query_health("speech")) is not None and x.detail.get("spoken") == 3 and x, timeout=5)
+    assert isinstance(h, Health) and h.detail["dropped_full"] == 3
 
 
 def test_stale_requests_are_skipped_so_a_new_reply_does_not_wait(
