@@ -151,16 +151,21 @@ def test_with_nothing_played_the_stream_passes_unchanged_in_any_chunking() -> No
     assert canceller(b"\x01\x00", None) == pcm[len(out) :] + b"\x01\x00"  # clock not known yet: what it holds, as is
 
 
+def _first_sentence() -> tuple[np.ndarray, np.ndarray, slice]:
+    """The robot's sentence as played, a stream (sample 0 at wall clock 100.0) hearing its echo from 1 s in over a faint
+    hiss, and that echo's first 0.6 s (`LOCK_S` and the search's reach after the state)."""
+    voice = synth.speak(SENTENCES[2], "en-us", 175) * 0.5
+    echo = echo_path(np.random.default_rng(6))(voice) * 0.25
+    x = np.random.default_rng(6).normal(0.0, 10 ** (-70 / 20), 5 * SAMPLE_RATE)
+    x[SAMPLE_RATE : SAMPLE_RATE + echo.size] += echo
+    return voice, x, slice(SAMPLE_RATE, SAMPLE_RATE + int((LOCK_S + SEARCH_S[1]) * SAMPLE_RATE))
+
+
 @espeak
 def test_a_canceller_that_has_not_heard_the_robot_learns_from_what_it_held_first() -> None:
     """The robot's first sentence (the canceller has learnt nothing): with `learn_first` the held 0.72 s are learnt from
     before they are cancelled, and its first 0.6 s are taken down further (-12.9 dB here against -7.4)."""
-    voice = synth.speak(SENTENCES[2], "en-us", 175) * 0.5
-    echo = echo_path(np.random.default_rng(6))(voice) * 0.25
-    x = np.random.default_rng(6).normal(0.0, 10 ** (-70 / 20), 5 * SAMPLE_RATE)
-    at = SAMPLE_RATE
-    x[at : at + echo.size] += echo
-    first = slice(at, at + int((LOCK_S + SEARCH_S[1]) * SAMPLE_RATE))
+    voice, x, first = _first_sentence()
     down = {}
     for learn_first in (True, False):
         played = Played()
@@ -175,12 +180,7 @@ def test_a_sentence_rendered_late_is_cancelled_from_its_first_sample_as_one_rend
     """The sentence's state arrives as the robot begins (1 s into the stream) and its reference is ready 0.5 s later (a
     loaded machine: CI, stop 104): `expect`ed, the stream is held back meanwhile and its first 0.6 s are cancelled as
     if it had been rendered at once (-12.9 dB here, both). Not expected, they went by uncancelled (-0.1 dB)."""
-    voice = synth.speak(SENTENCES[2], "en-us", 175) * 0.5
-    echo = echo_path(np.random.default_rng(6))(voice) * 0.25
-    x = np.random.default_rng(6).normal(0.0, 10 ** (-70 / 20), 5 * SAMPLE_RATE)
-    at = SAMPLE_RATE
-    x[at : at + echo.size] += echo
-    first = slice(at, at + int((LOCK_S + SEARCH_S[1]) * SAMPLE_RATE))
+    voice, x, first = _first_sentence()
     pcm, block = _pcm(x), 2 * int(0.03 * SAMPLE_RATE)
     down = {}
     for case in ("at once", "late", "late, not expected"):
