@@ -489,8 +489,7 @@ class EchoCanceller:
             if sentence.placed is None and not sentence.lost:
                 self.lock(sentence)
             if sentence.placed is None or sentence.lost:
-                may_begin = sentence.at + int(SEARCH_S[0] * SAMPLE_RATE) - int(self.lead_s * SAMPLE_RATE)
-                if sentence.placed is None and not sentence.lost and may_begin < first + n:
+                if sentence.placed is None and not sentence.lost and self._may_begin(sentence.at) < first + n:
                     self._unplaced = True  # its echo may be in the stream with no reference for it yet
                 continue
             start, end = sentence.placed, sentence.placed + sentence.samples.size
@@ -500,10 +499,14 @@ class EchoCanceller:
             near = near or (start < first + n and end + reach > first)
         for began in self.played.awaited():  # begun, not rendered yet: held back as if its echo were being looked for
             at = int(round((began - origin) * SAMPLE_RATE))
-            may_begin = at + int(SEARCH_S[0] * SAMPLE_RATE) - int(self.lead_s * SAMPLE_RATE)
-            if may_begin < first + n and first + n - at <= int(RENDER_WAIT_S * SAMPLE_RATE):
+            if self._may_begin(at) < first + n and first + n - at <= int(RENDER_WAIT_S * SAMPLE_RATE):
                 self._unplaced = True
         return ref, near
+
+    def _may_begin(self, at: int) -> int:
+        """Where in the stream the echo of a sentence the state puts at `at` may begin: the search's reach before it,
+        less the lead its reference will be placed by."""
+        return at + int(SEARCH_S[0] * SAMPLE_RATE) - int(self.lead_s * SAMPLE_RATE)
 
     def lock(self, sentence: Sentence) -> None:
         """Once the stream holds the sentence's first `LOCK_S` and the search's reach after it, find its echo there
