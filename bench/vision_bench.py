@@ -3,10 +3,9 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|blind|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE] [--hand-drawn SHARE] [--sheets] [--plus-signs]
+                                           [--hand-variety SHARE] [--hand-drawn SHARE] [--plus-signs]
                                            [--lens K [--calibrated [--keep-matrix]]]
-                                           (--hand-variety, --hand-drawn, --sheets, --calibrated, --keep-matrix:
-                                            tuning split only)
+                                           (--hand-variety, --hand-drawn, --calibrated, --keep-matrix: tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
@@ -18,9 +17,7 @@ two generators) after 22 rounds of held-out decisions, to ask whether the held-o
 signs, which the product's contract makes X marks turned by 45 degrees). With the tuning split,
 `--hand-variety`: that share of its cards with fingers get people's variety of fingers,
 `Variation.hand_variety`; `--hand-drawn S`: that
-share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--sheets`: cards with up to 3 times the mark's
-width of paper beside it and the filled-triangle clutter's walls running out of the frame (`Variation.walls_out`,
-round vision60), with a recall slice by that paper; `--lens K`: every
+share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--lens K`: every
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
@@ -58,7 +55,6 @@ TIMED_FRAMES = 200
 SIZE_BINS = ((0, 80), (80, 160), (160, 300), (300, 10_000))
 TILT_BINS = ((0, 15), (15, 30), (30, 46))
 BLUR_BINS = ((0, 1.5), (1.5, 8), (8, 14), (14, 21))
-PAPER_BINS = ((0, 0.6), (0.6, 1.5), (1.5, 3.01))
 
 
 def _bin(value: float, bins: tuple[tuple[float, float], ...]) -> str:
@@ -89,13 +85,6 @@ def main(
     hand_drawn: Annotated[
         float, typer.Option(help="tuning split only: share of marks drawn by hand with a pen (Variation.hand_drawn)")
     ] = 0.0,
-    sheets: Annotated[
-        bool,
-        typer.Option(
-            help="tuning split only: cards with up to 3 times the mark's width of paper beside it, and the filled "
-            "triangles' painted walls running out of the frame (round vision60's definition; Variation.walls_out)"
-        ),
-    ] = False,
     plus_signs: Annotated[
         bool,
         typer.Option(help="blind split only: mark-free frames show upright plus signs (an X turned by 45 degrees)"),
@@ -124,8 +113,6 @@ def main(
         raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
     if hand_drawn and split != "tuning":
         raise typer.BadParameter("--hand-drawn is a tuning-generator setting (--split tuning)")
-    if sheets and split != "tuning":
-        raise typer.BadParameter("--sheets is a tuning-generator setting (--split tuning)")
     if plus_signs and split != "blind":
         raise typer.BadParameter("--plus-signs is a blind-generator setting (--split blind)")
     if lens and split == "blind":
@@ -133,7 +120,7 @@ def main(
     if calibrated and (not lens or split != "tuning"):
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     try:
-        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs, sheets)
+        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs)
     except ValueError as exc:  # a held-out lens the model cannot show
         raise typer.BadParameter(str(exc), param_hint="--lens") from None
     det = _detector(settings or [])
@@ -192,7 +179,6 @@ def main(
         "seed": seed,
         "hand_variety": hand_variety,
         "hand_drawn": hand_drawn,
-        **({"sheets": sheets} if split == "tuning" else {}),
         **({"plus_signs": plus_signs} if split == "blind" else {}),
         "lens": lens,
         "calibrated": calibrated,
@@ -248,7 +234,7 @@ FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | 
 
 def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
                calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0,
-               plus_signs: bool = False, sheets: bool = False) -> FrameFn:
+               plus_signs: bool = False) -> FrameFn:
     if split in ("heldout", "blind"):
         if split == "heldout":
             from services.vision.heldout import HeldOutGenerator
@@ -279,16 +265,12 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
     if split == "tuning":
         from services.vision.synthetic import SceneGenerator, Variation
 
-        wide = {"border": (0.03, 3.0), "walls_out": True} if sheets else {}
-        tgen = SceneGenerator(
-            seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, lens=lens, **wide)
-        )
+        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, lens=lens))
         if calibrated:  # the same scenes without the lens (the lens draws nothing): where the marks are
             from services.vision.calibration import Undistorter
             from services.vision.synthetic import lens_calibration
 
-            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn,
-                                                                    **wide))
+            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn))
             undistort = Undistorter(lens_calibration(lens, pinhole.width, pinhole.height),
                                     None if keep_matrix else 1.0)
             new = undistort.new_matrix(pinhole.width, pinhole.height)
@@ -317,9 +299,6 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
                 # fingers reaching from the card's edge towards the mark (over its edge for some)
                 "finger_near_mark": str(scene.fingers > 0).lower(),
                 **({"by_hand": str(scene.by_hand is not None).lower()} if hand_drawn else {}),
-                **({"triangle": "filled" if scene.filled else "outline"} if labels[0].shape is Shape.TRIANGLE else {}),
-                # the paper beside the mark on its card's wider side, in mark widths
-                **({"card_paper": _bin((max(scene.card) - 1) / 2, PAPER_BINS)} if sheets else {}),
                 **inside,
             }
             return img, (labels[0].shape, labels[0].box), meta

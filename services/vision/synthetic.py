@@ -110,11 +110,6 @@ class Variation:
     """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
     as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
     over any of the card's four edges (0: light skin, 0.2 wide, over the bottom edge)"""
-    walls_out: bool = False
-    """the light wall the `filled_triangle` clutter is painted on half the time runs out of the frame on the side
-    nearest the frame's edge (round vision60's definition: a light surface that ends inside the frame is a card or
-    sheet, and a filled triangle on it a mark). It draws nothing more, so the scenes are otherwise those of the same
-    seed without it (False: the wall ends 1.5-4.5 times the triangle's size from its centre, often inside the frame)"""
     lens: float = 0.0
     """the camera lens's barrel distortion, the same for every frame (0: a pinhole camera). It draws
     nothing, so the scenes are those of the same seed without it, only seen through the lens. It is k
@@ -343,10 +338,6 @@ class SceneGenerator:
             if rng.random() < 0.5:
                 wall = np.array([[cx - 3 * size, cy - 3 * size], [cx + 3 * size, cy + 3 * size]])
                 wall += rng.uniform(-1.5, 1.5, size=(2, 2)) * size
-                if self.variation.walls_out:  # on out of the frame where it comes nearest the frame's edge
-                    gaps = np.array([wall[0, 0], wall[0, 1], w - wall[1, 0], h - wall[1, 1]])
-                    side = int(np.argmin(gaps))
-                    wall[side // 2, side % 2] = (-20.0, -20.0, w + 20.0, h + 20.0)[side]
                 level = int(rng.integers(185, 250))
                 cv2.rectangle(img, _point(wall[0]), _point(wall[1]), (level, level, level - 8), -1)
             r = size / 2
