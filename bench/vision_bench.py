@@ -3,9 +3,11 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
 
     .venv/bin/python bench/vision_bench.py [--frames 2000] [--seed 4242] [--split heldout|blind|tuning]
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
-                                           [--hand-variety SHARE] [--hand-drawn SHARE] [--plus-signs]
+                                           [--hand-variety SHARE] [--hand-drawn SHARE] [--without KIND ...]
+                                           [--plus-signs]
                                            [--lens K [--calibrated [--keep-matrix]]]
-                                           (--hand-variety, --hand-drawn, --calibrated, --keep-matrix: tuning split only)
+                                           (--hand-variety, --hand-drawn, --without, --calibrated, --keep-matrix:
+                                            tuning split only)
 
 `--split heldout` (the default, and the figure to report) draws frames with
 `services/vision/heldout.py`, a generator the detector was never tuned on (other drawing code,
@@ -17,7 +19,8 @@ two generators) after 22 rounds of held-out decisions, to ask whether the held-o
 signs, which the product's contract makes X marks turned by 45 degrees). With the tuning split,
 `--hand-variety`: that share of its cards with fingers get people's variety of fingers,
 `Variation.hand_variety`; `--hand-drawn S`: that
-share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--lens K`: every
+share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--without KIND`: no clutter of that kind
+(`Variation.kinds`; the frames then differ from the seed's default ones); `--lens K`: every
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
@@ -85,6 +88,13 @@ def main(
     hand_drawn: Annotated[
         float, typer.Option(help="tuning split only: share of marks drawn by hand with a pen (Variation.hand_drawn)")
     ] = 0.0,
+    without: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="tuning split only: leave this kind of clutter out (repeatable; synthetic.DISTRACTORS), e.g. "
+            "filled_triangle, whose painted walls round vision61's definition makes marks"
+        ),
+    ] = None,
     plus_signs: Annotated[
         bool,
         typer.Option(help="blind split only: mark-free frames show upright plus signs (an X turned by 45 degrees)"),
@@ -113,6 +123,8 @@ def main(
         raise typer.BadParameter("--hand-variety is a tuning-generator setting (--split tuning)")
     if hand_drawn and split != "tuning":
         raise typer.BadParameter("--hand-drawn is a tuning-generator setting (--split tuning)")
+    if without and split != "tuning":
+        raise typer.BadParameter("--without is a tuning-generator setting (--split tuning)")
     if plus_signs and split != "blind":
         raise typer.BadParameter("--plus-signs is a blind-generator setting (--split blind)")
     if lens and split == "blind":
@@ -120,9 +132,11 @@ def main(
     if calibrated and (not lens or split != "tuning"):
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     try:
-        frame_of = _generator(split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs)
-    except ValueError as exc:  # a held-out lens the model cannot show
-        raise typer.BadParameter(str(exc), param_hint="--lens") from None
+        frame_of = _generator(
+            split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs, tuple(without or ())
+        )
+    except ValueError as exc:  # a held-out lens the model cannot show, or clutter the generator does not draw
+        raise typer.BadParameter(str(exc), param_hint="--without" if without else "--lens") from None
     det = _detector(settings or [])
     tp: dict[Shape, int] = defaultdict(int)
     fp: dict[Shape, int] = defaultdict(int)
@@ -179,6 +193,7 @@ def main(
         "seed": seed,
         "hand_variety": hand_variety,
         "hand_drawn": hand_drawn,
+        **({"without": list(without)} if without else {}),
         **({"plus_signs": plus_signs} if split == "blind" else {}),
         "lens": lens,
         "calibrated": calibrated,
@@ -234,7 +249,7 @@ FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | 
 
 def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
                calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0,
-               plus_signs: bool = False) -> FrameFn:
+               plus_signs: bool = False, without: tuple[str, ...] = ()) -> FrameFn:
     if split in ("heldout", "blind"):
         if split == "heldout":
             from services.vision.heldout import HeldOutGenerator
@@ -263,14 +278,23 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
 
         return held
     if split == "tuning":
-        from services.vision.synthetic import SceneGenerator, Variation
+        from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
 
-        tgen = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, lens=lens))
+        unknown = sorted(set(without) - set(DISTRACTORS))
+        if unknown:
+            raise ValueError(f"no such clutter {', '.join(unknown)}: one of {', '.join(DISTRACTORS)}")
+        kinds = tuple(k for k in DISTRACTORS if k not in without)
+        tgen = SceneGenerator(
+            seed=seed,
+            variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, lens=lens, kinds=kinds),
+        )
         if calibrated:  # the same scenes without the lens (the lens draws nothing): where the marks are
             from services.vision.calibration import Undistorter
             from services.vision.synthetic import lens_calibration
 
-            pinhole = SceneGenerator(seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn))
+            pinhole = SceneGenerator(
+                seed=seed, variation=Variation(hand_variety=hand_variety, hand_drawn=hand_drawn, kinds=kinds)
+            )
             undistort = Undistorter(lens_calibration(lens, pinhole.width, pinhole.height),
                                     None if keep_matrix else 1.0)
             new = undistort.new_matrix(pinhole.width, pinhole.height)
@@ -299,6 +323,7 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
                 # fingers reaching from the card's edge towards the mark (over its edge for some)
                 "finger_near_mark": str(scene.fingers > 0).lower(),
                 **({"by_hand": str(scene.by_hand is not None).lower()} if hand_drawn else {}),
+                **({"triangle": "filled" if scene.filled else "outline"} if labels[0].shape is Shape.TRIANGLE else {}),
                 **inside,
             }
             return img, (labels[0].shape, labels[0].box), meta

@@ -52,6 +52,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
+from services.vision.filled import FILLED_SHARE, LOOSE_TRIANGLE_FILL, ink_and_paper, paper_round, solid_share
 from services.vision.proposer import MODEL_PATH as PROPOSER_PATH
 from services.vision.proposer import Proposal, Proposer
 from services.vision.verifier import CLASSES, MODEL_PATH, TRIANGLES_PATH, Verifier, claim, crops
@@ -356,6 +357,13 @@ class DetectorConfig:
     filled triangles drawn by hand (`bench/vision_stages.py --hand-drawn 1`), having learnt exact ones. On since
     round vision34 (the vision README): on fresh held-out seeds 30 of 160 missed triangles found for 4 more false
     ones in 4,000 frames; on the blind generator 36 of 236 for none; about 3 % of the speed. Needs `verify`."""
+    filled_paper_round: float = 0.0
+    """a filled TRIANGLE that both networks refused - one the shape and card tests claimed, or a loose candidate the
+    verifier likeliest calls a triangle that fills `filled.LOOSE_TRIANGLE_FILL` of its enclosing triangle, which the
+    card tests then judge - is kept where at least this share of a ring round it is paper (`filled.paper_round`; 0:
+    off). The verifier, seeing four times the mark, takes a filled triangle on a sheet much wider than itself, or on a
+    card that runs out of the frame, for one painted on a wall; a danger mark on plain paper stops the robot whatever
+    the paper's extent. Round vision61 (the vision README)."""
     hand_triangle_loose: float = 0.0
     """the second network's word on a loose candidate too (0: not asked): one the verifier did not name, to which it
     gives TRIANGLE at least `hand_triangle_floor`, is named a TRIANGLE if the second network gives TRIANGLE at least
@@ -428,6 +436,8 @@ class DetectorConfig:
         if not 0.0 <= self.danger_contrast_ratio < 1.0:
             raise ValueError(f"danger_contrast_ratio: {self.danger_contrast_ratio}: a share of the paper's grey under 1 "
                              "(0: max_contrast_ratio)")
+        if not 0.0 <= self.filled_paper_round <= 1.0:
+            raise ValueError(f"filled_paper_round: {self.filled_paper_round}: a share of the ring, 0 (off) to 1")
         if not 0.0 <= self.loose_confidence <= 1.0:
             raise ValueError(f"loose_confidence: {self.loose_confidence}: a verifier probability, 0 (off) to 1")
         if not 0.0 <= self.propose_o_clear <= 1.0 or not 0.0 < self.propose_o_middle <= 1.0:
@@ -930,6 +940,8 @@ class MarkDetector:
                 claimed, stage = p.shape, "verifier"
                 if self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
+                elif p.shape is Shape.TRIANGLE and self._filled_on_paper(p) is not None:
+                    det, stage = p.det, "kept"
             else:
                 claimed, prob, ok = self.verifier.name(row)
                 stage = "unnamed"
@@ -942,6 +954,13 @@ class MarkDetector:
                         det = self._finish(p.level, p.i, p.blob, p.own, claimed, prob, box=p.box, named=True)
                         stage = "kept" if det is not None else self._why
                     ok = False
+                elif not ok and claimed is Shape.TRIANGLE and (fill := self._filled_on_paper(p)) is not None:
+                    # a filled triangle with paper all round, which the networks took for one painted on a wall: the
+                    # card tests judge it, its confidence the shape's fit (as the shape tests give a claimed one)
+                    assert p.blob is not None and p.own is not None
+                    conf = 1.0 - 0.5 * max(0.0, 1.0 - fill) / (1.0 - LOOSE_TRIANGLE_FILL)
+                    det = self._finish(p.level, p.i, p.blob, p.own, claimed, conf, box=p.box)
+                    stage = "kept" if det is not None else self._why
                 if ok and claimed is Shape.TRIANGLE and self._open(p):
                     ok, stage = False, "shape"
                 if ok and not (p.part and claimed is Shape.O):
@@ -965,6 +984,28 @@ class MarkDetector:
             if det is not None:
                 out.append(Detection(det.shape, det.confidence, _up(det.box, p.level.f)))
         return out
+
+    def _filled_on_paper(self, p: _Pending) -> float | None:
+        """For a claimed TRIANGLE, or a loose candidate, that is filled and has paper all round it
+        (`DetectorConfig.filled_paper_round`): how well it fills its enclosing triangle (a loose one must fill
+        `LOOSE_TRIANGLE_FILL` of it); else None."""
+        share = self.config.filled_paper_round
+        if share <= 0:
+            return None
+        x, y, w, h = p.box
+        own = p.own if p.own is not None else cv2.inRange(p.level.labels[y : y + h, x : x + w], p.i, p.i)
+        outlines = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0]
+        if not outlines:
+            return None
+        outline = max(outlines, key=cv2.contourArea)
+        fill = _triangle_fill(outline, cv2.contourArea(outline))
+        if p.shape is None and fill < LOOSE_TRIANGLE_FILL:
+            return None
+        g = p.level.g
+        ink, paper = ink_and_paper(g, p.box)
+        if solid_share(g, p.box, outline, ink, paper) < FILLED_SHARE:
+            return None
+        return fill if paper_round(g, p.box, outline, ink, paper) >= share else None
 
     def _open(self, p: _Pending) -> bool:
         """Whether a loose candidate named a TRIANGLE is two strokes meeting at an angle, not a triangle: no hole, one

@@ -32,3 +32,14 @@ def test_the_json_and_the_table_name_the_settings_a_run_changed() -> None:
 def test_a_setting_that_does_not_exist_is_refused() -> None:
     result = CliRunner().invoke(_bench(), ["--frames", "4", "--seed", "3", "--set", "bogus=1"])
     assert result.exit_code != 0 and "bogus=1" in result.output
+
+
+def test_without_leaves_a_kind_of_clutter_out_of_the_tuning_frames_only() -> None:
+    runner, app = CliRunner(), _bench()
+    run = json.loads(runner.invoke(app, ["--split", "tuning", "--frames", "4", "--seed", "3", "--json",
+                                         "--without", "filled_triangle"]).stdout)
+    assert run["without"] == ["filled_triangle"]
+    unknown = runner.invoke(app, ["--split", "tuning", "--frames", "4", "--without", "roof"])
+    assert unknown.exit_code == 2 and "roof" in unknown.output
+    other = runner.invoke(app, ["--split", "heldout", "--frames", "4", "--without", "text"])
+    assert other.exit_code == 2 and "tuning" in other.output
