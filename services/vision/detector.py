@@ -362,8 +362,10 @@ class DetectorConfig:
     verifier likeliest calls a triangle that fills `filled.LOOSE_TRIANGLE_FILL` of its enclosing triangle, which the
     card tests then judge - is kept where at least this share of a ring round it is paper (`filled.paper_round`; 0:
     off). The verifier, seeing four times the mark, takes a filled triangle on a sheet much wider than itself, or on a
-    card that runs out of the frame, for one painted on a wall; a danger mark on plain paper stops the robot whatever
-    the paper's extent. Round vision61 (the vision README)."""
+    card that runs out of the frame, for one painted on a wall; with this on, a danger mark on plain paper stops the
+    robot whatever the paper's extent. Off: round vision61 (the vision README) found 12 of 184 missed tuning triangles
+    for 6 false ones and failed its gates (letters A and V, warning signs, play buttons and arrow heads have paper
+    round them too); `bench/vision_cards.py`'s filled triangles on wide cards and on white before white it finds."""
     hand_triangle_loose: float = 0.0
     """the second network's word on a loose candidate too (0: not asked): one the verifier did not name, to which it
     gives TRIANGLE at least `hand_triangle_floor`, is named a TRIANGLE if the second network gives TRIANGLE at least
