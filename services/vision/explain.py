@@ -34,7 +34,8 @@ REASONS: dict[str, str] = {
 
 FILLED_TRIANGLE = (
     "; a filled triangle is a mark only on a card that ends within about its width, in front of something darker "
-    "than the paper (else it looks painted on a wall: draw an outline, or trim the card)"
+    "than the paper (else it looks painted on a wall: draw an outline, trim the card, or accept more false stops "
+    "with the detector setting filled_paper_round=0.9)"
 )
 """Added where the verifier refused or did not name a triangle: the commonest such case (`bench/vision_cards.py`)."""
 
