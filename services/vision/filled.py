@@ -4,11 +4,13 @@ The verifier judges a filled triangle's context from a crop of four times the ma
 that crop it names a triangle, and where only light paper does it refuses one, having been taught that a filled
 triangle on a light surface that runs on is painted on a wall. A person who holds up a sheet much wider than the
 triangle on it, or a card that runs out of the frame, shows it just that: stop 106's look on two spent blind seeds
-(`docs/experiments/scripts/vision60_sheet_look.py`) found the sheet's whole outline in the frame round 2 of 160
-missed filled triangles. A wide card and a wall cannot be told apart there, and a triangle is a danger mark: a false
-one costs a needless stop, a missed one a walk into danger. So this stage keeps a filled triangle that the networks
-refused where plain paper lies all round it, however far that paper runs. What the verifier's refusals were
-mostly for, a dark wedge between a card's edge and something else, has paper on one or two sides only.
+(`docs/experiments/scripts/vision60_sheet_look.py`) found a whole sheet within 4 times the triangle's size round 2
+of 160 missed filled triangles (3 anywhere in view). A wide card and a wall cannot be told apart there, and a
+triangle is a danger mark: a false one costs a needless stop, a missed one a walk into danger. So this stage keeps a
+filled triangle that the networks refused where plain paper lies all round it, however far that paper runs. A dark
+wedge between a card's edge and something else has paper on one or two sides only. Round vision61 judged it and it
+did not land (the vision README): letters, warning signs, play buttons, arrow heads and some wedges have paper round
+them too, and the option is off by default.
 """
 
 from __future__ import annotations
