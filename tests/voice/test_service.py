@@ -58,19 +58,18 @@ def test_spool_folder_to_voice_commands(bus: ServiceContext, start_service, tmp_
     assert first.confidence >= 0.5
     assert first.engine == "spotter"
 
-    # a new file written atomically while the service runs: published with low latency
+    # a new file written atomically while the service runs: picked up and published (how soon is
+    # bench/voice_latency.py's figure, not a timed assertion here)
     table = synth.speech_clip("table", "en-us", 150)
     tmp = spool / "2-table.wav.tmp"
     tmp.write_bytes(table.path.read_bytes())
     t0 = time.time()
     tmp.replace(spool / "2-table.wav")
     wait_for(lambda: len(heard) >= 2, timeout=10)
-    latency = time.time() - t0
     with lock:
         second = heard[1]
     assert second.command is None or second.command.value != "go"
     assert second.stamp >= t0 - 0.01
-    assert latency < 2.0
     # the bad file is reported once its size has settled, and skipped
     # (and the second utterance counted: its count is reported just after its command goes out)
     h = wait_for(lambda: (x := bus.query_health("voice")) is not None and x.detail.get("bad_audio") == 1
