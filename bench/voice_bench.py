@@ -272,6 +272,9 @@ class Score:
     correct_direct: int = 0
     correct_asked: int = 0
     asked_go: int = 0
+    walked_go: int = 0
+    """"go" clips the robot walks on at once, without asking (a walk gate that does not hear a voice turns them into
+    questions)"""
     oov: int = 0
     oov_accepted: int = 0
     noise: int = 0
@@ -288,7 +291,7 @@ class Score:
         return {
             "engine": self.engine, "family": self.family,
             "command_accuracy": round((self.correct_direct + self.correct_asked) / max(1, self.commands), 3),
-            "of_which_asked_and_confirmed": self.correct_asked, "go_asked": self.asked_go,
+            "of_which_asked_and_confirmed": self.correct_asked, "go_asked": self.asked_go, "go_walked": self.walked_go,
             "by_command": {k: round(v[0] / max(1, v[1]), 2) for k, v in self.per_command.items()},
             "oov_accepted": round(self.oov_accepted / max(1, self.oov), 3),
             "noise_accepted": round(self.noise_accepted / max(1, self.noise), 3),
@@ -338,6 +341,7 @@ def score(engine_name: str, engine: Engine, items: list[Item], policy: Policy) -
                     s.correct_asked += ok
                 else:
                     s.correct_direct += ok
+                    s.walked_go += ok and word == "go" and walks
                 s.per_command[word][0] += ok
                 if not ok:
                     s.errors[f"{word}->{cmd.value if cmd else 'none'}"] += 1

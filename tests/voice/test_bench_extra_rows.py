@@ -32,3 +32,31 @@ def test_paired_counts_the_words_each_run_counted_and_the_other_did_not() -> Non
     assert paired("111", "111") == (0, 0)
     with pytest.raises(ValueError, match="not the same clips"):
         paired("10", "100")
+
+
+def test_the_bench_counts_a_go_walked_at_once_apart_from_one_asked_and_confirmed() -> None:
+    from schemas.messages import Command
+    from services.voice.engine import Recognition
+
+    heard = {b"walk": (Command.GO, 0.9), b"ask": (Command.GO, 0.7), b"ask-unconfirmed": (Command.GO, 0.7),
+             b"yes": (Command.YES, 0.8), b"yes-unsure": (Command.YES, 0.6), b"gold": (Command.GO, 0.6)}
+
+    class Fixed:
+        name = "fixed"
+
+        def recognise(self, pcm: bytes) -> Recognition:
+            command, conf = heard[pcm]
+            return Recognition(command, command.value, conf, self.name)
+
+    go, yes = voice_bench.WORDS.index("go"), voice_bench.WORDS.index("yes")
+    items = [voice_bench.Item("espeak-heldout", "a", go, "go", "clean", b"walk"),
+             voice_bench.Item("espeak-heldout", "a", go, "go", "noisy", b"ask"),
+             voice_bench.Item("espeak-heldout", "a", yes, "yes", "noisy", b"yes"),
+             voice_bench.Item("espeak-heldout", "b", go, "go", "clean", b"ask-unconfirmed"),
+             voice_bench.Item("espeak-heldout", "b", yes, "yes", "clean", b"yes-unsure"),
+             voice_bench.Item("espeak-heldout", "b", voice_bench.OTHER, "gold", "clean", b"gold")]
+    scores, _ = voice_bench.score("fixed", Fixed(), items, voice_bench.Policy())
+    row = next(s for s in scores if s.family == "ALL").row()
+    assert row["go_walked"] == 1  # the sure "go"; the asked ones are not walks
+    assert row["go_asked"] == 2 and row["of_which_asked_and_confirmed"] == 1  # b's "yes" is below 0.7
+    assert row["false_asks"] == 1 and row["false_walks_direct"] == 0  # "gold" heard as "go" at 0.6: asked
