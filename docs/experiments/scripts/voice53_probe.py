@@ -5,8 +5,8 @@ the 7 commands and tune words only (OOV_TUNE and the tune one-edit neighbours), 
   render: PYTHONPATH=. python docs/experiments/scripts/voice53_probe.py render DRAW OUT.npz
   score:  PYTHONPATH=. python docs/experiments/scripts/voice53_probe.py score OUT.npz NEW_SE_HEAD
 
-`score` prints, for each engine setting, commands heard (asked "go" counted when the policy would ask), other words
-accepted, "go" walked unasked, direct false walks, per voice family."""
+`score` prints, for each engine setting, commands heard (a published "go" counted, whether the robot would walk or
+ask), other words accepted, "go" walked unasked, direct false walks, per voice family."""
 from __future__ import annotations
 
 import random
@@ -17,7 +17,7 @@ from multiprocessing import get_context
 import numpy as np
 
 from services.voice.engine_spotter import SpotterEngine
-from services.voice.spotter.head import SPEECH_EMBEDDING_HEAD, Head
+from services.voice.spotter.head import SPEECH_EMBEDDING_HEAD
 from services.voice.synth import OOV_TUNE
 from services.voice.training import corpus, dataset
 from services.voice.training.dataset import OTHER, Recipe
@@ -61,7 +61,6 @@ def render(draw: int, out: str) -> None:
 
 def score(path: str, new_se: str) -> None:
     z = np.load(path, allow_pickle=True)
-    old_se = Head.load(SPEECH_EMBEDDING_HEAD)
     settings = {
         "default (old gate, veto off)": dict(walk_gate=None, agree_min=0.0),
         "old gate, veto 0.25 (round 27)": dict(walk_gate=None, agree_min=0.25),
@@ -71,12 +70,11 @@ def score(path: str, new_se: str) -> None:
         "old SE head alone": dict(path=SPEECH_EMBEDDING_HEAD, walk_gate="none"),
         "new SE head alone": dict(path=new_se, walk_gate="none"),
     }
-    del old_se
     vocab = corpus.VOCABULARY
     for name, kw in settings.items():
         eng = SpotterEngine.from_path(**kw)
         tally: dict[str, Counter] = defaultdict(Counter)
-        for text, label, voice, pcm in zip(z["text"], z["label"], z["voice"], z["pcm"], strict=True):
+        for label, voice, pcm in zip(z["label"], z["voice"], z["pcm"], strict=True):
             fam = "festival" if voice.startswith("festival") else "kokoro"
             rec = eng.recognise(pcm.astype("<i2").tobytes())
             heard = rec.command.value if rec.command else None
