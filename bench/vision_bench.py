@@ -5,7 +5,7 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
                                            [--hand-variety SHARE] [--hand-drawn SHARE] [--without KIND ...]
                                            [--plus-signs]
-                                           [--lens K [--calibrated [--keep-matrix]]]
+                                           [--lens K [--calibrated [--keep-matrix]]] [--flicker DEPTH]
                                            (--hand-variety, --hand-drawn, --without, --calibrated, --keep-matrix:
                                             tuning split only)
 
@@ -24,7 +24,8 @@ share of its marks drawn by hand with a pen, `Variation.hand_drawn`; `--without 
 frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`: each such frame undistorted
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
-undistorted with the calibration's own camera matrix, which cuts the edges. With `--split heldout`,
+undistorted with the calibration's own camera matrix, which cuts the edges. `--flicker DEPTH` (any split): every frame
+as a rolling-shutter camera sees it under mains-powered light (`flicker_bands`), which no generator draws. With `--split heldout`,
 `--lens K` shows the held-out scenes through a lens in OpenCV's radial model (k1 = -K, focal length the
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
@@ -57,6 +58,7 @@ CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
 TIMED_FRAMES = 200
 SIZE_BINS = ((0, 80), (80, 160), (160, 300), (300, 10_000))
 TILT_BINS = ((0, 15), (15, 30), (30, 46))
+FLICKER_BINS = ((0, 0.1), (0.1, 0.3), (0.3, 1.0))
 BLUR_BINS = ((0, 1.5), (1.5, 8), (8, 14), (14, 21))
 
 
@@ -65,6 +67,28 @@ def _bin(value: float, bins: tuple[tuple[float, float], ...]) -> str:
         if lo <= value < hi:
             return f"{lo:g}-{hi:g}"
     return "other"
+
+
+def flicker_bands(img: np.ndarray, rng: np.random.Generator, depth: float) -> tuple[np.ndarray, float]:
+    """`img` as a rolling-shutter camera sees it under mains-powered light: horizontal bands that drift.
+
+    Fluorescent tubes and many LED lamps flicker at twice the mains frequency (100 or 120 Hz) with a depth of a few
+    per cent (electronic ballasts) to nearly all of their light (cheap LED drivers). A rolling shutter starts each
+    row's exposure a little later than the last, so each row integrates another part of the cycle: the frame is
+    crossed by bright and dark bands, `height / (f * readout)` rows apart. An exposure of E seconds averages the
+    flicker over E, which leaves `|sinc(f E)|` of its depth: none at 10 ms (one cycle at 100 Hz), most of it in the
+    short exposures of a bright room. Drawn per frame: f of 100 or 120 Hz, the light's depth `depth` x U(0.5, 1), an
+    exposure of 1-8 ms, a readout of 15-33 ms and a phase; the gain is applied to linear light (gamma 2.2), and
+    clipped. Returns the frame and the bands' amplitude (the share of light the brightest row gains)."""
+    f = float(rng.choice((100.0, 120.0)))
+    exposure, readout = rng.uniform(0.001, 0.008), rng.uniform(0.015, 0.033)
+    amplitude = depth * rng.uniform(0.5, 1.0) * abs(float(np.sinc(f * exposure)))
+    rows = img.shape[0]
+    period = rows / (f * readout)
+    gain = 1.0 + amplitude * np.sin(2 * np.pi * np.arange(rows) / period + rng.uniform(0, 2 * np.pi))
+    linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain.astype(np.float32)[:, None, None]
+    out = np.clip(linear, 0.0, 1.0) ** (1 / 2.2) * 255.0
+    return np.round(out).astype(np.uint8), amplitude
 
 
 def main(
@@ -117,6 +141,13 @@ def main(
         bool,
         typer.Option(help="with --calibrated: undistort with the calibration's own camera matrix (edges cut)"),
     ] = False,
+    flicker: Annotated[
+        float,
+        typer.Option(
+            help="any split: every frame under mains-powered light through a rolling shutter, bands of up to this "
+            "depth of the light's flicker (0.3: a fluorescent tube; 1: a cheap LED lamp); see flicker_bands",
+        ),
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
     if hand_variety and split != "tuning":
@@ -131,6 +162,8 @@ def main(
         raise typer.BadParameter("--lens is a tuning or held-out generator setting (the blind one has its own optics)")
     if calibrated and (not lens or split != "tuning"):
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
+    if not 0.0 <= flicker <= 1.0:
+        raise typer.BadParameter("--flicker is the light's flicker depth, 0 to 1")
     try:
         frame_of = _generator(
             split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs, tuple(without or ())
@@ -151,6 +184,9 @@ def main(
     for i in range(frames):
         truth = CLASSES[i % len(CLASSES)]
         img, label, meta = frame_of(truth)
+        if flicker:  # its own draws, so the scenes are the seed's own
+            img, amplitude = flicker_bands(img, np.random.default_rng((seed, i)), flicker)
+            meta = {**meta, "flicker_amplitude": _bin(amplitude, FLICKER_BINS)} if label is not None else meta
         if len(kept) < TIMED_FRAMES:
             kept.append(img)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -198,6 +234,7 @@ def main(
         "lens": lens,
         "calibrated": calibrated,
         "keep_matrix": keep_matrix,
+        "flicker": flicker,
         "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "resolution": "640x480",
         "opencv": cv2.__version__,
@@ -359,6 +396,8 @@ def _tables(r: dict[str, Any]) -> str:
             f"OpenCV {r['opencv']}, {r['threads']} thread"
         ),
         f"detector settings: {' '.join(r['settings']) or 'the defaults'}",
+        *([f"every frame under flickering light through a rolling shutter, depth up to {r['flicker']:g}"]
+          if r.get("flicker") else []),
         *(
             [f"NOT the READMEs' frames for this seed: fonts missing (apt-get install fonts-dejavu-core "
              f"fonts-dejavu-extra): {', '.join(r['missing_fonts'])}"]

@@ -43,3 +43,32 @@ def test_without_leaves_a_kind_of_clutter_out_of_the_tuning_frames_only() -> Non
     assert unknown.exit_code == 2 and "roof" in unknown.output
     other = runner.invoke(app, ["--split", "heldout", "--frames", "4", "--without", "text"])
     assert other.exit_code == 2 and "tuning" in other.output
+
+
+def test_flicker_bands_cross_the_frame_in_rows_and_none_without_flicker() -> None:
+    import numpy as np
+
+    grey = np.full((480, 640, 3), 128, np.uint8)
+    same, amplitude = vision_bench.flicker_bands(grey, np.random.default_rng(1), 0.0)
+    assert amplitude == 0.0 and np.array_equal(same, grey)
+    amplitudes = []
+    for i in range(20):
+        banded, amplitude = vision_bench.flicker_bands(grey, np.random.default_rng(i), 1.0)
+        assert banded.shape == grey.shape and banded.dtype == np.uint8 and 0 < amplitude <= 1.0
+        assert np.ptp(banded, axis=1).max() == 0  # each row one gain: bands, not blotches
+        rows = banded[:, 0, 0].astype(int)
+        expected = 128 * ((1 + amplitude) ** (1 / 2.2) - (1 - amplitude) ** (1 / 2.2))  # grey 128 is linear 0.22
+        assert abs(rows.max() - rows.min() - expected) <= 0.25 * expected + 2  # brightest and darkest rows
+        if amplitude > 0.1:
+            assert 2 <= np.count_nonzero(np.diff(np.sign(rows - rows.mean())) != 0) <= 16  # 1.5-8 cycles a frame
+        amplitudes.append(amplitude)
+    assert max(amplitudes) > 0.6 and min(amplitudes) < 0.6  # the depth drawn per frame, and the exposure's share
+
+
+def test_flicker_is_named_and_sliced_and_out_of_range_refused() -> None:
+    runner, app = CliRunner(), _bench()
+    run = json.loads(runner.invoke(app, ["--frames", "8", "--seed", "3", "--json", "--flicker", "0.5"]).stdout)
+    assert run["flicker"] == 0.5 and sum(c["n"] for c in run["recall_by"]["flicker_amplitude"].values()) == 6
+    table = runner.invoke(app, ["--frames", "4", "--seed", "3", "--flicker", "0.5"]).stdout
+    assert "under flickering light through a rolling shutter, depth up to 0.5" in table
+    assert runner.invoke(app, ["--frames", "4", "--flicker", "1.5"]).exit_code == 2
