@@ -546,7 +546,7 @@ def main() -> int:
     arithmetic = {"compute": whisper.compute_type(), "int8_exact": whisper.exact_int8()}
     print(f"Whisper (the default head's embedding) in {arithmetic['compute']}; this CPU's int8 sums "
           + ("exactly (VNNI)" if arithmetic["int8_exact"] else "with saturation, as the committed default head was fitted")
-          + " (services/voice/README.md, stop 67)", flush=True)
+          + " (docs/experiments/voice-rounds.md, stop 67)", flush=True)
     rendered = heldout_items(args.seed, args.workers)
     items = through_mic_items(rendered, args.mic_rate)
     if args.mic_rate:

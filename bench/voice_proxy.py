@@ -6,7 +6,7 @@ committed recipe (`TrainConfig()`, the splits `train` fits on) is fitted WITHOUT
 to `TrainConfig.blas_threads`), combined as `train.fit` combines them (`train.ensemble`). Then, never with d's
 clips in the calibration either:
 
-- plain proxy (rounds 5-8 of services/voice/README.md): temperature and knots (`train.fit_temperature`,
+- plain proxy (rounds 5-8 of docs/experiments/voice-rounds.md): temperature and knots (`train.fit_temperature`,
   `train.calibrate`) fitted on one random half of the tune rows without d, figures (`train.tune_figures`) on
   d's `recorded-tune` clips of the other half, both ways, averaged;
 - `--enrol` (round 9): temperature and knots on all of `TrainConfig.tune_splits` without d, as `train` does;

@@ -15,7 +15,7 @@ The first network (`main`) judges every row as before. The second (`veto`) runs 
 slot 'loose' set: loose candidates, parts `_split` cut off, the proposer's proposals) and gives those rows'
 X probability a ceiling: it becomes the lower of the two networks' X, and what it loses goes to 'none', so a
 row still sums to one. A claimed candidate, and a loose row's O and TRIANGLE, are judged by `main` alone.
-Why (round vision23f, services/vision/README.md): the blind generator's filled stars reach the verifier as
+Why (round vision23f, docs/experiments/vision-rounds.md): the blind generator's filled stars reach the verifier as
 loose candidates that `main` names X; a network trained with stars (`--everyday`) refuses them, but used on
 its own it also refused held-out marks `main` keeps.
 

@@ -19,7 +19,7 @@ folders are never looked ahead in (their frames are all taken, in order).
 Off by default (the service's `--lookahead`): on round vision26's machine the loop kept up with a 30 fps
 camera in the running stack (27 ms a frame) and the look ahead did not lower the stop's p99; standalone,
 with frames due faster than the loop finishes them, it cut X shown -> published from p50 18 / max 36 ms
-to 14 / 26 ms (services/vision/README.md, "Vision26").
+to 14 / 26 ms (docs/experiments/vision-rounds.md, "Vision26").
 """
 
 from __future__ import annotations

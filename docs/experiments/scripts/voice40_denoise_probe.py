@@ -10,7 +10,7 @@ bench's `ego_noise` stays held out), and in pink noise. Each segment over the wo
     .venv/bin/pip install noisereduce   # not a dependency of the project: this probe's alone
     .venv/bin/python docs/experiments/scripts/voice40_denoise_probe.py --json /tmp/s80/probe.json
 
-Stop 80 ran the machine noise's three rows (services/voice/README.md, "Round voice40"); pink was not run.
+Stop 80 ran the machine noise's three rows (docs/experiments/voice-rounds.md, "Round voice40"); pink was not run.
 """
 
 from __future__ import annotations

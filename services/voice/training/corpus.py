@@ -52,7 +52,7 @@ FOREIGN_TRAIN = ("foreign:cs_dita", "foreign:cs_krb", "foreign:cs_machac", "fore
 """Recorded speakers of other languages (Festival's Czech and Finnish voices: two women, a child, three men)
 saying the English words from their CMU phonemes (`tts.foreign`): the `foreign` training split only (round 11),
 never tune, recorded-tune or held-out. The Italian (lp, pc) and Catalan (ona) voices were screened out: the
-committed head recognised fewer than 10 of 28 of their clean commands (services/voice/README.md, round 11)."""
+committed head recognised fewer than 10 of 28 of their clean commands (docs/experiments/voice-rounds.md, round 11)."""
 RECORDED_MORE = ("mbrola:us2", "mbrola:us3", "mbrola:en1", "rhvoice:alan", "rhvoice:bdl", "rhvoice:clb")
 """Six more recorded speakers, from two more engines (Debian contrib/non-free: MBROLA's diphones through espeak-ng,
 three men; RHVoice's statistical-parametric voices, two men and a woman), added to `RECORDED_TRAIN` by
