@@ -5,7 +5,7 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
                                            [--failures DIR] [--json] [--set KEY=VALUE ...]
                                            [--hand-variety SHARE] [--hand-drawn SHARE] [--without KIND ...]
                                            [--plus-signs]
-                                           [--lens K [--calibrated [--keep-matrix]]] [--flicker DEPTH]
+                                           [--lens K [--calibrated [--keep-matrix]]] [--flicker DEPTH [--flicker-wave sine|pwm]]
                                            (--hand-variety, --hand-drawn, --without, --calibrated, --keep-matrix:
                                             tuning split only)
 
@@ -69,23 +69,40 @@ def _bin(value: float, bins: tuple[tuple[float, float], ...]) -> str:
     return "other"
 
 
-def flicker_bands(img: np.ndarray, rng: np.random.Generator, depth: float) -> tuple[np.ndarray, float]:
+def flicker_bands(img: np.ndarray, rng: np.random.Generator, depth: float, wave: str = "sine") -> tuple[np.ndarray, float]:
     """`img` as a rolling-shutter camera sees it under mains-powered light: horizontal bands that drift.
 
     Fluorescent tubes and many LED lamps flicker at twice the mains frequency (100 or 120 Hz) with a depth of a few
     per cent (electronic ballasts) to nearly all of their light (cheap LED drivers). A rolling shutter starts each
     row's exposure a little later than the last, so each row integrates another part of the cycle: the frame is
     crossed by bright and dark bands, `height / (f * readout)` rows apart. An exposure of E seconds averages the
-    flicker over E, which leaves `|sinc(f E)|` of its depth: none at 10 ms (one cycle at 100 Hz), most of it in the
-    short exposures of a bright room. Drawn per frame: f of 100 or 120 Hz, the light's depth `depth` x U(0.5, 1), an
-    exposure of 1-8 ms, a readout of 15-33 ms and a phase; the gain is applied to linear light (gamma 2.2), and
-    clipped. Returns the frame and the bands' amplitude (the share of light the brightest row gains)."""
-    f = float(rng.choice((100.0, 120.0)))
-    exposure, readout = rng.uniform(0.001, 0.008), rng.uniform(0.015, 0.033)
-    amplitude = depth * rng.uniform(0.5, 1.0) * abs(float(np.sinc(f * exposure)))
+    flicker over E, which leaves `|sinc(f E)|` of a sine's depth: none at 10 ms (one cycle at 100 Hz), most of it in
+    the short exposures of a bright room. Drawn per frame: the light's depth `depth` x U(0.5, 1), an exposure of 1-8
+    ms, a readout of 15-33 ms and a phase, and with `wave`:
+
+    - "sine": a sine at 100 or 120 Hz (a tube's or a mains LED's ripple);
+    - "pwm": an LED dimmer's square wave, on for 20-80 % of each cycle at 100-1,000 Hz, each row's light its mean
+      over the row's exposure (thin bands at high frequency, flat-topped ones at low).
+
+    The rows' gain (the frame's mean light kept) is applied to linear light (gamma 2.2), and clipped. Returns the frame
+    and the bands' amplitude, (brightest - darkest) / (brightest + darkest) of the rows' light (a sine's own depth)."""
+    if wave not in ("sine", "pwm"):
+        raise ValueError(f"flicker wave must be sine or pwm, got {wave!r}")
     rows = img.shape[0]
-    period = rows / (f * readout)
-    gain = 1.0 + amplitude * np.sin(2 * np.pi * np.arange(rows) / period + rng.uniform(0, 2 * np.pi))
+    f = float(rng.choice((100.0, 120.0))) if wave == "sine" else rng.uniform(100.0, 1000.0)
+    exposure, readout = rng.uniform(0.001, 0.008), rng.uniform(0.015, 0.033)
+    light_depth = depth * rng.uniform(0.5, 1.0)
+    phase = rng.uniform(0, 2 * np.pi)
+    if wave == "sine":
+        amplitude = light_depth * abs(float(np.sinc(f * exposure)))
+        gain = 1.0 + amplitude * np.sin(2 * np.pi * f * readout * np.arange(rows) / rows + phase)
+    else:
+        duty = rng.uniform(0.2, 0.8)
+        starts = readout * np.arange(rows) / rows + phase / (2 * np.pi * f)
+        t = starts[:, None] + exposure * (np.arange(64) + 0.5)[None, :] / 64  # each row's exposure, sampled
+        light = np.where((t * f) % 1.0 < duty, 1.0, 1.0 - light_depth).mean(axis=1)
+        gain = light / light.mean()
+        amplitude = float((gain.max() - gain.min()) / (gain.max() + gain.min()))
     linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain.astype(np.float32)[:, None, None]
     out = np.clip(linear, 0.0, 1.0) ** (1 / 2.2) * 255.0
     return np.round(out).astype(np.uint8), amplitude
@@ -148,6 +165,9 @@ def main(
             "depth of the light's flicker (0.3: a fluorescent tube; 1: a cheap LED lamp); see flicker_bands",
         ),
     ] = 0.0,
+    flicker_wave: Annotated[
+        str, typer.Option(help="with --flicker: sine (a tube's 100/120 Hz ripple) or pwm (an LED dimmer's square wave)")
+    ] = "sine",
 ) -> None:
     cv2.setNumThreads(1)
     if hand_variety and split != "tuning":
@@ -164,6 +184,8 @@ def main(
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     if not 0.0 <= flicker <= 1.0:
         raise typer.BadParameter("--flicker is the light's flicker depth, 0 to 1")
+    if flicker_wave not in ("sine", "pwm"):
+        raise typer.BadParameter("--flicker-wave is sine or pwm")
     try:
         frame_of = _generator(
             split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs, tuple(without or ())
@@ -185,7 +207,7 @@ def main(
         truth = CLASSES[i % len(CLASSES)]
         img, label, meta = frame_of(truth)
         if flicker:  # its own draws, so the scenes are the seed's own
-            img, amplitude = flicker_bands(img, np.random.default_rng((seed, i)), flicker)
+            img, amplitude = flicker_bands(img, np.random.default_rng((seed, i)), flicker, flicker_wave)
             meta = {**meta, "flicker_amplitude": _bin(amplitude, FLICKER_BINS)} if label is not None else meta
         if len(kept) < TIMED_FRAMES:
             kept.append(img)
@@ -235,6 +257,7 @@ def main(
         "calibrated": calibrated,
         "keep_matrix": keep_matrix,
         "flicker": flicker,
+        **({"flicker_wave": flicker_wave} if flicker else {}),
         "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "resolution": "640x480",
         "opencv": cv2.__version__,
@@ -396,7 +419,8 @@ def _tables(r: dict[str, Any]) -> str:
             f"OpenCV {r['opencv']}, {r['threads']} thread"
         ),
         f"detector settings: {' '.join(r['settings']) or 'the defaults'}",
-        *([f"every frame under flickering light through a rolling shutter, depth up to {r['flicker']:g}"]
+        *([f"every frame under flickering light through a rolling shutter, depth up to {r['flicker']:g} "
+           f"({r['flicker_wave']})"]
           if r.get("flicker") else []),
         *(
             [f"NOT the READMEs' frames for this seed: fonts missing (apt-get install fonts-dejavu-core "

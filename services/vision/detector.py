@@ -52,6 +52,7 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
+from services.vision.deflicker import deflicker
 from services.vision.filled import FILLED_SHARE, LOOSE_TRIANGLE_FILL, ink_and_paper, paper_round, solid_share
 from services.vision.proposer import MODEL_PATH as PROPOSER_PATH
 from services.vision.proposer import Proposal, Proposer
@@ -395,6 +396,12 @@ class DetectorConfig:
     """the proposer's ONNX file ("": the committed `proposer.onnx`), for judging a retrained one with the benches'
     `--set` (`python -m services.vision.proposer_training --out ...`; round vision43); a file that is no proposer is
     refused when the detector is made"""
+    deflicker: bool = False
+    """even out the bands a flickering light draws across a rolling-shutter frame before anything else
+    (`deflicker.py`): where the rows' gain, estimated from the frame, is periodic (`deflicker_share` of its variance)
+    and varies by `deflicker_depth` or more peak to peak, each row is divided by it. Round vision62 (stop 108)."""
+    deflicker_share: float = 0.7
+    deflicker_depth: float = 1.15
     danger_first: bool = True
     """judge the pyramid's levels coarsest first, verify each level's candidates as soon as it is done,
     and report the frame at the first X or TRIANGLE the verifier keeps: the finer levels and the proposer
@@ -726,6 +733,8 @@ class MarkDetector:
         """Every pyramid level, then one batched verifier call for all of their candidates, then the
         proposer; or, with `danger_first`, level by level from the coarsest, stopping at a danger mark
         (then `Step.FINE` before the finest level: none was found in the others)."""
+        if self.config.deflicker:
+            gray = deflicker(gray, self.config.deflicker_share, self.config.deflicker_depth)
         found: list[Detection] = []
         pending: list[_Pending] = []
         self._greys, self._vetoes, self._levels, self._gray = {}, [], [], gray

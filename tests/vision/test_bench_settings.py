@@ -70,5 +70,5 @@ def test_flicker_is_named_and_sliced_and_out_of_range_refused() -> None:
     run = json.loads(runner.invoke(app, ["--frames", "8", "--seed", "3", "--json", "--flicker", "0.5"]).stdout)
     assert run["flicker"] == 0.5 and sum(c["n"] for c in run["recall_by"]["flicker_amplitude"].values()) == 6
     table = runner.invoke(app, ["--frames", "4", "--seed", "3", "--flicker", "0.5"]).stdout
-    assert "under flickering light through a rolling shutter, depth up to 0.5" in table
+    assert "under flickering light through a rolling shutter, depth up to 0.5 (sine)" in table
     assert runner.invoke(app, ["--frames", "4", "--flicker", "1.5"]).exit_code == 2

@@ -1,0 +1,108 @@
+"""The bands of a flickering light, taken out of a frame before detection (`DetectorConfig.deflicker`).
+
+Fluorescent tubes and many LED lamps flicker at twice the mains frequency (100 or 120 Hz), or at their dimmer's PWM
+frequency, and a rolling shutter exposes each row of a frame a little later than the one above it: each row gets its
+own share of the light, and the frame is crossed by bright and dark bands (`bench/vision_bench.py --flicker`). The
+detector's tests compare grey levels (a loose candidate's surround at least 35 levels lighter than its ink, the card's
+paper at least 25 over the ink), so in a dark band a mark's contrast falls under them.
+
+A band multiplies a row's light, and through a camera's tone curve (about a power law) the row's grey levels too; the
+scene's own edges are local. So the bands' log gain, row to row, is the median over the row's pixels of the log grey
+level's step to the next row (at half resolution, every other column, pixels neither near black nor clipped), and
+their gain is its running sum. That profile, less a quadratic trend (which it cannot tell from the scene's own
+shading), is fitted by a Fourier series of `harmonics` terms (ridge-regularised) for each period of a grid
+(`PERIODS`: 16 rows, a fast PWM dimmer, to 480, one cycle a frame); the best period's fit is taken for bands if it
+explains at least `min_share` of the profile's variance and its gain varies by at least `min_depth` peak to peak, and
+each row is then multiplied by the inverse of its gain (at most `max_gain` either way). A frame without bands but
+with the light changing smoothly from top to bottom can pass the test too; then it is that change that is evened
+out.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+PERIODS: tuple[float, ...] = tuple(float(p) for p in np.geomspace(16, 480, 64))
+"""The band periods tried, in rows of a 480-row frame (scaled with the frame's height)."""
+RIDGE = 0.1
+"""The Fourier coefficients' ridge penalty: keeps a fit at a period the profile barely shows from swinging wildly."""
+LOG_GREY = np.log(np.arange(256, dtype=np.float32) + 1.0)
+
+
+@dataclass(frozen=True)
+class Bands:
+    """The bands found in a frame: their period (rows), the share of the detrended gain profile they explain, their
+    gain's peak-to-peak ratio, and each row's gain (the frame's mean is 1)."""
+
+    period: float
+    share: float
+    depth: float
+    gain: np.ndarray
+
+
+@lru_cache(maxsize=8)
+def _fits(rows: int, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For `rows` rows: the trend's design (rows, 3), and for every period of the grid the design [trend | Fourier
+    terms] (P, rows, 3 + 2h), the ridge solution's matrix (P, 3 + 2h, rows) and the period in rows."""
+    y = np.arange(rows, dtype=np.float64)
+    u = y / rows - 0.5
+    trend = np.stack([np.ones(rows), u, u * u], axis=1)
+    periods = np.array(PERIODS) * rows / 480.0
+    ridge = np.diag([0.0] * 3 + [RIDGE] * (2 * harmonics))
+    designs = []
+    for p in periods:
+        phase = 2 * np.pi * y[:, None] * np.arange(1, harmonics + 1)[None, :] / p
+        designs.append(np.concatenate([trend, np.sin(phase), np.cos(phase)], axis=1))
+    x = np.stack(designs)
+    solve = np.stack([np.linalg.solve(d.T @ d + ridge, d.T) for d in x])
+    return trend, x, solve, periods
+
+
+def gain_profile(gray: np.ndarray) -> np.ndarray:
+    """The log of each row's gain at half resolution, up to a constant: the running sum of the median step of the log
+    grey level from each row to the next."""
+    half = cv2.resize(gray, (max(1, gray.shape[1] // 2), max(1, gray.shape[0] // 2)), interpolation=cv2.INTER_AREA)
+    half = half[:, ::2]
+    logs = LOG_GREY[half]
+    usable = (half > 12) & (half < 250)
+    steps = np.where(usable[1:] & usable[:-1], logs[1:] - logs[:-1], np.nan)
+    with warnings.catch_warnings():  # a row with no usable pixel (black, or clipped): no step there
+        warnings.simplefilter("ignore", RuntimeWarning)
+        median = np.nan_to_num(np.nanmedian(steps, axis=1))
+    return np.concatenate([[0.0], np.cumsum(median, dtype=np.float64)])
+
+
+def find_bands(gray: np.ndarray, harmonics: int = 3) -> Bands:
+    """The strongest periodic row gain of a grey frame (bands or not: see `Bands.share` and `Bands.depth`)."""
+    profile = gain_profile(gray)
+    rows = profile.size
+    trend, x, solve, periods = _fits(rows, harmonics)
+    profile = profile - trend @ np.linalg.lstsq(trend, profile, rcond=None)[0]
+    total = float(profile @ profile)
+    if total <= 1e-12:
+        return Bands(0.0, 0.0, 1.0, np.ones(gray.shape[0]))
+    coef = solve @ profile  # (P, 3 + 2h)
+    residual = ((profile[None, :] - np.einsum("prk,pk->pr", x, coef)) ** 2).sum(axis=1)
+    best = int(np.argmin(residual))
+    periodic = x[best, :, 3:] @ coef[best, 3:]
+    full = np.interp((np.arange(gray.shape[0]) + 0.5) / 2.0 - 0.5, np.arange(rows), periodic)
+    gain = np.exp(full - full.mean())
+    share = max(0.0, 1.0 - float(residual[best]) / total)
+    return Bands(float(periods[best] * gray.shape[0] / rows), share, float(gain.max() / gain.min()), gain)
+
+
+def deflicker(gray: np.ndarray, min_share: float = 0.7, min_depth: float = 1.15, max_gain: float = 4.0,
+              harmonics: int = 3) -> np.ndarray:
+    """`gray` with its rows' flicker gain divided out, or `gray` itself where no bands pass the tests."""
+    if gray.shape[0] < 64:
+        return gray
+    bands = find_bands(gray, harmonics)
+    if bands.share < min_share or bands.depth < min_depth:
+        return gray
+    scale = np.clip(1.0 / bands.gain, 1.0 / max_gain, max_gain).astype(np.float32)
+    return np.clip(gray.astype(np.float32) * scale[:, None] + 0.5, 0, 255).astype(np.uint8)
