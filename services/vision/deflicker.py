@@ -27,7 +27,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-PERIODS: tuple[float, ...] = tuple(float(p) for p in np.geomspace(16, 480, 64))
+PERIODS: tuple[float, ...] = tuple(float(p) for p in np.geomspace(16, 480, 160))
 """The band periods tried, in rows of a 480-row frame (scaled with the frame's height)."""
 RIDGE = 0.1
 """The Fourier coefficients' ridge penalty: keeps a fit at a period the profile barely shows from swinging wildly."""
@@ -45,22 +45,30 @@ class Bands:
     gain: np.ndarray
 
 
-@lru_cache(maxsize=8)
-def _fits(rows: int, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """For `rows` rows: the trend's design (rows, 3), and for every period of the grid the design [trend | Fourier
-    terms] (P, rows, 3 + 2h), the ridge solution's matrix (P, 3 + 2h, rows) and the period in rows."""
+def _design(rows: int, periods: np.ndarray, harmonics: int) -> tuple[np.ndarray, np.ndarray]:
+    """For each period: the design [quadratic trend | Fourier terms] (P, rows, 3 + 2h) and its ridge solution's
+    matrix (P, 3 + 2h, rows)."""
     y = np.arange(rows, dtype=np.float64)
     u = y / rows - 0.5
-    trend = np.stack([np.ones(rows), u, u * u], axis=1)
-    periods = np.array(PERIODS) * rows / 480.0
+    trend = np.broadcast_to(np.stack([np.ones(rows), u, u * u], axis=1), (periods.size, rows, 3))
+    phase = 2 * np.pi * y[None, :, None] * np.arange(1, harmonics + 1)[None, None, :] / periods[:, None, None]
+    x = np.concatenate([trend, np.sin(phase), np.cos(phase)], axis=2)
     ridge = np.diag([0.0] * 3 + [RIDGE] * (2 * harmonics))
-    designs = []
-    for p in periods:
-        phase = 2 * np.pi * y[:, None] * np.arange(1, harmonics + 1)[None, :] / p
-        designs.append(np.concatenate([trend, np.sin(phase), np.cos(phase)], axis=1))
-    x = np.stack(designs)
-    solve = np.stack([np.linalg.solve(d.T @ d + ridge, d.T) for d in x])
-    return trend, x, solve, periods
+    xt = x.transpose(0, 2, 1)
+    return x, np.linalg.solve(xt @ x + ridge, xt)
+
+
+@lru_cache(maxsize=8)
+def _grid(rows: int, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coarse grid's periods (rows) with their designs and ridge solutions (`_design`), for `rows` rows."""
+    periods = np.array(PERIODS) * rows / 480.0
+    return (periods, *_design(rows, periods, harmonics))
+
+
+def _fit(profile: np.ndarray, x: np.ndarray, solve: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each design's coefficients for `profile` and its residual sum of squares."""
+    coef = solve @ profile
+    return coef, ((profile[None, :] - np.einsum("prk,pk->pr", x, coef)) ** 2).sum(axis=1)
 
 
 def gain_profile(gray: np.ndarray) -> np.ndarray:
@@ -78,22 +86,27 @@ def gain_profile(gray: np.ndarray) -> np.ndarray:
 
 
 def find_bands(gray: np.ndarray, harmonics: int = 3) -> Bands:
-    """The strongest periodic row gain of a grey frame (bands or not: see `Bands.share` and `Bands.depth`)."""
+    """The strongest periodic row gain of a grey frame (bands or not: see `Bands.share` and `Bands.depth`): the best
+    period of the coarse grid, then of a finer one round it."""
     profile = gain_profile(gray)
     rows = profile.size
-    trend, x, solve, periods = _fits(rows, harmonics)
-    profile = profile - trend @ np.linalg.lstsq(trend, profile, rcond=None)[0]
+    periods, x, solve = _grid(rows, harmonics)
+    profile = profile - x[0, :, :3] @ np.linalg.lstsq(x[0, :, :3], profile, rcond=None)[0]
     total = float(profile @ profile)
     if total <= 1e-12:
         return Bands(0.0, 0.0, 1.0, np.ones(gray.shape[0]))
-    coef = solve @ profile  # (P, 3 + 2h)
-    residual = ((profile[None, :] - np.einsum("prk,pk->pr", x, coef)) ** 2).sum(axis=1)
+    _, residual = _fit(profile, x, solve)
+    # a period's multiples fit as well through their harmonics: the shortest period within 2 % of the best fit
+    coarse = periods[int(np.flatnonzero(residual <= residual.min() + 0.02 * (total - residual.min()))[0])]
+    fine = coarse * np.geomspace(0.95, 1.05, 21)
+    x, solve = _design(rows, fine, harmonics)
+    coef, residual = _fit(profile, x, solve)
     best = int(np.argmin(residual))
     periodic = x[best, :, 3:] @ coef[best, 3:]
     full = np.interp((np.arange(gray.shape[0]) + 0.5) / 2.0 - 0.5, np.arange(rows), periodic)
     gain = np.exp(full - full.mean())
     share = max(0.0, 1.0 - float(residual[best]) / total)
-    return Bands(float(periods[best] * gray.shape[0] / rows), share, float(gain.max() / gain.min()), gain)
+    return Bands(float(fine[best] * gray.shape[0] / rows), share, float(gain.max() / gain.min()), gain)
 
 
 def deflicker(gray: np.ndarray, min_share: float = 0.7, min_depth: float = 1.15, max_gain: float = 4.0,
