@@ -109,7 +109,7 @@ def find_bands(gray: np.ndarray, harmonics: int = 3) -> Bands:
     return Bands(float(periods[best] * gray.shape[0] / rows), share, float(gain.max() / gain.min()), gain)
 
 
-def deflicker(gray: np.ndarray, min_share: float = 0.7, min_depth: float = 1.15, max_gain: float = 4.0,
+def deflicker(gray: np.ndarray, min_share: float = 0.9, min_depth: float = 1.15, max_gain: float = 4.0,
               harmonics: int = 3) -> np.ndarray:
     """`gray` with its rows' flicker gain divided out, or `gray` itself where no bands pass the tests."""
     if gray.shape[0] < 64:
