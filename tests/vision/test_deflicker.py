@@ -58,3 +58,23 @@ def test_a_frame_without_bands_is_left_as_it_is() -> None:
 def test_a_frame_too_small_to_tell_is_left_as_it_is() -> None:
     small = _banded(_scene(2), 0.8, 150.0)[:48]
     assert deflicker(small) is small
+
+
+def test_the_option_finds_danger_marks_the_bands_hid() -> None:
+    """Tuning frames (seed 7222) under a cheap LED lamp's bands (bench/vision_bench.py --flicker 1.0): three danger
+    marks the default misses there and finds without the bands; `deflicker=1` finds them through the bands."""
+    from bench.vision_bench import CLASSES, _generator, flicker_bands
+    from services.vision.detector import MarkDetector, box_overlap, parse_settings
+
+    frame_of = _generator("tuning", 7222)
+    frames = {}
+    for i in range(31):
+        img, label, _ = frame_of(CLASSES[i % len(CLASSES)])
+        if i in (20, 24, 30):
+            frames[i] = (flicker_bands(img, np.random.default_rng((7222, i)), 1.0)[0], label)
+
+    def found(detector: MarkDetector) -> int:
+        return sum(any(d.shape == label[0] and box_overlap(d.box, label[1]) >= 0.5 for d in detector.detect(img))
+                   for img, label in frames.values())
+
+    assert found(MarkDetector(parse_settings(["deflicker=1"]))) - found(MarkDetector(parse_settings([]))) >= 2
