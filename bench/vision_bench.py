@@ -25,7 +25,7 @@ frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`:
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
 undistorted with the calibration's own camera matrix, which cuts the edges. `--flicker DEPTH` (any split): every frame
-as a rolling-shutter camera sees it under mains-powered light (`flicker_bands`), which no generator draws. With `--split heldout`,
+as a rolling-shutter camera sees it under mains-powered light (`bench/flicker.py`), which no generator draws. With `--split heldout`,
 `--lens K` shows the held-out scenes through a lens in OpenCV's radial model (k1 = -K, focal length the
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
@@ -50,6 +50,7 @@ import cv2
 import numpy as np
 import typer
 
+from bench.flicker import WAVES, flicker_bands
 from schemas.messages import Shape
 from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings
 from services.vision.verifier import Verifier
@@ -67,45 +68,6 @@ def _bin(value: float, bins: tuple[tuple[float, float], ...]) -> str:
         if lo <= value < hi:
             return f"{lo:g}-{hi:g}"
     return "other"
-
-
-def flicker_bands(img: np.ndarray, rng: np.random.Generator, depth: float, wave: str = "sine") -> tuple[np.ndarray, float]:
-    """`img` as a rolling-shutter camera sees it under mains-powered light: horizontal bands that drift.
-
-    Fluorescent tubes and many LED lamps flicker at twice the mains frequency (100 or 120 Hz) with a depth of a few
-    per cent (electronic ballasts) to nearly all of their light (cheap LED drivers). A rolling shutter starts each
-    row's exposure a little later than the last, so each row integrates another part of the cycle: the frame is
-    crossed by bright and dark bands, `height / (f * readout)` rows apart. An exposure of E seconds averages the
-    flicker over E, which leaves `|sinc(f E)|` of a sine's depth: none at 10 ms (one cycle at 100 Hz), most of it in
-    the short exposures of a bright room. Drawn per frame: the light's depth `depth` x U(0.5, 1), an exposure of 1-8
-    ms, a readout of 15-33 ms and a phase, and with `wave`:
-
-    - "sine": a sine at 100 or 120 Hz (a tube's or a mains LED's ripple);
-    - "pwm": an LED dimmer's square wave, on for 20-80 % of each cycle at 100-1,000 Hz, each row's light its mean
-      over the row's exposure (thin bands at high frequency, flat-topped ones at low).
-
-    The rows' gain (the frame's mean light kept) is applied to linear light (gamma 2.2), and clipped. Returns the frame
-    and the bands' amplitude, (brightest - darkest) / (brightest + darkest) of the rows' light (a sine's own depth)."""
-    if wave not in ("sine", "pwm"):
-        raise ValueError(f"flicker wave must be sine or pwm, got {wave!r}")
-    rows = img.shape[0]
-    f = float(rng.choice((100.0, 120.0))) if wave == "sine" else rng.uniform(100.0, 1000.0)
-    exposure, readout = rng.uniform(0.001, 0.008), rng.uniform(0.015, 0.033)
-    light_depth = depth * rng.uniform(0.5, 1.0)
-    phase = rng.uniform(0, 2 * np.pi)
-    if wave == "sine":
-        amplitude = light_depth * abs(float(np.sinc(f * exposure)))
-        gain = 1.0 + amplitude * np.sin(2 * np.pi * f * readout * np.arange(rows) / rows + phase)
-    else:
-        duty = rng.uniform(0.2, 0.8)
-        starts = readout * np.arange(rows) / rows + phase / (2 * np.pi * f)
-        t = starts[:, None] + exposure * (np.arange(64) + 0.5)[None, :] / 64  # each row's exposure, sampled
-        light = np.where((t * f) % 1.0 < duty, 1.0, 1.0 - light_depth).mean(axis=1)
-        gain = light / light.mean()
-        amplitude = float((gain.max() - gain.min()) / (gain.max() + gain.min()))
-    linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain.astype(np.float32)[:, None, None]
-    out = np.clip(linear, 0.0, 1.0) ** (1 / 2.2) * 255.0
-    return np.round(out).astype(np.uint8), amplitude
 
 
 def main(
@@ -162,7 +124,7 @@ def main(
         float,
         typer.Option(
             help="any split: every frame under mains-powered light through a rolling shutter, bands of up to this "
-            "depth of the light's flicker (0.3: a fluorescent tube; 1: a cheap LED lamp); see flicker_bands",
+            "depth of the light's flicker (0.3: a fluorescent tube; 1: a cheap LED lamp); see bench/flicker.py",
         ),
     ] = 0.0,
     flicker_wave: Annotated[
@@ -184,7 +146,7 @@ def main(
         raise typer.BadParameter("--calibrated needs --lens K and --split tuning")
     if not 0.0 <= flicker <= 1.0:
         raise typer.BadParameter("--flicker is the light's flicker depth, 0 to 1")
-    if flicker_wave not in ("sine", "pwm"):
+    if flicker_wave not in WAVES:
         raise typer.BadParameter("--flicker-wave is sine or pwm")
     try:
         frame_of = _generator(

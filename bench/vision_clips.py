@@ -36,9 +36,12 @@ scenes, cameras and noise with them and without, so a run with them pairs with o
   wobble; the clock of "seen within 1 s" starts when the hand starts;
 - `--rolling-shutter`: rows read out top to bottom over 10-30 ms;
 - `--auto-exposure`: the gain follows the frame's brightness (time constant 0.15-0.6 s), so a bright card brought
-  up darkens the frames after it.
+  up darkens the frames after it;
+- `--flicker DEPTH [--flicker-wave sine|pwm]`: the room is lit by a flickering lamp (`bench/flicker.py`, one lamp per
+  clip): bright and dark bands across every frame, moving on from frame to frame as the lamp's phase does.
 
-    .venv/bin/python bench/vision_clips.py [--clips 100] [--seed 2718] [--hand] [--rolling-shutter] [--auto-exposure] [--json]
+    .venv/bin/python bench/vision_clips.py [--clips 100] [--seed 2718] [--hand] [--rolling-shutter] [--auto-exposure]
+                                           [--flicker DEPTH [--flicker-wave sine|pwm]] [--json]
                                            [--set KEY=VALUE ...]
 
 `--set` changes a detector setting from `DetectorConfig`'s default, as the service's `--detector` does (to compare a
@@ -58,11 +61,13 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import cv2
+import numpy as np
 import typer
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.flicker import WAVES, draw_lamp, lit  # noqa: E402
 from schemas.messages import Shape  # noqa: E402
 from services.vision.debounce import DANGER_SHAPES, Confirmation, DebounceConfig, Debouncer  # noqa: E402
 from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings  # noqa: E402
@@ -280,7 +285,11 @@ def summarise(rows: list[tuple[ClipScore, HeldOutClip]]) -> dict[str, Any]:
 
 
 def _tables(r: dict[str, Any]) -> str:
-    effects = ", ".join(k.replace("_", " ") for k, on in r["effects"].items() if on) or "none"
+    fx = r["effects"]
+    effects = ", ".join(
+        [k.replace("_", " ") for k in ("hand", "rolling_shutter", "auto_exposure") if fx.get(k)]
+        + ([f"a flickering lamp up to {fx['flicker']:g} ({fx['flicker_wave']})"] if fx.get("flicker") else [])
+    ) or "none"
     lines = [
         f"held-out clips, seed {r['seed']}: {r['clips_per_class']} clips per class of {r['frames_per_clip']} frames "
         f"at {CLIP_FPS:g} fps, the card up from frame {r['shown']}; OpenCV {r['opencv']}, 1 thread",
@@ -361,6 +370,10 @@ def main(
     auto_exposure: Annotated[
         bool, typer.Option(help="the camera's gain follows the frame's brightness")
     ] = False,
+    flicker: Annotated[
+        float, typer.Option(help="a flickering lamp lights the room, up to this depth of its light (bench/flicker.py)")
+    ] = 0.0,
+    flicker_wave: Annotated[str, typer.Option(help="with --flicker: sine (100/120 Hz) or pwm (an LED dimmer)")] = "sine",
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
     settings: Annotated[
         list[str] | None,
@@ -375,6 +388,8 @@ def main(
         raise typer.BadParameter(
             f"a clip needs more than its {CLIP_SHOWN} lead-in frames", param_hint="--frames"
         )
+    if not 0.0 <= flicker <= 1.0 or flicker_wave not in WAVES:
+        raise typer.BadParameter("--flicker is a depth from 0 to 1, --flicker-wave sine or pwm", param_hint="--flicker")
     cv2.setNumThreads(1)
     gen = HeldOutGenerator(seed=seed)
     detector = MarkDetector(config)
@@ -388,6 +403,10 @@ def main(
             rolling_shutter=rolling_shutter,
             auto_exposure=auto_exposure,
         )
+        if flicker:  # one lamp a clip, its own draws (the scenes are the seed's own); its phase follows the frames
+            lamp = draw_lamp(np.random.default_rng((seed, i)), flicker, flicker_wave)
+            lamp_lit = [lit(f, lamp.gain(f.shape[0], k / CLIP_FPS)) for k, f in enumerate(clip.frames)]
+            clip = dataclasses.replace(clip, frames=lamp_lit)
         found, spent = detect_clip(detector, clip)
         cpu += spent
         # the labels, not the frames (33 MB a clip)
@@ -397,7 +416,8 @@ def main(
     to_view = [c.in_view - c.shown for c, _ in runs if c.in_view is not None]
     result = {
         "seed": seed,
-        "effects": {"hand": hand, "rolling_shutter": rolling_shutter, "auto_exposure": auto_exposure},
+        "effects": {"hand": hand, "rolling_shutter": rolling_shutter, "auto_exposure": auto_exposure,
+                    **({"flicker": flicker, "flicker_wave": flicker_wave} if flicker else {})},
         "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "frames_to_view": {
             "p50": _pct(to_view, 0.5),

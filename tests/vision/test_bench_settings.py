@@ -9,7 +9,7 @@ import json
 import typer
 from typer.testing import CliRunner
 
-from bench import vision_bench
+from bench import flicker, vision_bench
 
 
 def _bench() -> typer.Typer:
@@ -49,11 +49,11 @@ def test_flicker_bands_cross_the_frame_in_rows_and_none_without_flicker() -> Non
     import numpy as np
 
     grey = np.full((480, 640, 3), 128, np.uint8)
-    same, amplitude = vision_bench.flicker_bands(grey, np.random.default_rng(1), 0.0)
+    same, amplitude = flicker.flicker_bands(grey, np.random.default_rng(1), 0.0)
     assert amplitude == 0.0 and np.array_equal(same, grey)
     amplitudes = []
     for i in range(20):
-        banded, amplitude = vision_bench.flicker_bands(grey, np.random.default_rng(i), 1.0)
+        banded, amplitude = flicker.flicker_bands(grey, np.random.default_rng(i), 1.0)
         assert banded.shape == grey.shape and banded.dtype == np.uint8 and 0 < amplitude <= 1.0
         assert np.ptp(banded, axis=1).max() == 0  # each row one gain: bands, not blotches
         rows = banded[:, 0, 0].astype(int)
@@ -72,3 +72,18 @@ def test_flicker_is_named_and_sliced_and_out_of_range_refused() -> None:
     table = runner.invoke(app, ["--frames", "4", "--seed", "3", "--flicker", "0.5"]).stdout
     assert "under flickering light through a rolling shutter, depth up to 0.5 (sine)" in table
     assert runner.invoke(app, ["--frames", "4", "--flicker", "1.5"]).exit_code == 2
+
+
+def test_a_lamps_bands_move_on_from_frame_to_frame_as_its_phase_does() -> None:
+    import numpy as np
+
+    lamp = flicker.Lamp("sine", f=100.0, exposure=0.002, readout=0.03, depth=0.8, phase=0.0)
+    first, next_frame, later = (lamp.gain(480, t) for t in (0.0, 1 / 30, 3 / 30))
+    assert np.allclose(first, later)  # 100 Hz at 30 fps: a third of a cycle a frame, the same bands every third frame
+    assert not np.allclose(first, next_frame)
+    assert np.allclose(flicker.Lamp("sine", 120.0, 0.002, 0.03, 0.8, 0.0).gain(480, 1 / 30),
+                       flicker.Lamp("sine", 120.0, 0.002, 0.03, 0.8, 0.0).gain(480, 0.0))  # 120 Hz: they stand still
+    dimmer = flicker.Lamp("pwm", f=400.0, exposure=0.001, readout=0.03, depth=1.0, phase=0.0, duty=0.5)
+    rows = dimmer.gain(480)
+    assert abs(rows.mean() - 1.0) < 1e-9 and 0.5 < dimmer.amplitude() <= 1.0  # 12 thin bands, light half the time
+    assert np.allclose(flicker.Lamp("sine", 100.0, 0.01, 0.03, 0.8, 0.0).gain(480), 1.0)  # a whole cycle's exposure

@@ -199,6 +199,8 @@ def test_automatic_exposure_pulls_a_bright_card_back_to_the_metered_level() -> N
 
 
 def test_bench_takes_the_person_and_camera_effects() -> None:
+    import json
+
     import typer
 
     app = typer.Typer()
@@ -207,6 +209,11 @@ def test_bench_takes_the_person_and_camera_effects() -> None:
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     assert "add: hand, rolling shutter, auto exposure" in result.output and "from view" in result.output
+    lamp = CliRunner().invoke(app, ["--clips", "1", "--frames", "8", "--seed", "4", "--flicker", "0.8", "--json"])
+    assert json.loads(lamp.output)["effects"]["flicker"] == 0.8
+    shown = CliRunner().invoke(app, ["--clips", "1", "--frames", "8", "--seed", "4", "--flicker", "0.8"]).output
+    assert "add: a flickering lamp up to 0.8 (sine)" in shown
+    assert CliRunner().invoke(app, ["--clips", "1", "--flicker-wave", "square", "--flicker", "0.5"]).exit_code == 2
 
 
 def test_the_rules_for_lifting_a_danger_replay_on_the_same_detections() -> None:

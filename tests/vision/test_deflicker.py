@@ -63,7 +63,8 @@ def test_a_frame_too_small_to_tell_is_left_as_it_is() -> None:
 def test_the_option_finds_danger_marks_the_bands_hid() -> None:
     """Tuning frames (seed 7222) under a cheap LED lamp's bands (bench/vision_bench.py --flicker 1.0): three danger
     marks the default misses there and finds without the bands; `deflicker=1` finds them through the bands."""
-    from bench.vision_bench import CLASSES, _generator, flicker_bands
+    from bench.flicker import flicker_bands
+    from bench.vision_bench import CLASSES, _generator
     from services.vision.detector import MarkDetector, box_overlap, parse_settings
 
     frame_of = _generator("tuning", 7222)
