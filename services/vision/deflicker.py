@@ -2,7 +2,7 @@
 
 Fluorescent tubes and many LED lamps flicker at twice the mains frequency (100 or 120 Hz), or at their dimmer's PWM
 frequency, and a rolling shutter exposes each row of a frame a little later than the one above it: each row gets its
-own share of the light, and the frame is crossed by bright and dark bands (`bench/vision_bench.py --flicker`). The
+own share of the light, and the frame is crossed by bright and dark bands (`bench/flicker.py`, `bench/vision_bench.py --flicker`). The
 detector's tests compare grey levels (a loose candidate's surround at least 35 levels lighter than its ink, the card's
 paper at least 25 over the ink), so in a dark band a mark's contrast falls under them.
 
@@ -28,8 +28,8 @@ import cv2
 import numpy as np
 
 PERIODS: tuple[float, ...] = tuple(float(p) for p in np.geomspace(16, 480, 320))
-"""The band periods tried, in rows of a 480-row frame (scaled with the frame's height): 1.1 % apart, so that the
-nearest one stays within about a tenth of a cycle of the bands over the frame's height."""
+"""The band periods tried, in rows of a 480-row frame (scaled with the frame's height), 1.1 % apart: over the frame's
+height the nearest drifts from the bands by at most a sixth of a cycle for the shortest (30 cycles), less for longer."""
 RIDGE = 0.1
 """The Fourier coefficients' ridge penalty: keeps a fit at a period the profile barely shows from swinging wildly."""
 LOG_GREY = np.log(np.arange(256, dtype=np.float32) + 1.0)
