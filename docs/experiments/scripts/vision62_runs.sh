@@ -11,3 +11,7 @@ bench --seed 10177 --flicker 1.0 --set deflicker=1 > "$out/h10177_sine_on.txt"
 bench --seed 10177 --set deflicker=1 > "$out/h10177_clean_on.txt"
 bench --seed 1193 --split blind --flicker 1.0 --set deflicker=1 > "$out/b1193_sine_on.txt"
 bench --seed 1193 --split blind --set deflicker=1 > "$out/b1193_clean_on.txt"
+# clips (stop 108, after the frames above)
+PYTHONPATH=. .venv/bin/python bench/vision_clips.py --seed 2718 --flicker 1.0 > "$out/c2718_flicker_off.txt"
+PYTHONPATH=. .venv/bin/python bench/vision_clips.py --seed 2718 --flicker 1.0 --set deflicker=1 > "$out/c2718_flicker_on.txt"
+PYTHONPATH=. .venv/bin/python bench/vision_clips.py --seed 2718 > "$out/c2718_steady.txt"
