@@ -16,8 +16,8 @@ With `--words`, each word is also cut out alone (Whisper tiny.en's word timestam
 either side, then trimmed as the service trims a file) and decoded as one utterance, as the voice bench's
 clips are: how often a real person's ordinary words, said in running speech, are taken for a command.
 
-Recordings: by default four that ship in three wheels, each installed without its dependencies (`./run setup` does:
-their audio is read, their libraries never imported):
+Recordings: by default four that ship in three wheels, whose audio is read and whose libraries are never imported
+(`moonshine-voice` is in the test extra; `./run setup` installs the other two without their dependencies):
 
 - `moonshine-voice` (MIT): `two_cities.wav`, **a person reading** the opening of *A Tale of Two Cities* (LibriVox,
   public domain; 44 s, no command word), and `endgame_nagg_nell.wav`, a dialogue from Beckett's *Endgame* made by
@@ -100,7 +100,7 @@ WHEEL_RECORDINGS = (
                    "pyannote/audio/sample/sample.stm"),
     WheelRecording("useful-moonshine-onnx", "moonshine_onnx/assets/beckett.wav", "one voice, origin unstated", WORSTWARD_HO),
 )
-"""Pinned in `run` (setup_python), installed with `--no-deps`."""
+"""moonshine-voice is pinned in the test extra; the other two in `run` (setup_python), installed with `--no-deps`."""
 
 
 @dataclass(frozen=True)
