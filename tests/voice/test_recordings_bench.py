@@ -4,8 +4,7 @@ saying Beckett)."""
 
 from __future__ import annotations
 
-import importlib.metadata
-import importlib.util
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +12,8 @@ import pytest
 from bench.voice_bench import Policy
 from bench.voice_recordings import (
     ENDGAME,
+    RECORDINGS_DIR,
+    WHEEL_RECORDINGS,
     Recording,
     said,
     score,
@@ -26,6 +27,13 @@ from schemas.messages import Command
 from services.voice.segmenter import SegmenterConfig
 
 REC = Recording("x.wav", "test", np.zeros(16000), ENDGAME)
+
+
+def _need(*names: str) -> None:
+    """Skip, saying how to fetch them, unless the wheels holding these recordings are downloaded."""
+    missing = {w.requirement for w in WHEEL_RECORDINGS if Path(w.path).name in names and w.wheel(RECORDINGS_DIR) is None}
+    if missing:
+        pytest.skip(f"not downloaded ({' '.join(sorted(missing))}): ./run setup puts them in {RECORDINGS_DIR}")
 
 
 def test_a_command_word_alone_on_its_line_is_expected_and_inside_a_sentence_only_mentioned() -> None:
@@ -54,8 +62,7 @@ def test_published_commands_are_matched_to_what_was_said() -> None:
 
 @pytest.mark.parametrize("decoder", ["off", "on"])  # on: Whisper's decoder may rescue what the head missed (round 30)
 def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_reading(decoder: str) -> None:
-    if importlib.util.find_spec("moonshine_voice") is None:  # its audio is read; its library is never imported
-        pytest.skip("moonshine-voice (its audio) is in the test extra")
+    _need("two_cities.wav", "endgame_nagg_nell.wav")
     from services.voice.engine import make_engine
 
     engine = make_engine("spotter", decoder=decoder)
@@ -70,11 +77,7 @@ def test_the_service_path_hears_the_dialogues_yes_and_no_and_no_command_in_a_rea
 
 
 def test_two_people_on_a_telephone_line_and_a_voice_saying_beckett_give_no_command() -> None:
-    for dist in ("pyannote.audio", "useful-moonshine-onnx"):
-        try:
-            importlib.metadata.distribution(dist)
-        except importlib.metadata.PackageNotFoundError:
-            pytest.skip(f"{dist} (its audio, installed --no-deps by ./run setup) is not installed")
+    _need("sample.wav", "beckett.wav")
     from services.voice.engine import make_engine
 
     engine, policy = make_engine("spotter"), Policy.from_knowledge()
@@ -88,12 +91,27 @@ def test_two_people_on_a_telephone_line_and_a_voice_saying_beckett_give_no_comma
     assert alone["go_walks"] == 0
 
 
-def test_a_recordings_wheel_not_installed_is_named_with_how_to_install_it(monkeypatch: pytest.MonkeyPatch,
-                                                                          capsys: pytest.CaptureFixture[str]) -> None:
-    import bench.voice_recordings as vr
+def test_a_recordings_wheel_not_downloaded_is_named_with_how_to_fetch_it(tmp_path: Path,
+                                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit, match="./run setup downloads them"):
+        wheel_recordings(tmp_path)
+    err = capsys.readouterr().err
+    assert "sample.wav" in err and f"pip download --no-deps -d {tmp_path}" in err and "pyannote.audio==4.0.7" in err
 
-    absent = vr.WheelRecording("no-such-recordings-wheel", "x/a.wav", "nobody", ("Yes.",))
-    monkeypatch.setattr(vr, "WHEEL_RECORDINGS", (absent,))
-    with pytest.raises(SystemExit, match="./run setup installs them"):
-        vr.wheel_recordings()
-    assert "a.wav (pip install --no-deps no-such-recordings-wheel" in capsys.readouterr().err
+
+def test_a_recording_is_read_from_its_wheel_file(tmp_path: Path) -> None:
+    import io
+    import wave
+    import zipfile
+
+    buf = io.BytesIO()
+    with wave.open(buf, "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(16000)
+        w.writeframes(b"\x00\x10" * 16000)
+    with zipfile.ZipFile(tmp_path / "pyannote_audio-4.0.7-py3-none-any.whl", "w") as z:
+        z.writestr("pyannote/audio/sample/sample.wav", buf.getvalue())
+        z.writestr("pyannote/audio/sample/sample.stm", "sample 1 A 0.1 0.9 Hello?\nsample 1 B 1.0 1.5 Yes.\n")
+    (rec,) = wheel_recordings(tmp_path)
+    assert rec.name == "sample.wav" and rec.transcript == ("Hello?", "Yes.") and rec.samples.size == 16000
