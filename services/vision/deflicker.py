@@ -60,10 +60,13 @@ def _design(rows: int, periods: np.ndarray, harmonics: int) -> tuple[np.ndarray,
 
 
 @lru_cache(maxsize=8)
-def _grid(rows: int, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The coarse grid's periods (rows) with their designs and ridge solutions (`_design`), for `rows` rows."""
+def _grid(rows: int, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The grid's periods (rows) with their designs and ridge solutions (`_design`), and the quadratic trend's
+    least-squares projection (rows, rows), for `rows` rows."""
     periods = np.array(PERIODS) * rows / 480.0
-    return (periods, *_design(rows, periods, harmonics))
+    x, solve = _design(rows, periods, harmonics)
+    trend = x[0, :, :3]
+    return periods, x, solve, trend @ np.linalg.pinv(trend)
 
 
 def _fit(profile: np.ndarray, x: np.ndarray, solve: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -91,8 +94,8 @@ def find_bands(gray: np.ndarray, harmonics: int = 3) -> Bands:
     """The strongest periodic row gain of a grey frame (bands or not: see `Bands.share` and `Bands.depth`)."""
     profile = gain_profile(gray)
     rows = profile.size
-    periods, x, solve = _grid(rows, harmonics)
-    profile = profile - x[0, :, :3] @ np.linalg.lstsq(x[0, :, :3], profile, rcond=None)[0]
+    periods, x, solve, trend = _grid(rows, harmonics)
+    profile = profile - trend @ profile
     total = float(profile @ profile)
     if total <= 1e-12:
         return Bands(0.0, 0.0, 1.0, np.ones(gray.shape[0]))
