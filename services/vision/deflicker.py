@@ -33,6 +33,10 @@ height the nearest drifts from the bands by at most a sixth of a cycle for the s
 RIDGE = 0.1
 """The Fourier coefficients' ridge penalty: keeps a fit at a period the profile barely shows from swinging wildly."""
 LOG_GREY = np.log(np.arange(256, dtype=np.float32) + 1.0)
+MIN_SHARE = 0.9
+"""The share of the rows' gain profile the bands must explain (round vision62 chose it on tuning seed 7222)."""
+MIN_DEPTH = 1.15
+"""The bands' least peak-to-peak gain."""
 
 
 @dataclass(frozen=True)
@@ -112,7 +116,7 @@ def find_bands(gray: np.ndarray, harmonics: int = 3) -> Bands:
     return Bands(float(periods[best] * gray.shape[0] / rows), share, float(gain.max() / gain.min()), gain)
 
 
-def deflicker(gray: np.ndarray, min_share: float = 0.9, min_depth: float = 1.15, max_gain: float = 4.0,
+def deflicker(gray: np.ndarray, min_share: float = MIN_SHARE, min_depth: float = MIN_DEPTH, max_gain: float = 4.0,
               harmonics: int = 3) -> np.ndarray:
     """`gray` with its rows' flicker gain divided out, or `gray` itself where no bands pass the tests."""
     if gray.shape[0] < 64:

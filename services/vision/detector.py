@@ -52,6 +52,8 @@ import cv2
 import numpy as np
 
 from schemas.messages import Mark, Shape
+from services.vision.deflicker import MIN_DEPTH as DEFLICKER_DEPTH
+from services.vision.deflicker import MIN_SHARE as DEFLICKER_SHARE
 from services.vision.deflicker import deflicker
 from services.vision.filled import FILLED_SHARE, LOOSE_TRIANGLE_FILL, ink_and_paper, paper_round, solid_share
 from services.vision.proposer import MODEL_PATH as PROPOSER_PATH
@@ -400,8 +402,8 @@ class DetectorConfig:
     """even out the bands a flickering light draws across a rolling-shutter frame before anything else
     (`deflicker.py`): where the rows' gain, estimated from the frame, is periodic (`deflicker_share` of its variance)
     and varies by `deflicker_depth` or more peak to peak, each row is divided by it. Round vision62 (stop 108)."""
-    deflicker_share: float = 0.9
-    deflicker_depth: float = 1.15
+    deflicker_share: float = DEFLICKER_SHARE
+    deflicker_depth: float = DEFLICKER_DEPTH
     """with `deflicker`: the share of the rows' gain profile the bands must explain, and their least peak-to-peak gain
     (round vision62 chose 0.9 over 0.7 and 0.85 / 1.3 on tuning seed 7222: the fewest clean frames touched)"""
     danger_first: bool = True
