@@ -120,6 +120,10 @@ class DetectorConfig:
     clutter_radius: float = 0.15  # ... within this fraction of its size
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
+    safe_margin_card: bool = False
+    """the O's clear margin judged on its card, as the card tests are (`_card_margin`): the ink that counts against it
+    is other ink the card encloses (at most `safe_max_ink` of the card's part of the ring), not a card edge or a finger
+    reaching in from beyond the card. Round vision63 (stop 109)."""
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     text_max_f: int = 8
     """the text-line test runs on pyramid levels of downscale up to this: every level since round
@@ -1280,7 +1284,7 @@ class MarkDetector:
         if (
             shape is Shape.O
             and cfg.safe_margin > 0
-            and not _clear_margin(g_roi, bin_roi, ink, extent, dist, cfg)
+            and not _clear_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
         ):
             # a false O would lift a danger: the safe mark must also have the wide clear margin
             self._why = "O margin"
@@ -1855,21 +1859,32 @@ def _on_card(
     mean, std = cv2.meanStdDev(g_roi, mask=card_near)
     if float(std[0][0]) > cfg.max_margin_texture * (paper - ink):
         return "texture"
-    # dark things enclosed by the card (not reaching the edge of the region looked at) are on it
+    inside, labels = _enclosed(card, filled)
+    if inside.any():
+        close = _beyond_halo(dist, extent, cfg.clutter_radius, cfg)
+        on_card = int(np.count_nonzero(inside[labels[close]]))
+        if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
+            return "ink"
+    return float(mean[0][0])
+
+
+def _enclosed(card: np.ndarray, filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dark things enclosed by the `card` (not reaching the edge of the region looked at): other ink on it. Returns
+    which of the 4-connected regions neither card nor mark (`filled`) are enclosed, by label, and the labels."""
     other = cv2.bitwise_not(cv2.bitwise_or(card, filled))
     n, labels = _labels(other, connectivity=4)
     inside = np.ones(n, bool)  # no pixel on the region's edge
     for edge in (labels[0], labels[-1], labels[:, 0], labels[:, -1]):
         inside[edge] = False
     inside[0] = False
-    if inside.any():
-        # from the border band outwards: nearer, the mark's own blurred edge is neither ink nor paper
-        halo = max(2.5, cfg.border * extent)
-        close = (dist >= halo) & (dist <= max(halo + 1.0, cfg.clutter_radius * extent))
-        on_card = int(np.count_nonzero(inside[labels[close]]))
-        if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
-            return "ink"
-    return float(mean[0][0])
+    return inside, labels
+
+
+def _beyond_halo(dist: np.ndarray, extent: float, reach: float, cfg: DetectorConfig) -> np.ndarray:
+    """The pixels from the border band out to `reach` x the mark's extent: nearer, the mark's own blurred edge is
+    neither ink nor paper."""
+    halo = max(2.5, cfg.border * extent)
+    return (dist >= halo) & (dist <= max(halo + 1.0, reach * extent))
 
 
 def _ranked(g: np.ndarray, mask: np.ndarray | None, ranks: list[int]) -> tuple[float, float]:
@@ -1890,20 +1905,46 @@ def _masked_median(g: np.ndarray, mask: np.ndarray, n: int) -> float:
 def _clear_margin(
     g_roi: np.ndarray,
     bin_roi: np.ndarray,
+    filled: np.ndarray,
     ink: float,
     extent: float,
     dist: np.ndarray,
     cfg: DetectorConfig,
 ) -> bool:
     """The strict context for the safe mark: every pixel within `safe_margin` x the extent of the
-    outline is plain paper (at most `max_surround_ink` ink, spread at most `max_margin_texture` of the
-    contrast), whatever the card's shape - fingers or a card edge there make the O wait."""
+    outline is plain paper (at most `safe_max_ink` ink, spread at most `max_margin_texture` of the
+    contrast), whatever the card's shape - fingers or a card edge there make the O wait. With
+    `safe_margin_card`, `_card_margin`."""
+    if cfg.safe_margin_card:
+        return _card_margin(g_roi, filled, ink, extent, dist, cfg)
     ring = cv2.inRange(dist, 1.5, max(3.0, cfg.safe_margin * extent))
     ring_n = cv2.countNonZero(ring)
     if ring_n == 0 or cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.safe_max_ink * ring_n:
         return False
     mean, std = cv2.meanStdDev(g_roi, mask=ring)
     return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
+
+
+def _card_margin(
+    g_roi: np.ndarray, filled: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig
+) -> bool:
+    """The safe mark's clear margin judged on its card (round vision63): from the border band out to `safe_margin` x
+    the extent, the ink the card encloses (`_enclosed`: other ink on it, not a card edge or a finger reaching in from
+    beyond the card, which the card tests do not count either) covers at most `safe_max_ink` of the card's part of that
+    ring with it. How plain the card is there the card tests judged (`max_margin_texture`, out to `surround`). A card
+    whose border is narrower than the margin, the issue's case, no longer makes its O wait; a stroke of ink on the card
+    beside the O still does."""
+    band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # as `_on_card` finds the paper
+    band_n = cv2.countNonZero(band)
+    if band_n == 0:
+        return False
+    paper = _masked_median(g_roi, band, band_n)
+    _, card = _card(g_roi, filled, band, ink + 0.5 * (paper - ink))
+    inside, labels = _enclosed(card, filled)
+    zone = _beyond_halo(dist, extent, cfg.safe_margin, cfg)
+    card_n = int(np.count_nonzero(card[zone]))
+    other_ink = int(np.count_nonzero(inside[labels[zone]]))
+    return card_n > 0 and other_ink <= cfg.safe_max_ink * (card_n + other_ink)
 
 
 def _card(

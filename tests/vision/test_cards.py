@@ -5,6 +5,7 @@ in front of something darker. The bench's own tables show where a filled triangl
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -41,6 +42,42 @@ def test_a_coloured_mark_is_found_as_a_black_one(ink: str) -> None:
     for mark in ("X", "filled TRIANGLE"):
         for kind in ("grey", "dark", "texture"):
             assert found[mark][kind]["0.3"] == {"found": 1.0, "false": 0}, (ink, mark, kind)
+
+
+def _o_frame(kind: str, size: int, border: float, seed: int) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    return vision_cards.card_frame(kind, Shape.O, False, size, border, 0.0, np.random.default_rng(seed))
+
+
+def _os(detector: MarkDetector, img: np.ndarray, box: tuple[int, int, int, int]) -> list[float]:
+    return [iou(d.box, box) for d in detector.detect(img) if d.shape is Shape.O]
+
+
+ON_CARD = DetectorConfig(safe_margin_card=True, safe_max_ink=0.06)  # round vision63's variant
+
+
+@pytest.mark.parametrize("size", [80, 160])
+def test_an_o_on_a_card_narrower_than_its_margin_waits_unless_the_margin_is_judged_on_the_card(size: int) -> None:
+    """Round vision63: the O's clear margin (a tenth of its size) runs off a card whose border is a twenty-fifth of
+    the O's width, onto a dark background. The default makes it wait; judged on the card (`safe_margin_card`), the
+    background beyond the card's edge is not ink on the card, and the O is found where it is."""
+    img, box = _o_frame("dark", size, 0.04, size)
+    assert _os(MarkDetector(DetectorConfig()), img, box) == []
+    found = _os(MarkDetector(ON_CARD), img, box)
+    assert len(found) == 1 and found[0] >= 0.9
+
+
+@pytest.mark.parametrize("kind", ["grey", "texture"])
+def test_other_ink_beside_an_o_on_its_card_still_makes_it_wait(kind: str) -> None:
+    """A pen stroke on the card, an arc of 50 degrees a twelfth of the O's size from it, is in the O's clear margin
+    however the margin is judged (the card encloses it); with no margin at all (`safe_margin=0`) the O is found, so
+    the margin is what refuses it."""
+    img, box = _o_frame(kind, 120, 0.3, 7)
+    x, y, w, h = box
+    r = int(round(w / 2 + 0.08 * 120))
+    cv2.ellipse(img, (int(round(x + w / 2)), int(round(y + h / 2))), (r, r), 0, -25, 25, (30, 30, 30), 4)
+    assert _os(MarkDetector(ON_CARD), img, box) == []
+    assert _os(MarkDetector(DetectorConfig()), img, box) == []
+    assert len(_os(MarkDetector(DetectorConfig(safe_margin=0.0)), img, box)) == 1
 
 
 def test_the_frame_is_what_the_bench_says() -> None:
