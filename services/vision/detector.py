@@ -121,9 +121,11 @@ class DetectorConfig:
     safe_margin: float = 0.1  # the O also needs this clear margin, fraction of size (0: off) ...
     safe_max_ink: float = 0.02  # ... with at most this share of ink in it (a false O lifts a danger)
     safe_margin_card: bool = False
-    """the O's clear margin judged on its card, as the card tests are (`_card_margin`): the ink that counts against it
-    is other ink the card encloses (at most `safe_max_ink` of the card's part of the ring), not a card edge or a finger
-    reaching in from beyond the card. Round vision63 (stop 109)."""
+    """an O the clear margin above refuses is judged again on its card, as the card tests judge marks
+    (`_card_margin`): the ink that counts against it is other ink the card encloses, at most `safe_card_ink` of the
+    card's part of the ring, not a card edge or a finger reaching in from beyond the card. Rounds vision63 and 63b
+    (stop 109; round vision63, commit 90eed45, judged on the card alone, with `safe_max_ink` as its share)."""
+    safe_card_ink: float = 0.06
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     text_max_f: int = 8
     """the text-line test runs on pyramid levels of downscale up to this: every level since round
@@ -465,6 +467,8 @@ class DetectorConfig:
                              "to 1, and a confidence, 0 to 1")
         if not 0.0 <= self.propose_open_margin <= 2.0:
             raise ValueError(f"propose_open_margin {self.propose_open_margin}: a share of the box's size, 0 to 2")
+        if not 0.0 <= self.safe_card_ink <= 1.0:
+            raise ValueError(f"safe_card_ink {self.safe_card_ink}: a share of the card's part of the margin, 0 to 1")
         if not 0.0 <= self.o_islands <= 1.0:
             raise ValueError(f"o_islands {self.o_islands}: a share of the box, 0 (off) to 1")
         if not (0.0 <= self.star_depth <= 1.0 and self.star_spread > 0 and 0.0 <= self.star_inner <= 1.0):
@@ -1914,24 +1918,29 @@ def _clear_margin(
     """The strict context for the safe mark: every pixel within `safe_margin` x the extent of the
     outline is plain paper (at most `safe_max_ink` ink, spread at most `max_margin_texture` of the
     contrast), whatever the card's shape - fingers or a card edge there make the O wait. With
-    `safe_margin_card`, `_card_margin`."""
-    if cfg.safe_margin_card:
-        return _card_margin(g_roi, filled, ink, extent, dist, cfg)
+    `safe_margin_card`, an O this refuses may still pass `_card_margin`."""
     ring = cv2.inRange(dist, 1.5, max(3.0, cfg.safe_margin * extent))
     ring_n = cv2.countNonZero(ring)
-    if ring_n == 0 or cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) > cfg.safe_max_ink * ring_n:
-        return False
-    mean, std = cv2.meanStdDev(g_roi, mask=ring)
-    return float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink)
+    if ring_n > 0 and cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) <= cfg.safe_max_ink * ring_n:
+        mean, std = cv2.meanStdDev(g_roi, mask=ring)
+        if float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink):
+            return True
+    return cfg.safe_margin_card and _card_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
 
 
 def _card_margin(
-    g_roi: np.ndarray, filled: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig
+    g_roi: np.ndarray,
+    bin_roi: np.ndarray,
+    filled: np.ndarray,
+    ink: float,
+    extent: float,
+    dist: np.ndarray,
+    cfg: DetectorConfig,
 ) -> bool:
-    """The safe mark's clear margin judged on its card (round vision63): from the border band out to `safe_margin` x
-    the extent, the ink the card encloses (`_enclosed`: other ink on it, not a card edge or a finger reaching in from
-    beyond the card, which the card tests do not count either) covers at most `safe_max_ink` of the card's part of that
-    ring with it. How plain the card is there the card tests judged (`max_margin_texture`, out to `surround`). A card
+    """The safe mark's clear margin judged on its card (round vision63b): from the border band out to `safe_margin` x
+    the extent, the ink (`bin_roi`, as the strict margin counts it) that the card encloses (`_enclosed`: other ink on
+    it, not a card edge or a finger reaching in from beyond the card, which the card tests do not count either) covers
+    at most `safe_card_ink` of the card's part of that ring with it. How plain the card is there the card tests judged (`max_margin_texture`, out to `surround`). A card
     whose border is narrower than the margin, the issue's case, no longer makes its O wait; a stroke of ink on the card
     beside the O still does."""
     band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # as `_on_card` finds the paper
@@ -1943,8 +1952,8 @@ def _card_margin(
     inside, labels = _enclosed(card, filled)
     zone = _beyond_halo(dist, extent, cfg.safe_margin, cfg)
     card_n = int(np.count_nonzero(card[zone]))
-    other_ink = int(np.count_nonzero(inside[labels[zone]]))
-    return card_n > 0 and other_ink <= cfg.safe_max_ink * (card_n + other_ink)
+    other_ink = int(np.count_nonzero(inside[labels[zone]] & (bin_roi[zone] > 0)))
+    return card_n > 0 and other_ink <= cfg.safe_card_ink * (card_n + other_ink)
 
 
 def _card(

@@ -52,12 +52,12 @@ def _os(detector: MarkDetector, img: np.ndarray, box: tuple[int, int, int, int])
     return [iou(d.box, box) for d in detector.detect(img) if d.shape is Shape.O]
 
 
-ON_CARD = DetectorConfig(safe_margin_card=True, safe_max_ink=0.06)  # round vision63's variant
+ON_CARD = DetectorConfig(safe_margin_card=True)  # round vision63b's variant
 
 
 @pytest.mark.parametrize("size", [80, 160])
 def test_an_o_on_a_card_narrower_than_its_margin_waits_unless_the_margin_is_judged_on_the_card(size: int) -> None:
-    """Round vision63: the O's clear margin (a tenth of its size) runs off a card whose border is a twenty-fifth of
+    """Rounds vision63 and 63b: the O's clear margin (a tenth of its size) runs off a card whose border is a twenty-fifth of
     the O's width, onto a dark background. The default makes it wait; judged on the card (`safe_margin_card`), the
     background beyond the card's edge is not ink on the card, and the O is found where it is."""
     img, box = _o_frame("dark", size, 0.04, size)
