@@ -1937,12 +1937,13 @@ def _card_margin(
     dist: np.ndarray,
     cfg: DetectorConfig,
 ) -> bool:
-    """The safe mark's clear margin judged on its card (round vision63b): from the border band out to `safe_margin` x
-    the extent, the ink (`bin_roi`, as the strict margin counts it) that the card encloses (`_enclosed`: other ink on
-    it, not a card edge or a finger reaching in from beyond the card, which the card tests do not count either) covers
-    at most `safe_card_ink` of the card's part of that ring with it. How plain the card is there the card tests judged (`max_margin_texture`, out to `surround`). A card
-    whose border is narrower than the margin, the issue's case, no longer makes its O wait; a stroke of ink on the card
-    beside the O still does."""
+    """The safe mark's clear margin judged on its card (round vision63b; off by default): from the border band out to
+    `safe_margin` x the extent, the ink (`bin_roi`, as the strict margin counts it) that the card encloses
+    (`_enclosed`: other ink on it, not a card edge or a finger reaching in from beyond the card, which the card tests
+    do not count either) covers at most `safe_card_ink` of the card's part of that ring with it; how plain the card
+    is there, the card tests judged (`max_margin_texture`, out to `surround`). An O on a card whose border is narrower
+    than the margin, the issue's case, passes; a stroke of ink on the card beside the O does not. Held-out it found 5
+    points of O recall and made 5 more false O in 4,000 frames, so it is an option."""
     band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # as `_on_card` finds the paper
     band_n = cv2.countNonZero(band)
     if band_n == 0:

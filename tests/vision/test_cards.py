@@ -57,9 +57,10 @@ ON_CARD = DetectorConfig(safe_margin_card=True)  # round vision63b's variant
 
 @pytest.mark.parametrize("size", [80, 160])
 def test_an_o_on_a_card_narrower_than_its_margin_waits_unless_the_margin_is_judged_on_the_card(size: int) -> None:
-    """Rounds vision63 and 63b: the O's clear margin (a tenth of its size) runs off a card whose border is a twenty-fifth of
-    the O's width, onto a dark background. The default makes it wait; judged on the card (`safe_margin_card`), the
-    background beyond the card's edge is not ink on the card, and the O is found where it is."""
+    """Rounds vision63 and 63b: the O's clear margin (a tenth of its size) runs off a card whose border is a
+    twenty-fifth of the O's width, onto a dark background. The default makes it wait; judged on the card
+    (`safe_margin_card`, off), the background beyond the card's edge is not ink on the card, and the O is found where
+    it is."""
     img, box = _o_frame("dark", size, 0.04, size)
     assert _os(MarkDetector(DetectorConfig()), img, box) == []
     found = _os(MarkDetector(ON_CARD), img, box)
