@@ -1826,7 +1826,7 @@ def _on_card(
     background beyond a narrow card edge) are not on the card and do not count against the mark.
     The extent is sqrt(hull area), not the box: a rotated X's box is 1.4 times wider, its card is not.
     """
-    band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # skip the blurred outline
+    band = _border_band(dist, extent, cfg)
     band_n = cv2.countNonZero(band)
     if band_n == 0:
         return "band"
@@ -1870,6 +1870,12 @@ def _on_card(
         if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return "ink"
     return float(mean[0][0])
+
+
+def _border_band(dist: np.ndarray, extent: float, cfg: DetectorConfig) -> np.ndarray:
+    """The band just outside the mark's outline, `border` x its extent wide (at least 3 px), where its paper is
+    looked for; it skips the blurred outline itself (the first 1.5 px)."""
+    return cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))
 
 
 def _enclosed(card: np.ndarray, filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1944,7 +1950,7 @@ def _card_margin(
     is there, the card tests judged (`max_margin_texture`, out to `surround`). An O on a card whose border is narrower
     than the margin, the issue's case, passes; a stroke of ink on the card beside the O does not. Held-out it found 5
     points of O recall and made 5 more false O in 4,000 frames, so it is an option."""
-    band = cv2.inRange(dist, 1.5, max(3.0, 1.5 + cfg.border * extent))  # as `_on_card` finds the paper
+    band = _border_band(dist, extent, cfg)
     band_n = cv2.countNonZero(band)
     if band_n == 0:
         return False
