@@ -126,6 +126,17 @@ class DetectorConfig:
     card's part of the ring, not a card edge or a finger reaching in from beyond the card. Rounds vision63 and 63b
     (stop 109; round vision63, commit 90eed45, judged on the card alone, with `safe_max_ink` as its share)."""
     safe_card_ink: float = 0.06
+    safe_card_extent: float = 0.0
+    """with `safe_margin_card`: an O is judged on its card only if its extent (the square root of its outline's hull
+    area, in its pyramid level's pixels) is at least this: for a smaller O the margin is a ring of 1-3 px, too narrow
+    to say what is card and what is not, and a finger or a card's edge there excuses whatever ink touches it. Round
+    vision63c (stop 110: a 15 px red ring beside a finger, spent blind seed 1249). 0: any size."""
+    safe_card_sure: float = 0.0
+    """with `safe_margin_card`: an O the strict margin refused and its card spared is kept only if the verifier gives
+    it at least this probability of an O (a claimed O needs 0.8 otherwise, the verifier's `thresholds`; a loose one
+    is named O only at 0.95 anyway). Judged on less context, the safe mark asks for surer shape evidence, as a proposed
+    O does (`propose_sure_thresholds`). 0: no more than any O; without the verifier such an O is refused. Round
+    vision63c (stop 110)."""
     letter_gap: float = 0.25  # a letter-sized shape on the card this close (fraction of size): a word
     text_max_f: int = 8
     """the text-line test runs on pyramid levels of downscale up to this: every level since round
@@ -467,6 +478,10 @@ class DetectorConfig:
                              "to 1, and a confidence, 0 to 1")
         if not 0.0 <= self.propose_open_margin <= 2.0:
             raise ValueError(f"propose_open_margin {self.propose_open_margin}: a share of the box's size, 0 to 2")
+        if self.safe_card_extent < 0:
+            raise ValueError(f"safe_card_extent {self.safe_card_extent}: pixels, 0 (any size) or more")
+        if not 0.0 <= self.safe_card_sure <= 1.0:
+            raise ValueError(f"safe_card_sure {self.safe_card_sure}: a verifier probability, 0 (off) to 1")
         if not 0.0 <= self.safe_card_ink <= 1.0:
             raise ValueError(f"safe_card_ink {self.safe_card_ink}: a share of the card's part of the margin, 0 to 1")
         if not 0.0 <= self.o_islands <= 1.0:
@@ -594,6 +609,7 @@ class _Pending:
     trace_at: int | None = None  # its entry in the trace, updated with the verifier's verdict
     rescue: bool = False  # a danger mark the card tests refused: kept only if the network is very sure
     part: bool = False  # a loose part `_split` cut off a bigger component: never named O
+    spared: bool = False  # an O its card spared at the clear margin: it needs `safe_card_sure`
 
 
 def changed_settings(config: DetectorConfig) -> str:
@@ -682,6 +698,7 @@ class MarkDetector:
         self._claimed: Shape | None = None  # the shape the last judged component was taken for
         self._why = ""  # the stage at which `_judge` last rejected a component
         self._card_refusal = ""  # and, at the card stage, which test (`_on_card`)
+        self._spared = False  # whether the last O `_finish` kept passed its clear margin only on its card
         self._f = 1
         self._max_size = 0  # the largest component judged at the current level (0: any)
         self._greys: dict[int, np.ndarray] = {}  # this frame's grey image at each pyramid level
@@ -961,7 +978,9 @@ class MarkDetector:
                     det, stage = p.det, "kept"
             elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
-                if self.verifier.accepts(row, p.shape) or kept is not None:
+                if p.spared and row[CLASSES.index(Shape.O)] < self.config.safe_card_sure:
+                    stage = "O margin"
+                elif self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
                 elif p.shape is Shape.TRIANGLE and self._filled_on_paper(p) is not None:
                     det, stage = p.det, "kept"
@@ -993,6 +1012,8 @@ class MarkDetector:
                         blob = _Blob(blob.outer, [], blob.area, blob.size)
                     det = self._finish(p.level, p.i, blob, p.own, claimed, prob, box=p.box, named=True)
                     stage = "kept" if det is not None else self._why
+                    if det is not None and self._spared and prob < self.config.safe_card_sure:
+                        det, stage = None, "O margin"
                     if (
                         det is None
                         and self._rescuable(claimed, p.level, p.i)
@@ -1166,7 +1187,9 @@ class MarkDetector:
                 if self._seen:
                     self._seen[-1].kept = True
                 if self.verifier is not None:
-                    wait, stage = _Pending(level, int(i), judged.box, judged.shape, det=judged), "verifier"
+                    spared = judged.shape is Shape.O and self._spared
+                    wait = _Pending(level, int(i), judged.box, judged.shape, det=judged, spared=spared)
+                    stage = "verifier"
                 else:
                     det, stage = judged, "kept"
             if trace is not None:
@@ -1264,7 +1287,7 @@ class MarkDetector:
         g, binary = level.g, level.binary
         x, y, w, h = box if box is not None else (int(v) for v in level.stats[i][:4])
         size = float(max(w, h))
-        self._why, self._claimed, self._card_refusal = "card", shape, ""
+        self._why, self._claimed, self._card_refusal, self._spared = "card", shape, "", False
         # the card, with room for whatever lies on it within `surround` of the mark
         pad = math.ceil(3 * cfg.surround * size) + 2
         x0, y0 = max(0, x - pad), max(0, y - pad)
@@ -1285,15 +1308,14 @@ class MarkDetector:
             self._card_refusal = paper
             self._vetoes.append(_up((x, y, w, h), level.f))
             return None
-        if (
-            shape is Shape.O
-            and cfg.safe_margin > 0
-            and not _clear_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
-        ):
+        if shape is Shape.O and cfg.safe_margin > 0:
             # a false O would lift a danger: the safe mark must also have the wide clear margin
-            self._why = "O margin"
-            self._vetoes.append(_up((x, y, w, h), level.f))
-            return None
+            margin = _clear_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
+            self._spared = margin == "card" and cfg.safe_card_sure > 0
+            if not margin or (self._spared and self.verifier is None):
+                self._why = "O margin"
+                self._vetoes.append(_up((x, y, w, h), level.f))
+                return None
         self._why = "hole"
         if blob.holes:
             # a hole is paper: empty of other ink and about as bright as the card (a big filled disc
@@ -1920,18 +1942,20 @@ def _clear_margin(
     extent: float,
     dist: np.ndarray,
     cfg: DetectorConfig,
-) -> bool:
+) -> str:
     """The strict context for the safe mark: every pixel within `safe_margin` x the extent of the
     outline is plain paper (at most `safe_max_ink` ink, spread at most `max_margin_texture` of the
     contrast), whatever the card's shape - fingers or a card edge there make the O wait. With
-    `safe_margin_card`, an O this refuses may still pass `_card_margin`."""
+    `safe_margin_card`, an O this refuses may still pass `_card_margin`. Returns "strict", "card" (passed only on its
+    card) or "" (refused)."""
     ring = cv2.inRange(dist, 1.5, max(3.0, cfg.safe_margin * extent))
     ring_n = cv2.countNonZero(ring)
     if ring_n > 0 and cv2.countNonZero(cv2.bitwise_and(bin_roi, ring)) <= cfg.safe_max_ink * ring_n:
         mean, std = cv2.meanStdDev(g_roi, mask=ring)
         if float(std[0][0]) <= cfg.max_margin_texture * max(1.0, float(mean[0][0]) - ink):
-            return True
-    return cfg.safe_margin_card and _card_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
+            return "strict"
+    on_card = cfg.safe_margin_card and extent >= cfg.safe_card_extent
+    return "card" if on_card and _card_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg) else ""
 
 
 def _card_margin(

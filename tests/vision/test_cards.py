@@ -5,6 +5,8 @@ in front of something darker. The bench's own tables show where a filled triangl
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 import pytest
@@ -14,6 +16,7 @@ from bench import vision_cards
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
 from services.vision.training import iou
+from services.vision.verifier import CLASSES, Verifier
 
 
 @pytest.fixture(scope="module")
@@ -79,6 +82,37 @@ def test_other_ink_beside_an_o_on_its_card_still_makes_it_wait(kind: str) -> Non
     assert _os(MarkDetector(ON_CARD), img, box) == []
     assert _os(MarkDetector(DetectorConfig()), img, box) == []
     assert len(_os(MarkDetector(DetectorConfig(safe_margin=0.0)), img, box)) == 1
+
+
+class _DoubtfulOfO(Verifier):
+    """The committed verifier, its O probability capped at 0.9: above the 0.8 a claimed O needs, under a spared O's
+    `safe_card_sure` of 0.95."""
+
+    def probabilities(self, crops: np.ndarray, claims: np.ndarray) -> np.ndarray:
+        p = super().probabilities(crops, claims).copy()
+        o = CLASSES.index(Shape.O)
+        p[:, o] = np.minimum(p[:, o], 0.9)
+        return p
+
+
+def test_an_o_spared_by_its_card_needs_a_surer_verifier() -> None:
+    """Round vision63c (`safe_card_sure`): an O the strict margin refused and its card spared is kept only if the
+    verifier is sure of it; an O with the whole clear margin needs no more than before. Without the verifier such an O
+    is refused, with `safe_card_sure` off it is found. Nor is an O smaller than `safe_card_extent` judged on its card
+    (the 120 px O is judged at extents of 53 and 106 px on two levels)."""
+    doubtful = _DoubtfulOfO(**{f.name: getattr(Verifier.load(), f.name) for f in dataclasses.fields(Verifier)})
+    sure = dataclasses.replace(ON_CARD, safe_card_sure=0.95)
+    narrow, narrow_box = _o_frame("dark", 120, 0.04, 3)
+    wide, wide_box = _o_frame("dark", 120, 0.3, 3)
+    assert len(_os(MarkDetector(sure), narrow, narrow_box)) == 1  # the committed verifier is sure of a clean O
+    assert _os(MarkDetector(sure, verifier=doubtful), narrow, narrow_box) == []
+    assert len(_os(MarkDetector(ON_CARD, verifier=doubtful), narrow, narrow_box)) == 1
+    assert len(_os(MarkDetector(sure, verifier=doubtful), wide, wide_box)) == 1
+    assert _os(MarkDetector(dataclasses.replace(ON_CARD, safe_card_extent=130.0)), narrow, narrow_box) == []
+    assert len(_os(MarkDetector(dataclasses.replace(ON_CARD, safe_card_extent=20.0)), narrow, narrow_box)) == 1
+    blind = dataclasses.replace(sure, verify=False, propose=0.0)
+    assert _os(MarkDetector(blind), narrow, narrow_box) == []
+    assert len(_os(MarkDetector(dataclasses.replace(blind, safe_card_sure=0.0)), narrow, narrow_box)) == 1
 
 
 def test_the_frame_is_what_the_bench_says() -> None:
