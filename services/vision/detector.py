@@ -979,7 +979,8 @@ class MarkDetector:
             elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
                 if p.spared and row[CLASSES.index(Shape.O)] < self.config.safe_card_sure:
-                    stage = "O margin"
+                    stage = "O margin"  # refused at its margin after all: no proposal over it is kept either
+                    self._vetoes.append(_up(p.box, p.level.f))
                 elif self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
                 elif p.shape is Shape.TRIANGLE and self._filled_on_paper(p) is not None:
@@ -1014,6 +1015,7 @@ class MarkDetector:
                     stage = "kept" if det is not None else self._why
                     if det is not None and self._spared and prob < self.config.safe_card_sure:
                         det, stage = None, "O margin"
+                        self._vetoes.append(_up(p.box, p.level.f))
                     if (
                         det is None
                         and self._rescuable(claimed, p.level, p.i)

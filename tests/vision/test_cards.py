@@ -16,7 +16,7 @@ from bench import vision_cards
 from schemas.messages import Shape
 from services.vision.detector import DetectorConfig, MarkDetector
 from services.vision.training import iou
-from services.vision.verifier import CLASSES, Verifier
+from services.vision.verifier import CLASSES, Verifier, claim
 
 
 @pytest.fixture(scope="module")
@@ -85,13 +85,14 @@ def test_other_ink_beside_an_o_on_its_card_still_makes_it_wait(kind: str) -> Non
 
 
 class _DoubtfulOfO(Verifier):
-    """The committed verifier, its O probability capped at 0.9: above the 0.8 a claimed O needs, under a spared O's
-    `safe_card_sure` of 0.95."""
+    """The committed verifier, its O probability for a claimed O capped at 0.9: above the 0.8 a claimed O needs, under
+    a spared O's `safe_card_sure` of 0.95. Shown the same O as a proposal (no claim), it is as sure as ever."""
 
     def probabilities(self, crops: np.ndarray, claims: np.ndarray) -> np.ndarray:
         p = super().probabilities(crops, claims).copy()
         o = CLASSES.index(Shape.O)
-        p[:, o] = np.minimum(p[:, o], 0.9)
+        claimed_o = np.all(claims == claim(Shape.O), axis=1)
+        p[claimed_o, o] = np.minimum(p[claimed_o, o], 0.9)
         return p
 
 
