@@ -55,18 +55,19 @@ def _os(detector: MarkDetector, img: np.ndarray, box: tuple[int, int, int, int])
     return [iou(d.box, box) for d in detector.detect(img) if d.shape is Shape.O]
 
 
-ON_CARD = DetectorConfig(safe_margin_card=True)  # round vision63b's variant
+ON_CARD = DetectorConfig(safe_card_sure=0.0, safe_card_extent=0.0)  # round vision63b's variant: neither guard
+STRICT = DetectorConfig(safe_margin_card=False)  # the O's margin before round vision63c
 
 
 @pytest.mark.parametrize("size", [80, 160])
-def test_an_o_on_a_card_narrower_than_its_margin_waits_unless_the_margin_is_judged_on_the_card(size: int) -> None:
-    """Rounds vision63 and 63b: the O's clear margin (a tenth of its size) runs off a card whose border is a
-    twenty-fifth of the O's width, onto a dark background. The default makes it wait; judged on the card
-    (`safe_margin_card`, off), the background beyond the card's edge is not ink on the card, and the O is found where
-    it is."""
+def test_an_o_on_a_card_narrower_than_its_margin_is_found_as_the_margin_is_judged_on_the_card(size: int) -> None:
+    """Rounds vision63-63c: the O's clear margin (a tenth of its size) runs off a card whose border is a
+    twenty-fifth of the O's width, onto a dark background. The strict margin (`safe_margin_card=0`, the default
+    before round vision63c) makes it wait; judged on the card (the default), the background beyond the card's edge is
+    not ink on the card, and the O is found where it is."""
     img, box = _o_frame("dark", size, 0.04, size)
-    assert _os(MarkDetector(DetectorConfig()), img, box) == []
-    found = _os(MarkDetector(ON_CARD), img, box)
+    assert _os(MarkDetector(STRICT), img, box) == []
+    found = _os(MarkDetector(DetectorConfig()), img, box)
     assert len(found) == 1 and found[0] >= 0.9
 
 
@@ -79,8 +80,9 @@ def test_other_ink_beside_an_o_on_its_card_still_makes_it_wait(kind: str) -> Non
     x, y, w, h = box
     r = int(round(w / 2 + 0.08 * 120))
     cv2.ellipse(img, (int(round(x + w / 2)), int(round(y + h / 2))), (r, r), 0, -25, 25, (30, 30, 30), 4)
-    assert _os(MarkDetector(ON_CARD), img, box) == []
     assert _os(MarkDetector(DetectorConfig()), img, box) == []
+    assert _os(MarkDetector(ON_CARD), img, box) == []
+    assert _os(MarkDetector(STRICT), img, box) == []
     assert len(_os(MarkDetector(DetectorConfig(safe_margin=0.0)), img, box)) == 1
 
 
@@ -102,7 +104,7 @@ def test_an_o_spared_by_its_card_needs_a_surer_verifier() -> None:
     is refused, with `safe_card_sure` off it is found. Nor is an O smaller than `safe_card_extent` judged on its card
     (the 120 px O is judged at extents of 53 and 106 px on two levels)."""
     doubtful = _DoubtfulOfO(**{f.name: getattr(Verifier.load(), f.name) for f in dataclasses.fields(Verifier)})
-    sure = dataclasses.replace(ON_CARD, safe_card_sure=0.95)
+    sure = DetectorConfig()  # safe_card_sure 0.95 since round vision63c
     narrow, narrow_box = _o_frame("dark", 120, 0.04, 3)
     wide, wide_box = _o_frame("dark", 120, 0.3, 3)
     assert len(_os(MarkDetector(sure), narrow, narrow_box)) == 1  # the committed verifier is sure of a clean O

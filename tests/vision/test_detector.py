@@ -524,7 +524,8 @@ def test_a_finger_on_a_card_or_touching_a_word_is_no_mark(detector: MarkDetector
 def test_the_coarser_pyramid_finds_marks_the_old_one_missed_and_loses_none(detector: MarkDetector) -> None:
     """Round vision16: half resolution judges components of any size and a sixth-resolution level is
     added. On 200 tuning frames with varied hands it finds marks the old pyramid missed (four when it
-    landed, three of them 140-240 px), loses none the old one found, and adds no false mark."""
+    landed, three of them 140-240 px; one since round vision63c, whose O margin judged on the card lets the old
+    pyramid find another), loses none the old one found, and adds no false mark."""
     old = MarkDetector(
         dataclasses.replace(detector.config, levels=VISION15_LEVELS), verifier=detector.verifier
     )
@@ -546,7 +547,7 @@ def test_the_coarser_pyramid_finds_marks_the_old_one_missed_and_loses_none(detec
         elif hits == [True, False]:
             lost.append(i)
     assert lost == [] and false_new <= false_old
-    assert len(gained) >= 2, gained
+    assert len(gained) >= 1, gained
 
 
 # ---------------------------------------------------------------- settings (`--detector`, `HRI_VISION_DETECTOR`)
