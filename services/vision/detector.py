@@ -981,9 +981,8 @@ class MarkDetector:
                     det, stage = p.det, "kept"
             elif p.shape is not None:
                 claimed, stage = p.shape, "verifier"
-                if p.spared and row[CLASSES.index(Shape.O)] < self.config.safe_card_sure:
-                    stage = "O margin"  # refused at its margin after all: no proposal over it is kept either
-                    self._vetoes.append(_up(p.box, p.level.f))
+                if self._unsure_of_spared(p, p.spared, float(row[CLASSES.index(Shape.O)])):
+                    stage = "O margin"
                 elif self.verifier.accepts(row, p.shape) or kept is not None:
                     det, stage = p.det, "kept"
                 elif p.shape is Shape.TRIANGLE and self._filled_on_paper(p) is not None:
@@ -1016,9 +1015,8 @@ class MarkDetector:
                         blob = _Blob(blob.outer, [], blob.area, blob.size)
                     det = self._finish(p.level, p.i, blob, p.own, claimed, prob, box=p.box, named=True)
                     stage = "kept" if det is not None else self._why
-                    if det is not None and self._spared and prob < self.config.safe_card_sure:
+                    if det is not None and self._unsure_of_spared(p, self._spared, prob):
                         det, stage = None, "O margin"
-                        self._vetoes.append(_up(p.box, p.level.f))
                     if (
                         det is None
                         and self._rescuable(claimed, p.level, p.i)
@@ -1107,6 +1105,15 @@ class MarkDetector:
             x, y, w, h = p.box
             return crops(self._greys[2], (x // 2, y // 2, max(1, w // 2), max(1, h // 2)))
         return crops(p.level.g, p.box)
+
+    def _unsure_of_spared(self, p: _Pending, spared: bool, o_prob: float) -> bool:
+        """Whether candidate `p`, an O its card `spared` at the clear margin, has a verifier O probability `o_prob`
+        under `safe_card_sure`: then it is refused at its margin after all, and recorded as a veto like any O refused
+        there (no proposal over it is kept either). The one place the rule lives, for a claimed and a named O."""
+        if not spared or o_prob >= self.config.safe_card_sure:
+            return False
+        self._vetoes.append(_up(p.box, p.level.f))
+        return True
 
     def _rescuable(self, shape: Shape, level: _Level, i: int) -> bool:
         """Whether component `i`, just refused by `_finish`, may still be kept on the verifier's word
