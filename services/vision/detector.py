@@ -254,6 +254,12 @@ class DetectorConfig:
     cannot judge it (it has no component). Needs `verify`. On since round vision19 (its int8 model): on
     fresh held-out seeds it found 30 % of the X and triangles missed without it, for 10 more false ones in
     4,000 frames, at 113.9 frames per CPU-second against 133.8 (vision README, "The learned proposer")."""
+    faint_veto: bool = True
+    """a component the card tests refused as "faint" (no contrast between it and the band just outside it) vetoes the
+    proposer over it, as every component the context tests refused does. Off (round vision64): such a component is no
+    ink on paper, so it says nothing of a mark's context; it is often a mark's own part - a thick ring's inner edge,
+    which the finest level's local threshold cuts from the stroke's middle - and then it kept out a proposal of that
+    very mark (a big O the verifier is sure of, its outer edge merged with a finger)."""
     propose_thresholds: tuple[float, ...] = (0.5, 0.99, 0.9)
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 from round vision23g (0.7 before), whose verifier gives a
@@ -1318,7 +1324,8 @@ class MarkDetector:
         paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), danger=shape is not Shape.O)
         if isinstance(paper, str):
             self._card_refusal = paper
-            self._vetoes.append(_up((x, y, w, h), level.f))
+            if paper != "faint" or cfg.faint_veto:
+                self._vetoes.append(_up((x, y, w, h), level.f))
             return None
         if shape is Shape.O and cfg.safe_margin > 0:
             # a false O would lift a danger: the safe mark must also have the wide clear margin

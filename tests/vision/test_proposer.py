@@ -613,3 +613,37 @@ def test_a_proposed_triangle_that_is_two_strokes_is_refused_with_propose_open_si
     assert not _boxes(DetectorConfig(propose_open_side=0.6), img, Shape.TRIANGLE)
     with pytest.raises(ValueError, match="propose_open_side"):
         DetectorConfig(propose_open_side=1.5)
+
+
+def _thick_o_held_from_above(blur: float) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """A big thick O (300 px, strokes a sixth of it) on a card that runs off the top of the frame, three fingers reaching
+    down from beyond the frame onto its top, under a Gaussian blur of `blur` px (sigma); and the O's box. As tuning seed
+    7234's frame 829: at the coarser levels the ring, the fingers and the frame's edge are one component, and at the
+    finest the local threshold cuts the stroke's middle away, leaving its inner and outer edges."""
+    import cv2
+
+    img = np.full((480, 640, 3), 100, np.uint8)
+    cx, cy, r = 320, 260, 150
+    cv2.rectangle(img, (cx - 172, -10), (cx + 172, 479), (225, 225, 225), -1)  # the card
+    cv2.circle(img, (cx, cy), r - 25, (30, 30, 30), 50)
+    for k in range(3):
+        cv2.ellipse(img, (cx + (k - 1) * 75, (cy - r + 20) // 2), (24, (cy - r + 20) // 2 + 30), 0, 0, 360, (80,) * 3, -1)
+    img = cv2.GaussianBlur(img, (0, 0), blur)
+    noise = np.random.default_rng(1).normal(0.0, 2.0, img.shape)
+    return np.clip(img + noise, 0, 255).astype(np.uint8), (cx - r, cy - r, 2 * r, 2 * r)
+
+
+def test_a_faint_part_of_a_mark_no_longer_vetoes_its_proposal_with_faint_veto_off() -> None:
+    """`faint_veto` (round vision64): the thick O's inner edge, claimed an O at the finest level, is refused by the card
+    tests as "faint" (its band is the stroke's own ink); by default that refusal vetoes the proposer there, and the O,
+    which the proposer and the verifier both see, is lost. With `faint_veto` off it is found; a sharper copy of the
+    same scene, whose ring a coarser level detects, is found either way."""
+    from services.vision.detector import DetectorConfig, box_overlap
+
+    img, box = _thick_o_held_from_above(4.0)
+    off = DetectorConfig(faint_veto=False)
+    assert not any(box_overlap(b, box) >= 0.5 for b in _boxes(DetectorConfig(), img, Shape.O))
+    assert [box_overlap(b, box) >= 0.9 for b in _boxes(off, img, Shape.O)] == [True]
+    sharp, box = _thick_o_held_from_above(2.0)
+    for config in (DetectorConfig(), off):
+        assert len(_boxes(config, sharp, Shape.O)) == 1
