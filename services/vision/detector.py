@@ -259,7 +259,14 @@ class DetectorConfig:
     proposer over it, as every component the context tests refused does. Off (round vision64): such a component is no
     ink on paper, so it says nothing of a mark's context; it is often a mark's own part - a thick ring's inner edge,
     which the finest level's local threshold cuts from the stroke's middle - and then it kept out a proposal of that
-    very mark (a big O the verifier is sure of, its outer edge merged with a finger)."""
+    very mark (a big O the verifier is sure of, its outer edge merged with a finger). Round vision64 (`faint_veto=0`)
+    did not land: a faint component can also be the whole of a faint mark (an X under `min_contrast`, a shadow or a
+    crease by the card tests), and then the veto keeps the proposer from overruling the contrast test."""
+    faint_veto_contrast: float = -255.0
+    """with `faint_veto`: a component refused as faint vetoes the proposer only if the band just outside it is at
+    least this many grey levels lighter than its ink (-255: every one). Round vision64b's variant 1: a faint mark is
+    a little darker than its paper, while a component no darker than the band round it lies within ink - a thick
+    stroke's inner edge, the stroke's own ink for its band (tuning seed 7234: 3 grey levels lighter than the band)."""
     propose_thresholds: tuple[float, ...] = (0.5, 0.99, 0.9)
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 from round vision23g (0.7 before), whose verifier gives a
@@ -489,6 +496,8 @@ class DetectorConfig:
             raise ValueError(f"propose_open_margin {self.propose_open_margin}: a share of the box's size, 0 to 2")
         if self.safe_card_extent < 0:
             raise ValueError(f"safe_card_extent {self.safe_card_extent}: pixels, 0 (any size) or more")
+        if not -255.0 <= self.faint_veto_contrast <= 255.0:
+            raise ValueError(f"faint_veto_contrast {self.faint_veto_contrast}: grey levels, -255 (every one) to 255")
         if not 0.0 <= self.safe_card_sure <= 1.0:
             raise ValueError(f"safe_card_sure {self.safe_card_sure}: a verifier probability, 0 (off) to 1")
         if not 0.0 <= self.safe_card_ink <= 1.0:
@@ -1324,7 +1333,9 @@ class MarkDetector:
         paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), danger=shape is not Shape.O)
         if isinstance(paper, str):
             self._card_refusal = paper
-            if paper != "faint" or cfg.faint_veto:
+            if paper != "faint" or (
+                cfg.faint_veto and _band_contrast(g_roi, ink, extent, dist, cfg) >= cfg.faint_veto_contrast
+            ):
                 self._vetoes.append(_up((x, y, w, h), level.f))
             return None
         if shape is Shape.O and cfg.safe_margin > 0:
@@ -1911,6 +1922,14 @@ def _on_card(
         if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return "ink"
     return float(mean[0][0])
+
+
+def _band_contrast(g_roi: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig) -> float:
+    """How many grey levels lighter than the mark's `ink` the paper in its border band is, as `_on_card` measures it
+    (the band's median; -255 where there is no band): negative where the mark lies within something darker."""
+    band = _border_band(dist, extent, cfg)
+    band_n = cv2.countNonZero(band)
+    return _masked_median(g_roi, band, band_n) - ink if band_n else -255.0
 
 
 def _border_band(dist: np.ndarray, extent: float, cfg: DetectorConfig) -> np.ndarray:

@@ -633,17 +633,27 @@ def _thick_o_held_from_above(blur: float) -> tuple[np.ndarray, tuple[int, int, i
     return np.clip(img + noise, 0, 255).astype(np.uint8), (cx - r, cy - r, 2 * r, 2 * r)
 
 
-def test_a_faint_part_of_a_mark_no_longer_vetoes_its_proposal_with_faint_veto_off() -> None:
-    """`faint_veto` (round vision64): the thick O's inner edge, claimed an O at the finest level, is refused by the card
-    tests as "faint" (its band is the stroke's own ink); by default that refusal vetoes the proposer there, and the O,
-    which the proposer and the verifier both see, is lost. With `faint_veto` off it is found; a sharper copy of the
-    same scene, whose ring a coarser level detects, is found either way."""
+def test_a_faint_part_of_a_mark_in_its_ink_no_longer_vetoes_its_proposal() -> None:
+    """`faint_veto` and `faint_veto_contrast` (rounds vision64 and 64b): the thick O's inner edge, claimed an O at the
+    finest level, is refused by the card tests as "faint" (its band is the stroke's own ink, 14 grey levels darker
+    than it); by default that refusal vetoes the proposer there, and the O, which the proposer and the verifier both
+    see, is lost. With the faint veto off, or asked only of a component lighter than its band by 1 grey level or
+    less, the O is found; a sharper copy of the same scene, whose ring a coarser level detects, is found either way.
+    A faint X (about 21 grey levels darker than its card, under `min_contrast`) is still refused with
+    `faint_veto_contrast`, and found by the proposer with no faint veto at all: round vision64's trouble."""
     from services.vision.detector import DetectorConfig, box_overlap
+    from tests.vision.test_detector import _cross_on
 
     img, box = _thick_o_held_from_above(4.0)
-    off = DetectorConfig(faint_veto=False)
+    off, in_ink = DetectorConfig(faint_veto=False), DetectorConfig(faint_veto_contrast=1.0)
     assert not any(box_overlap(b, box) >= 0.5 for b in _boxes(DetectorConfig(), img, Shape.O))
-    assert [box_overlap(b, box) >= 0.9 for b in _boxes(off, img, Shape.O)] == [True]
+    for config in (off, in_ink):
+        assert [box_overlap(b, box) >= 0.9 for b in _boxes(config, img, Shape.O)] == [True]
     sharp, box = _thick_o_held_from_above(2.0)
-    for config in (DetectorConfig(), off):
+    for config in (DetectorConfig(), off, in_ink):
         assert len(_boxes(config, sharp, Shape.O)) == 1
+    faint = _cross_on(np.full((480, 640), 70.0), ink=48)
+    assert _boxes(DetectorConfig(), faint, Shape.X) == _boxes(in_ink, faint, Shape.X) == []
+    assert len(_boxes(off, faint, Shape.X)) == 1
+    with pytest.raises(ValueError, match="faint_veto_contrast"):
+        DetectorConfig(faint_veto_contrast=-300.0)
