@@ -255,18 +255,20 @@ class DetectorConfig:
     fresh held-out seeds it found 30 % of the X and triangles missed without it, for 10 more false ones in
     4,000 frames, at 113.9 frames per CPU-second against 133.8 (vision README, "The learned proposer")."""
     faint_veto: bool = True
-    """a component the card tests refused as "faint" (no contrast between it and the band just outside it) vetoes the
-    proposer over it, as every component the context tests refused does. Off (round vision64): such a component is no
-    ink on paper, so it says nothing of a mark's context; it is often a mark's own part - a thick ring's inner edge,
-    which the finest level's local threshold cuts from the stroke's middle - and then it kept out a proposal of that
-    very mark (a big O the verifier is sure of, its outer edge merged with a finger). Round vision64 (`faint_veto=0`)
-    did not land: a faint component can also be the whole of a faint mark (an X under `min_contrast`, a shadow or a
-    crease by the card tests), and then the veto keeps the proposer from overruling the contrast test."""
+    """a component the card tests refused as "faint" (under `min_contrast` between its ink and the band just outside it)
+    vetoes the proposer over it, as every component the context tests refused does. Off (round vision64): such a
+    component is no ink on paper, so it says nothing of a mark's context; it is often a mark's own part - a thick
+    ring's inner edge, which the finest level's local threshold cuts from the stroke's middle - and then it kept out a
+    proposal of that very mark (a big O the verifier is sure of, its outer edge merged with a finger). Round
+    vision64 (`faint_veto=0`) did not land: a faint component can also be the whole of a faint mark (an X under
+    `min_contrast`, a shadow or a crease by the card tests), and then the veto keeps the proposer from overruling the
+    contrast test."""
     faint_veto_contrast: float = -255.0
     """with `faint_veto`: a component refused as faint vetoes the proposer only if the band just outside it is at
     least this many grey levels lighter than its ink (-255: every one). Round vision64b's variant 1: a faint mark is
     a little darker than its paper, while a component no darker than the band round it lies within ink - a thick
-    stroke's inner edge, the stroke's own ink for its band (tuning seed 7234: 3 grey levels lighter than the band)."""
+    stroke's inner edge, the stroke's own ink for its band (tuning seed 7234's two big O: 3 grey levels lighter than
+    its band)."""
     propose_thresholds: tuple[float, ...] = (0.5, 0.99, 0.9)
     """the verifier's probability a proposed X, O and TRIANGLE needs (a false O lifts a danger), chosen on
     tuning seeds 99 + 555 (round vision18b); X 0.3 from round vision23g (0.7 before), whose verifier gives a
