@@ -637,8 +637,8 @@ def test_a_faint_part_of_a_mark_in_its_ink_no_longer_vetoes_its_proposal() -> No
     """`faint_veto` and `faint_veto_contrast` (rounds vision64 and 64b): the thick O's inner edge, claimed an O at the
     finest level, is refused by the card tests as "faint" (its band is the stroke's own ink, 14 grey levels darker
     than it); by default that refusal vetoes the proposer there, and the O, which the proposer and the verifier both
-    see, is lost. With the faint veto off, or asked only of a component lighter than its band by 1 grey level or
-    less, the O is found; a sharper copy of the same scene, whose ring a coarser level detects, is found either way.
+    see, is lost. With the faint veto off, or kept only for a faint component at least a grey level darker than its
+    band (`faint_veto_contrast=1`), the O is found; a sharper copy of the same scene, whose ring a coarser level detects, is found either way.
     A faint X (about 21 grey levels darker than its card, under `min_contrast`) is still refused with
     `faint_veto_contrast`, and found by the proposer with no faint veto at all: round vision64's trouble."""
     from services.vision.detector import DetectorConfig, box_overlap
