@@ -1882,11 +1882,9 @@ def _on_card(
     background beyond a narrow card edge) are not on the card and do not count against the mark.
     The extent is sqrt(hull area), not the box: a rotated X's box is 1.4 times wider, its card is not.
     """
-    band = _border_band(dist, extent, cfg)
-    band_n = cv2.countNonZero(band)
-    if band_n == 0:
+    band, band_n, paper = _band_paper(g_roi, dist, extent, cfg)
+    if paper is None:
         return "band"
-    paper = _masked_median(g_roi, band, band_n)
     if paper < 20 or paper - ink < cfg.min_contrast:
         return "faint"
     dark = ink + 0.3 * (paper - ink)
@@ -1928,12 +1926,21 @@ def _on_card(
     return float(mean[0][0])
 
 
-def _band_contrast(g_roi: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig) -> float:
-    """How many grey levels lighter than the mark's `ink` the paper in its border band is, as `_on_card` measures it
-    (the band's median; -255 where there is no band): negative where the mark lies within something darker."""
+def _band_paper(
+    g_roi: np.ndarray, dist: np.ndarray, extent: float, cfg: DetectorConfig
+) -> tuple[np.ndarray, int, float | None]:
+    """The mark's border band (`_border_band`), its pixel count and the paper's grey level there: the band's median,
+    None where there is no band."""
     band = _border_band(dist, extent, cfg)
     band_n = cv2.countNonZero(band)
-    return _masked_median(g_roi, band, band_n) - ink if band_n else -255.0
+    return band, band_n, _masked_median(g_roi, band, band_n) if band_n else None
+
+
+def _band_contrast(g_roi: np.ndarray, ink: float, extent: float, dist: np.ndarray, cfg: DetectorConfig) -> float:
+    """How many grey levels lighter than the mark's `ink` the paper in its border band is, as `_on_card` measures it
+    (-255 where there is no band): negative where the mark lies within something darker."""
+    paper = _band_paper(g_roi, dist, extent, cfg)[2]
+    return paper - ink if paper is not None else -255.0
 
 
 def _border_band(dist: np.ndarray, extent: float, cfg: DetectorConfig) -> np.ndarray:
@@ -2017,11 +2024,9 @@ def _card_margin(
     than the margin, the issue's case, passes; a stroke of ink on the card beside the O does not. Alone (round
     vision63b) it found 5 points of held-out O recall and made 5 more false O in 4,000 frames; with `safe_card_extent`
     and `safe_card_sure` (round vision63c) it found as much with no false O added, and is the default."""
-    band = _border_band(dist, extent, cfg)
-    band_n = cv2.countNonZero(band)
-    if band_n == 0:
+    band, _, paper = _band_paper(g_roi, dist, extent, cfg)
+    if paper is None:
         return False
-    paper = _masked_median(g_roi, band, band_n)
     _, card = _card(g_roi, filled, band, ink + 0.5 * (paper - ink))
     inside, labels = _enclosed(card, filled)
     zone = _beyond_halo(dist, extent, cfg.safe_margin, cfg)
