@@ -108,6 +108,10 @@ class DetectorConfig:
     where they are judged on a sixteenth of the pixels: a speed knob. 160 makes detection about 20 %
     faster and costs 0.5-1 % of O and triangle recall on the tuning generator (2-3 % held-out)."""
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
+    x_solidity: float = 0.5
+    """an X's ink fills at most this share of its outline's convex hull (and at least 0.18): thin bars. A thick X
+    (tape strips, a broad marker, bars crossing at 60 degrees) fills more, is left to the verifier as a loose
+    candidate and needs its loose bar (round vision65 tries a higher limit)"""
     filled_solidity: float = 0.93
     """a filled triangle (no hole) fills at least this share of its outline's convex hull ..."""
     filled_fill: float = 0.85
@@ -2209,7 +2213,7 @@ def _classify(b: _Blob, cfg: DetectorConfig) -> tuple[Shape, float] | None:
         hull_area = cv2.contourArea(hull)
         if hull_area <= 0:
             return None
-        return _cross(b, hull, hull_area) or _filled_triangle(b, hull_area, cfg.filled_solidity, cfg.filled_fill)
+        return _cross(b, hull, hull_area, cfg.x_solidity) or _filled_triangle(b, hull_area, cfg.filled_solidity, cfg.filled_fill)
     return None
 
 
@@ -2266,10 +2270,11 @@ def _ring_like(b: _Blob) -> tuple[Shape, float] | None:
     return None
 
 
-def _cross(b: _Blob, hull_pts: np.ndarray, hull_area: float) -> tuple[Shape, float] | None:
-    """Four arms around one centre (`hull_pts`: the outline's convex hull, of area `hull_area`)."""
+def _cross(b: _Blob, hull_pts: np.ndarray, hull_area: float, max_solidity: float = 0.5) -> tuple[Shape, float] | None:
+    """Four arms around one centre (`hull_pts`: the outline's convex hull, of area `hull_area`), filling at most
+    `max_solidity` of it (`DetectorConfig.x_solidity`)."""
     solidity = b.area / hull_area
-    if not 0.18 <= solidity <= 0.5:
+    if not 0.18 <= solidity <= max_solidity:
         return None
     hull_idx = cv2.convexHull(b.outer, returnPoints=False)
     try:

@@ -886,3 +886,30 @@ def test_the_filled_triangle_bars_are_settings() -> None:
     judged = detector_module._classify(bowed, lower)
     assert judged is not None and judged[0] is Shape.TRIANGLE and 0.5 <= judged[1] < straight[1]
     assert detector_module._classify(_solid_triangle(0.0), dataclasses.replace(config, filled_fill=0.999)) is None
+
+
+def _cross_blob(bar: float, angle: float = 90.0) -> detector_module._Blob:
+    """An X of two 80 px bars `bar` of their length wide crossing at `angle` degrees, as the shape tests see it."""
+    mask = np.zeros((120, 120), np.uint8)
+    for a in (90 - angle / 2, 90 + angle / 2):
+        dx, dy = 40 * np.cos(np.radians(a)), 40 * np.sin(np.radians(a))
+        cv2.line(mask, (round(60 - dx), round(60 - dy)), (round(60 + dx), round(60 + dy)), 255, round(bar * 80))
+    blob = detector_module._blob(mask, 80.0)
+    assert blob is not None
+    return blob
+
+
+def test_a_thick_x_is_claimed_under_a_higher_solidity_limit() -> None:
+    """`x_solidity` (round vision65): an X of bars a tenth of their length wide fills about a third of its hull and
+    is claimed at the default limit; one of bars 0.22 of their length wide (tape strips, a broad marker) fills 0.55
+    of it and is left to the verifier, unless the limit is 0.6. A solid shape is never an X."""
+    config = DetectorConfig()
+    thin = detector_module._classify(_cross_blob(0.1), config)
+    assert thin is not None and thin[0] is Shape.X
+    thick = _cross_blob(0.22)
+    assert detector_module._classify(thick, config) is None
+    higher = dataclasses.replace(config, x_solidity=0.6)
+    judged = detector_module._classify(thick, higher)
+    assert judged is not None and judged[0] is Shape.X and judged[1] >= 0.5
+    assert detector_module._classify(_cross_blob(0.22, angle=60.0), higher) is not None
+    assert detector_module._classify(_cross_blob(0.45), higher) is None  # a blot, not four arms
