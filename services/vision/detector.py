@@ -86,6 +86,10 @@ def finish(steps: Steps) -> list[Detection]:
             return done.value
 
 
+X_SOLIDITY = 0.5
+"""The most an X's ink filled of its convex hull before `DetectorConfig.x_solidity` (round vision65)."""
+
+
 @dataclass(frozen=True)
 class DetectorConfig:
     levels: tuple[tuple[int, ...], ...] = ((1, 31), (2, 31), (4, 31), (6, 31))
@@ -108,10 +112,15 @@ class DetectorConfig:
     where they are judged on a sixteenth of the pixels: a speed knob. 160 makes detection about 20 %
     faster and costs 0.5-1 % of O and triangle recall on the tuning generator (2-3 % held-out)."""
     max_aspect: float = 3.5  # longest/shortest side of the component's box (strong tilt)
-    x_solidity: float = 0.5
+    x_solidity: float = X_SOLIDITY
     """an X's ink fills at most this share of its outline's convex hull (and at least 0.18): thin bars. A thick X
     (tape strips, a broad marker, bars crossing at 60 degrees) fills more, is left to the verifier as a loose
-    candidate and needs its loose bar (round vision65 tries a higher limit)"""
+    candidate and needs its loose bar (round vision65 tried 0.6: a blurred X, thickened by its blur, was then claimed,
+    refused by the card tests and kept the proposer from the X it found there)"""
+    x_solidity_veto: bool = True
+    """whether an X claimed only under a raised `x_solidity` (its ink filling more than half its hull), refused by the
+    card tests or as a letter of a text line, keeps the proposer out of its place as every refused component does;
+    off, it leaves the place to the proposer, as it did when it was not claimed (round vision65b)"""
     filled_solidity: float = 0.93
     """a filled triangle (no hole) fills at least this share of its outline's convex hull ..."""
     filled_fill: float = 0.85
@@ -1339,8 +1348,13 @@ class MarkDetector:
         extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(blob.outer)), 1.0))
         dist = _distance(filled, (x - x0, y - y0, w, h), _reach(cfg, extent))
         paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), danger=shape is not Shape.O)
+        # an X claimed only under a raised x_solidity was a loose candidate before: without x_solidity_veto its refusal
+        # leaves the proposer free there, as it was then
+        vetoes = cfg.x_solidity_veto or named or shape is not Shape.X or blob.area <= X_SOLIDITY * extent**2
         if isinstance(paper, str):
             self._card_refusal = paper
+            if not vetoes:
+                return None
             if paper != "faint" or (
                 cfg.faint_veto and _band_contrast(g_roi, ink, extent, dist, cfg) >= cfg.faint_veto_contrast
             ):
@@ -1375,7 +1389,8 @@ class MarkDetector:
             return None
         if self._text_line(level, i):
             self._why = "text line"
-            self._vetoes.append(_up((x, y, w, h), level.f))
+            if vetoes:
+                self._vetoes.append(_up((x, y, w, h), level.f))
             return None
         self._why = "kept"
         return Detection(shape, conf, (x, y, w, h))
@@ -2270,7 +2285,9 @@ def _ring_like(b: _Blob) -> tuple[Shape, float] | None:
     return None
 
 
-def _cross(b: _Blob, hull_pts: np.ndarray, hull_area: float, max_solidity: float = 0.5) -> tuple[Shape, float] | None:
+def _cross(
+    b: _Blob, hull_pts: np.ndarray, hull_area: float, max_solidity: float = X_SOLIDITY
+) -> tuple[Shape, float] | None:
     """Four arms around one centre (`hull_pts`: the outline's convex hull, of area `hull_area`), filling at most
     `max_solidity` of it (`DetectorConfig.x_solidity`)."""
     solidity = b.area / hull_area

@@ -307,6 +307,31 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
         assert found(DetectorConfig(), seed)  # the default keeps it
 
 
+def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free_without_x_solidity_veto() -> None:
+    """Rounds vision65-65b: under `x_solidity` 0.6 the blurred X of the sure-peak test's seed 259, thickened by its
+    blur, is claimed by the shape tests and refused by the card tests; that refusal keeps the proposer out and the X
+    is lost. With `x_solidity_veto` off the claim leaves the place to the proposer, as it did when it was not
+    claimed, and the X is found again."""
+    from dataclasses import replace
+
+    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.synthetic import SceneGenerator, Variation
+
+    img, labels = SceneGenerator(seed=259, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
+    box = labels[0].box
+
+    def found(config: DetectorConfig) -> bool:
+        return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
+
+    def stages(config: DetectorConfig) -> set[tuple[Shape | None, str]]:
+        return {(t.shape, t.stage) for t in MarkDetector(config).trace(img)[1] if box_overlap(t.box, box) >= 0.4}
+
+    thick = DetectorConfig(x_solidity=0.6)
+    assert found(DetectorConfig()) and (Shape.X, "card") not in stages(DetectorConfig())
+    assert (Shape.X, "card") in stages(thick) and not found(thick)
+    assert found(replace(thick, x_solidity_veto=False))
+
+
 def _crossing(seed: int) -> np.ndarray:
     """No mark: two long straight strokes (cables, tape) crossing on plain paper."""
     import cv2
