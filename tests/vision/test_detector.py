@@ -899,17 +899,19 @@ def _cross_blob(bar: float, angle: float = 90.0) -> detector_module._Blob:
     return blob
 
 
-def test_a_thick_x_is_claimed_under_a_higher_solidity_limit() -> None:
-    """`x_solidity` (round vision65): an X of bars a tenth of their length wide fills about a third of its hull and
-    is claimed at the default limit; one of bars 0.22 of their length wide (tape strips, a broad marker) fills 0.55
-    of it and is left to the verifier, unless the limit is 0.6. A solid shape is never an X."""
+def test_a_thick_x_is_claimed_under_the_solidity_limit() -> None:
+    """`x_solidity` (round vision65b's default 0.6): an X of bars a tenth of their length wide fills about a third of
+    its hull and is claimed; one of bars 0.22 of their length wide (tape strips, a broad marker) fills 0.55 of it and
+    is claimed too (also crossing at 60 degrees), while at the old limit, 0.5, it was left to the verifier. A blot of
+    bars 0.45 wide is never an X."""
     config = DetectorConfig()
     thin = detector_module._classify(_cross_blob(0.1), config)
     assert thin is not None and thin[0] is Shape.X
     thick = _cross_blob(0.22)
-    assert detector_module._classify(thick, config) is None
-    higher = dataclasses.replace(config, x_solidity=0.6)
-    judged = detector_module._classify(thick, higher)
+    judged = detector_module._classify(thick, config)
     assert judged is not None and judged[0] is Shape.X and judged[1] >= 0.5
-    assert detector_module._classify(_cross_blob(0.22, angle=60.0), higher) is not None
-    assert detector_module._classify(_cross_blob(0.45), higher) is None  # a blot, not four arms
+    assert detector_module._classify(_cross_blob(0.22, angle=60.0), config) is not None
+    old = dataclasses.replace(config, x_solidity=detector_module.X_SOLIDITY)
+    assert detector_module._classify(thick, old) is None
+    assert detector_module._classify(_cross_blob(0.1), old) is not None
+    assert detector_module._classify(_cross_blob(0.45), config) is None  # a blot, not four arms

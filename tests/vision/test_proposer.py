@@ -307,14 +307,14 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
         assert found(DetectorConfig(), seed)  # the default keeps it
 
 
-def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free_without_x_solidity_veto() -> None:
+def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free() -> None:
     """Rounds vision65-65b: under `x_solidity` 0.6 the blurred X of the sure-peak test's seed 259, thickened by its
-    blur, is claimed by the shape tests and refused by the card tests; that refusal keeps the proposer out and the X
-    is lost. With `x_solidity_veto` off the claim leaves the place to the proposer, as it did when it was not
-    claimed, and the X is found again."""
+    blur, is claimed by the shape tests and refused by the card tests. With `x_solidity_veto` on (round vision65) that
+    refusal keeps the proposer out and the X is lost; by default (off) the claim leaves the place to the proposer, as
+    it did when the old limit left it unclaimed, and the X is found."""
     from dataclasses import replace
 
-    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
+    from services.vision.detector import X_SOLIDITY, DetectorConfig, MarkDetector, box_overlap
     from services.vision.synthetic import SceneGenerator, Variation
 
     img, labels = SceneGenerator(seed=259, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
@@ -326,10 +326,11 @@ def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free_without_x_
     def stages(config: DetectorConfig) -> set[tuple[Shape | None, str]]:
         return {(t.shape, t.stage) for t in MarkDetector(config).trace(img)[1] if box_overlap(t.box, box) >= 0.4}
 
-    thick = DetectorConfig(x_solidity=0.6)
-    assert found(DetectorConfig()) and (Shape.X, "card") not in stages(DetectorConfig())
-    assert (Shape.X, "card") in stages(thick) and not found(thick)
-    assert found(replace(thick, x_solidity_veto=False))
+    default = DetectorConfig()
+    assert (Shape.X, "card") in stages(default) and found(default)
+    assert not found(replace(default, x_solidity_veto=True))
+    old = replace(default, x_solidity=X_SOLIDITY)
+    assert (Shape.X, "card") not in stages(old) and found(old)
 
 
 def _crossing(seed: int) -> np.ndarray:
