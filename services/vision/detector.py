@@ -1358,7 +1358,11 @@ class MarkDetector:
             if not vetoes:
                 return None
             if paper != "faint" or (
-                cfg.faint_veto and _band_contrast(g_roi, ink, extent, dist, cfg) >= cfg.faint_veto_contrast
+                cfg.faint_veto
+                and (  # at -255 every faint component vetoes: no need to measure its band again
+                    cfg.faint_veto_contrast <= -255.0
+                    or _band_contrast(g_roi, ink, extent, dist, cfg) >= cfg.faint_veto_contrast
+                )
             ):
                 self._vetoes.append(_up((x, y, w, h), level.f))
             return None
