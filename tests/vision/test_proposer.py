@@ -4,6 +4,7 @@ committed model, and what it adds to the detector."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -11,6 +12,9 @@ import pytest
 from schemas.messages import Shape
 from services.vision.proposer import HEADS, MODEL_PATH, SCALE, SHAPES, STRIDE, Proposer, decode, network_input
 from tests.vision.pools import PoolRefused, no_pool
+
+if TYPE_CHECKING:
+    from services.vision.detector import DetectorConfig
 
 ORDER = (Shape.X, Shape.O, Shape.TRIANGLE, None)  # the benches' order: frame i of a seed shows ORDER[i % 4]
 
@@ -282,6 +286,21 @@ def test_a_negative_blind_share_is_refused_before_any_render(tmp_path: Path) -> 
     assert not (tmp_path / "p.onnx").exists()
 
 
+def _blurred_x(seed: int) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """The first frame of tuning seed `seed` with a small X (30-70 px) under up to 20 px of motion blur, and its box."""
+    from services.vision.synthetic import SceneGenerator, Variation
+
+    img, labels = SceneGenerator(seed=seed, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
+    return img, labels[0].box
+
+
+def _finds_x(config: DetectorConfig, img: np.ndarray, box: tuple[int, int, int, int]) -> bool:
+    """Whether a detector of `config` reports an X over `box` (overlap 0.5, as the bench counts a hit)."""
+    from services.vision.detector import MarkDetector, box_overlap
+
+    return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
+
+
 def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
     """`propose_sure` (round vision42; X's on by default since round vision56): a small X under strong motion blur
     that the proposer peaks on at 0.7 or more, but to which the verifier gives under its proposal bar (0.5), is kept
@@ -289,13 +308,10 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
     sure bar."""
     from dataclasses import replace
 
-    from services.vision.detector import DetectorConfig, MarkDetector, box_overlap
-    from services.vision.synthetic import SceneGenerator, Variation
+    from services.vision.detector import DetectorConfig
 
     def found(config: DetectorConfig, seed: int) -> bool:
-        img, labels = SceneGenerator(seed=seed, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
-        box = labels[0].box
-        return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
+        return _finds_x(config, *_blurred_x(seed))
 
     off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0))
     sure_x = replace(off, propose_sure=(0.7, 0.0, 0.0), propose_sure_thresholds=(0.01, 0.99, 0.9))
@@ -315,13 +331,11 @@ def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free() -> None:
     from dataclasses import replace
 
     from services.vision.detector import X_SOLIDITY, DetectorConfig, MarkDetector, box_overlap
-    from services.vision.synthetic import SceneGenerator, Variation
 
-    img, labels = SceneGenerator(seed=259, variation=Variation(size=(30.0, 70.0), blur=20.0)).frame(Shape.X)
-    box = labels[0].box
+    img, box = _blurred_x(259)
 
     def found(config: DetectorConfig) -> bool:
-        return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
+        return _finds_x(config, img, box)
 
     def stages(config: DetectorConfig) -> set[tuple[Shape | None, str]]:
         return {(t.shape, t.stage) for t in MarkDetector(config).trace(img)[1] if box_overlap(t.box, box) >= 0.4}
