@@ -6,6 +6,7 @@ mark size, tilt, blur and finger occlusion, and single-thread frames per second 
                                            [--hand-variety SHARE] [--hand-drawn SHARE] [--without KIND ...]
                                            [--plus-signs]
                                            [--lens K [--calibrated [--keep-matrix]]] [--flicker DEPTH [--flicker-wave sine|pwm]]
+                                           [--glare PEAK]
                                            (--hand-variety, --hand-drawn, --without, --calibrated, --keep-matrix:
                                             tuning split only)
 
@@ -25,7 +26,9 @@ frame through a lens with barrel distortion K, `Variation.lens`; `--calibrated`:
 with the lens's calibration in OpenCV's model, `synthetic.lens_calibration`, by the service's `Undistorter`,
 and scored against the same seed's lens-free labels where the undistorted frame shows them; `--keep-matrix`:
 undistorted with the calibration's own camera matrix, which cuts the edges. `--flicker DEPTH` (any split): every frame
-as a rolling-shutter camera sees it under mains-powered light (`bench/flicker.py`), which no generator draws. With `--split heldout`,
+as a rolling-shutter camera sees it under mains-powered light (`bench/flicker.py`), which no generator draws. `--glare PEAK`
+(any split): a lamp's reflection on a glossy or laminated card over every mark (`bench/glare.py`; no generator draws it),
+with a recall slice by the share of the mark's box it washes out to white. With `--split heldout`,
 `--lens K` shows the held-out scenes through a lens in OpenCV's radial model (k1 = -K, focal length the
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
@@ -51,6 +54,7 @@ import numpy as np
 import typer
 
 from bench.flicker import WAVES, flicker_bands
+from bench.glare import glare_spot
 from schemas.messages import Shape
 from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings
 from services.vision.verifier import Verifier
@@ -60,6 +64,7 @@ TIMED_FRAMES = 200
 SIZE_BINS = ((0, 80), (80, 160), (160, 300), (300, 10_000))
 TILT_BINS = ((0, 15), (15, 30), (30, 46))
 FLICKER_BINS = ((0, 0.1), (0.1, 0.3), (0.3, 1.0))
+GLARE_BINS = ((0, 0.01), (0.01, 0.1), (0.1, 0.25), (0.25, 1.01))
 BLUR_BINS = ((0, 1.5), (1.5, 8), (8, 14), (14, 21))
 
 
@@ -130,6 +135,14 @@ def main(
     flicker_wave: Annotated[
         str, typer.Option(help="with --flicker: sine (a tube's 100/120 Hz ripple) or pwm (an LED dimmer's square wave)")
     ] = "sine",
+    glare: Annotated[
+        float,
+        typer.Option(
+            help="any split: a lamp's reflection on a glossy card over every mark, its peak up to this share of the "
+            "sensor's white in linear light (1: its centre just saturates; 2: a wide washed-out patch); see "
+            "bench/glare.py",
+        ),
+    ] = 0.0,
 ) -> None:
     cv2.setNumThreads(1)
     if hand_variety and split != "tuning":
@@ -148,6 +161,8 @@ def main(
         raise typer.BadParameter("--flicker is the light's flicker depth, 0 to 1")
     if flicker_wave not in WAVES:
         raise typer.BadParameter("--flicker-wave is sine or pwm")
+    if not 0.0 <= glare <= 10.0:
+        raise typer.BadParameter("--glare is the highlight's peak, 0 to 10 times the sensor's white")
     try:
         frame_of = _generator(
             split, seed, hand_variety, lens, calibrated, keep_matrix, hand_drawn, plus_signs, tuple(without or ())
@@ -171,6 +186,9 @@ def main(
         if flicker:  # its own draws, so the scenes are the seed's own
             img, amplitude = flicker_bands(img, np.random.default_rng((seed, i)), flicker, flicker_wave)
             meta = {**meta, "flicker_amplitude": _bin(amplitude, FLICKER_BINS)} if label is not None else meta
+        if glare:  # its own draws too, after the light's flicker (the reflection is of the same lamp)
+            img, washed = glare_spot(img, np.random.default_rng((seed, i, 1)), glare, label[1] if label else None)
+            meta = {**meta, "glare_washed": _bin(washed, GLARE_BINS)} if label is not None else meta
         if len(kept) < TIMED_FRAMES:
             kept.append(img)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -220,6 +238,7 @@ def main(
         "keep_matrix": keep_matrix,
         "flicker": flicker,
         **({"flicker_wave": flicker_wave} if flicker else {}),
+        "glare": glare,
         "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "resolution": "640x480",
         "opencv": cv2.__version__,
@@ -384,6 +403,8 @@ def _tables(r: dict[str, Any]) -> str:
         *([f"every frame under flickering light through a rolling shutter, depth up to {r['flicker']:g} "
            f"({r['flicker_wave']})"]
           if r.get("flicker") else []),
+        *([f"a lamp's reflection on a glossy card over every mark, its peak up to {r['glare']:g} of the sensor's white"]
+          if r.get("glare") else []),
         *(
             [f"NOT the READMEs' frames for this seed: fonts missing (apt-get install fonts-dejavu-core "
              f"fonts-dejavu-extra): {', '.join(r['missing_fonts'])}"]
