@@ -8,11 +8,13 @@ has a gap. A highlight is drawn here as an elliptical Gaussian lobe of added lig
 `peak` in units of the sensor's white (1: the lobe's centre alone saturates), clipped.
 
 Used by `bench/vision_bench.py --glare PEAK`: one highlight a frame, centred within the mark's box (anywhere in a
-mark-free frame: a glossy thing somewhere in view), and a recall slice by the share of the mark's box washed out.
+mark-free frame: a glossy thing somewhere in view), and a recall slice by the share of the mark's box washed out; and by
+`bench/vision_clips.py --glare PEAK`: one highlight a clip, on the card (`glare_clip`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -82,3 +84,39 @@ def glare_spot(
     h, w = img.shape[:2]
     light = draw_highlight(rng, peak, h, w, box).light(h, w)
     return glared(img, light), washed_share(light, box) if box is not None else 0.0
+
+
+def glare_clip(
+    frames: list[np.ndarray],
+    boxes: list[tuple[int, int, int, int] | None],
+    rng: np.random.Generator,
+    peak: float,
+    fps: float,
+) -> list[np.ndarray]:
+    """A clip's `frames` with one highlight on its glossy card. It is drawn (`draw_highlight`) over the mark's box in
+    the first frame that shows it, then stays at its place on the card (it follows the box, and grows and shrinks with
+    it) while sliding across the card at up to one mark's size a second each way, as a card held by a hand turns under
+    the lamp. Frames without the mark's box (before the card is up, a mark-free clip) are left as they are: the card
+    is then mostly out of view."""
+    first = next((i for i, b in enumerate(boxes) if b is not None), None)
+    if first is None:
+        return frames
+    h, w = frames[0].shape[:2]
+    x0, y0, w0, h0 = boxes[first]  # type: ignore[misc]
+    size0 = max(w0, h0, 1)
+    spot = draw_highlight(rng, peak, h, w, (x0, y0, w0, h0))
+    at = ((spot.centre[0] - x0) / size0, (spot.centre[1] - y0) / size0)  # its place, in mark sizes from the box
+    drift = rng.uniform(-1.0, 1.0, 2)  # mark sizes a second
+    out = []
+    for k, (frame, box) in enumerate(zip(frames, boxes, strict=True)):
+        if box is None:
+            out.append(frame)
+            continue
+        size, t = max(box[2], box[3], 1), (k - first) / fps
+        moved = dataclasses.replace(
+            spot,
+            centre=(box[0] + (at[0] + drift[0] * t) * size, box[1] + (at[1] + drift[1] * t) * size),
+            axes=(spot.axes[0] * size / size0, spot.axes[1] * size / size0),
+        )
+        out.append(glared(frame, moved.light(h, w)))
+    return out

@@ -38,10 +38,13 @@ scenes, cameras and noise with them and without, so a run with them pairs with o
 - `--auto-exposure`: the gain follows the frame's brightness (time constant 0.15-0.6 s), so a bright card brought
   up darkens the frames after it;
 - `--flicker DEPTH [--flicker-wave sine|pwm]`: the room is lit by a flickering lamp (`bench/flicker.py`, one lamp per
-  clip): bright and dark bands across every frame, moving on from frame to frame as the lamp's phase does.
+  clip): bright and dark bands across every frame, moving on from frame to frame as the lamp's phase does;
+- `--glare PEAK`: the card is glossy (laminated) and a lamp's reflection lies on it (`bench/glare.py`, one highlight
+  per clip, up to PEAK of the sensor's white in linear light): drawn over the mark when the card comes into view, it
+  follows the card and slides across it at up to one mark's size a second.
 
     .venv/bin/python bench/vision_clips.py [--clips 100] [--seed 2718] [--hand] [--rolling-shutter] [--auto-exposure]
-                                           [--flicker DEPTH [--flicker-wave sine|pwm]] [--json]
+                                           [--flicker DEPTH [--flicker-wave sine|pwm]] [--glare PEAK] [--json]
                                            [--set KEY=VALUE ...]
 
 `--set` changes a detector setting from `DetectorConfig`'s default, as the service's `--detector` does (to compare a
@@ -68,6 +71,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.flicker import WAVES, draw_lamp, lit  # noqa: E402
+from bench.glare import glare_clip  # noqa: E402
 from schemas.messages import Shape  # noqa: E402
 from services.vision.debounce import DANGER_SHAPES, Confirmation, DebounceConfig, Debouncer  # noqa: E402
 from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings  # noqa: E402
@@ -289,6 +293,7 @@ def _tables(r: dict[str, Any]) -> str:
     effects = ", ".join(
         [k.replace("_", " ") for k in ("hand", "rolling_shutter", "auto_exposure") if fx.get(k)]
         + ([f"a flickering lamp up to {fx['flicker']:g} ({fx['flicker_wave']})"] if fx.get("flicker") else [])
+        + ([f"a lamp's reflection on the glossy card up to {fx['glare']:g} of white"] if fx.get("glare") else [])
     ) or "none"
     lines = [
         f"held-out clips, seed {r['seed']}: {r['clips_per_class']} clips per class of {r['frames_per_clip']} frames "
@@ -374,6 +379,9 @@ def main(
         float, typer.Option(help="a flickering lamp lights the room, up to this depth of its light (bench/flicker.py)")
     ] = 0.0,
     flicker_wave: Annotated[str, typer.Option(help="with --flicker: sine (100/120 Hz) or pwm (an LED dimmer)")] = "sine",
+    glare: Annotated[
+        float, typer.Option(help="a lamp's reflection on the glossy card, up to this share of white (bench/glare.py)")
+    ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
     settings: Annotated[
         list[str] | None,
@@ -390,6 +398,8 @@ def main(
         )
     if not 0.0 <= flicker <= 1.0 or flicker_wave not in WAVES:
         raise typer.BadParameter("--flicker is a depth from 0 to 1, --flicker-wave sine or pwm", param_hint="--flicker")
+    if not 0.0 <= glare <= 10.0:
+        raise typer.BadParameter("--glare is the highlight's peak, 0 to 10 times the sensor's white", param_hint="--glare")
     cv2.setNumThreads(1)
     gen = HeldOutGenerator(seed=seed)
     detector = MarkDetector(config)
@@ -407,6 +417,9 @@ def main(
             lamp = draw_lamp(np.random.default_rng((seed, i)), flicker, flicker_wave)
             lamp_lit = [lit(f, lamp.gain(f.shape[0], k / CLIP_FPS)) for k, f in enumerate(clip.frames)]
             clip = dataclasses.replace(clip, frames=lamp_lit)
+        if glare:  # one highlight a clip, its own draws too
+            glossy = glare_clip(clip.frames, clip.boxes, np.random.default_rng((seed, i, 1)), glare, CLIP_FPS)
+            clip = dataclasses.replace(clip, frames=glossy)
         found, spent = detect_clip(detector, clip)
         cpu += spent
         # the labels, not the frames (33 MB a clip)
@@ -417,7 +430,8 @@ def main(
     result = {
         "seed": seed,
         "effects": {"hand": hand, "rolling_shutter": rolling_shutter, "auto_exposure": auto_exposure,
-                    **({"flicker": flicker, "flicker_wave": flicker_wave} if flicker else {})},
+                    **({"flicker": flicker, "flicker_wave": flicker_wave} if flicker else {}),
+                    **({"glare": glare} if glare else {})},
         "settings": list(settings or []),  # --set as given: what this run changed from the defaults
         "frames_to_view": {
             "p50": _pct(to_view, 0.5),

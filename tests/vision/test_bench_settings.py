@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import json
 
+import pytest
 import typer
 from typer.testing import CliRunner
 
-from bench import flicker, vision_bench
+from bench import flicker, glare, vision_bench
 
 
 def _bench() -> typer.Typer:
@@ -87,3 +88,41 @@ def test_a_lamps_bands_move_on_from_frame_to_frame_as_its_phase_does() -> None:
     rows = dimmer.gain(480)
     assert abs(rows.mean() - 1.0) < 1e-9 and 0.5 < dimmer.amplitude() <= 1.0  # 12 thin bands, light half the time
     assert np.allclose(flicker.Lamp("sine", 100.0, 0.01, 0.03, 0.8, 0.0).gain(480), 1.0)  # a whole cycle's exposure
+
+
+def test_a_highlight_adds_light_over_its_box_and_washes_its_middle_out() -> None:
+    import numpy as np
+
+    card = np.full((120, 160, 3), 200, np.uint8)
+    card[50:70, 40:120] = 30  # a bar of dark ink
+    box = (40, 50, 80, 20)
+    for i in range(20):
+        rng = np.random.default_rng(i)
+        spot = glare.draw_highlight(rng, 2.0, 120, 160, box)
+        assert 40 <= spot.centre[0] <= 120 and 50 <= spot.centre[1] <= 70  # within the mark's box
+        assert 1.0 <= spot.peak <= 2.0 and spot.axes[1] <= spot.axes[0]
+        light = spot.light(120, 160)
+        lit = glare.glared(card, light)
+        assert (lit >= card).all()  # a reflection only adds light
+        cx, cy = round(spot.centre[0]), round(spot.centre[1])
+        assert (lit[cy, cx] >= 240).all() and glare.washed_share(light, box) > 0  # its middle: ink about as white as paper
+        far = light < 1e-6
+        assert np.array_equal(lit[far], card[far])  # far from it, the frame as it was
+    grey = glare.glared(card[:, :, 0], light)
+    assert grey.shape == (120, 160) and np.array_equal(grey, lit[:, :, 0])
+    assert glare.washed_share(np.zeros((120, 160), np.float32), box) == 0.0
+    same, washed = glare.glare_spot(card, np.random.default_rng(0), 0.0, box)
+    assert washed == 0.0 and np.array_equal(same, card)
+    with pytest.raises(ValueError, match="peak"):
+        glare.draw_highlight(np.random.default_rng(0), -1.0, 120, 160)
+
+
+def test_glare_is_named_and_sliced_and_out_of_range_refused() -> None:
+    runner, app = CliRunner(), _bench()
+    run = json.loads(runner.invoke(app, ["--frames", "8", "--seed", "3", "--json", "--glare", "2"]).stdout)
+    assert run["glare"] == 2.0 and sum(c["n"] for c in run["recall_by"]["glare_washed"].values()) == 6
+    assert "glare_washed" not in json.loads(runner.invoke(app, ["--frames", "4", "--seed", "3", "--json"]).stdout)[
+        "recall_by"]
+    table = runner.invoke(app, ["--frames", "4", "--seed", "3", "--glare", "2"]).stdout
+    assert "a lamp's reflection on a glossy card over every mark, its peak up to 2 of the sensor's white" in table
+    assert runner.invoke(app, ["--frames", "4", "--glare", "-1"]).exit_code == 2

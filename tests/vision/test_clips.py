@@ -214,6 +214,32 @@ def test_bench_takes_the_person_and_camera_effects() -> None:
     shown = CliRunner().invoke(app, ["--clips", "1", "--frames", "8", "--seed", "4", "--flicker", "0.8"]).output
     assert "add: a flickering lamp up to 0.8 (sine)" in shown
     assert CliRunner().invoke(app, ["--clips", "1", "--flicker-wave", "square", "--flicker", "0.5"]).exit_code == 2
+    glossy = CliRunner().invoke(app, ["--clips", "1", "--frames", "8", "--seed", "4", "--glare", "1.5"]).output
+    assert "add: a lamp's reflection on the glossy card up to 1.5 of white" in glossy
+    assert CliRunner().invoke(app, ["--clips", "1", "--glare", "-0.5"]).exit_code == 2
+
+
+def test_a_clips_highlight_stays_on_its_card_and_slides_across_it() -> None:
+    """`bench/glare.glare_clip`: no highlight before the card is up; from the first frame with the mark's box, one
+    highlight at its place on the card (it follows the box), moving at most a mark's size a second."""
+    from bench.glare import glare_clip
+
+    blank = [np.full((200, 240), 100, np.uint8) for _ in range(12)]
+    boxes = [None, None] + [(60 + 4 * k, 80, 40, 40) for k in range(10)]  # the card moves right 4 px a frame
+    for seed in range(5):
+        out = glare_clip(blank, boxes, np.random.default_rng(seed), 2.0, 10.0)
+        assert out[0] is blank[0] and out[1] is blank[1]
+        brightest = []
+        for frame, box in zip(out[2:], boxes[2:], strict=True):
+            assert (frame >= 100).all() and frame.max() > 200
+            y, x = np.unravel_index(int(np.argmax(frame)), frame.shape)
+            brightest.append((x - box[0], y - box[1]))  # where on the card
+        first, last = np.array(brightest[0]), np.array(brightest[-1])
+        assert np.abs(last - first).max() <= 40 * 0.9 + 3  # 0.9 s at up to a mark's size (40 px) a second
+    again = glare_clip(blank, boxes, np.random.default_rng(0), 2.0, 10.0)
+    assert all(np.array_equal(a, b) for a, b in zip(again, glare_clip(blank, boxes, np.random.default_rng(0), 2.0,
+                                                                        10.0), strict=True))
+    assert glare_clip(blank, [None] * 12, np.random.default_rng(0), 2.0, 10.0) is blank  # a mark-free clip
 
 
 def test_the_rules_for_lifting_a_danger_replay_on_the_same_detections() -> None:
