@@ -98,11 +98,11 @@ def glare_clip(
     it) while sliding across the card at up to one mark's size a second each way, as a card held by a hand turns under
     the lamp. Frames without the mark's box (before the card is up, a mark-free clip) are left as they are: the card
     is then mostly out of view."""
-    first = next((i for i, b in enumerate(boxes) if b is not None), None)
-    if first is None:
+    shown = next(((i, b) for i, b in enumerate(boxes) if b is not None), None)
+    if shown is None:
         return frames
+    first, (x0, y0, w0, h0) = shown
     h, w = frames[0].shape[:2]
-    x0, y0, w0, h0 = boxes[first]  # type: ignore[misc]
     size0 = max(w0, h0, 1)
     spot = draw_highlight(rng, peak, h, w, (x0, y0, w0, h0))
     at = ((spot.centre[0] - x0) / size0, (spot.centre[1] - y0) / size0)  # its place, in mark sizes from the box

@@ -186,7 +186,7 @@ def main(
         if flicker:  # its own draws, so the scenes are the seed's own
             img, amplitude = flicker_bands(img, np.random.default_rng((seed, i)), flicker, flicker_wave)
             meta = {**meta, "flicker_amplitude": _bin(amplitude, FLICKER_BINS)} if label is not None else meta
-        if glare:  # its own draws too, after the light's flicker (the reflection is of the same lamp)
+        if glare:  # its own draws too (the scenes stay the seed's own), over the flicker's bands if any
             img, washed = glare_spot(img, np.random.default_rng((seed, i, 1)), glare, label[1] if label else None)
             meta = {**meta, "glare_washed": _bin(washed, GLARE_BINS)} if label is not None else meta
         if len(kept) < TIMED_FRAMES:
