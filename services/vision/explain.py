@@ -20,7 +20,7 @@ from services.vision.detector import STAGES, Box, Detection, MarkDetector, box_o
 
 REASONS: dict[str, str] = {
     "unnamed": "no shape test read it clearly and the learned verifier was not sure enough to name it: blurred, "
-    "partly covered, or drawn loosely",
+    "partly covered, washed out by a lamp's reflection on a glossy card, or drawn loosely",
     "card": "the card tests refused it: too little plain light paper right round it, other ink or a letter-sized "
     "shape beside it, or too faint against the paper",
     "O margin": "an O needs a clear margin of paper all round it (a tenth of its size): no finger or card edge "
@@ -117,5 +117,6 @@ class CardCheck:
         for (shape, stage), n in self.refused.most_common():
             lines.append(f"{shape.value}: read but not reported in {n} of {self.frames} frames: {why(shape, stage)}")
         if not self.reported and not self.refused:
-            lines.append("nothing mark-like was seen: is the card in view, large enough (about 40 px), and in focus?")
+            lines.append("nothing mark-like was seen: is the card in view, large enough (about 40 px), in focus, and "
+                         "free of a lamp's reflection (tilt a glossy card until the reflection leaves the mark)?")
         return lines

@@ -60,6 +60,7 @@ def test_a_large_frame_is_explained_in_its_own_pixels(detector: MarkDetector) ->
 
 def test_the_other_rules_read_as_words() -> None:
     assert "clear margin" in REASONS["O margin"] and "line of text" in REASONS["text line"]
+    assert "reflection" in REASONS["unnamed"]  # a lamp's reflection on a glossy card (stop 113)
     from services.vision.detector import STAGES
 
     assert all(stage in STAGES for stage in REASONS)  # a renamed stage cannot go unexplained silently
@@ -98,7 +99,7 @@ def test_card_check_counts_each_shape_and_rule_once_a_frame() -> None:
     assert lines[3].startswith("O: read but not reported in 1 of 3 frames: an O needs a clear margin")
     empty = CardCheck()
     empty.add([], [])
-    assert "nothing mark-like was seen" in empty.summary()[-1]
+    assert "nothing mark-like was seen" in empty.summary()[-1] and "reflection" in empty.summary()[-1]  # stop 113
 
 
 def test_check_looks_at_a_folder_of_frames(tmp_path: Path) -> None:
