@@ -2234,7 +2234,9 @@ def _classify(b: _Blob, cfg: DetectorConfig) -> tuple[Shape, float] | None:
         hull_area = cv2.contourArea(hull)
         if hull_area <= 0:
             return None
-        return _cross(b, hull, hull_area, cfg.x_solidity) or _filled_triangle(b, hull_area, cfg.filled_solidity, cfg.filled_fill)
+        return _cross(b, hull, hull_area, cfg.x_solidity) or _filled_triangle(
+            b, hull_area, cfg.filled_solidity, cfg.filled_fill
+        )
     return None
 
 
