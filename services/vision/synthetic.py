@@ -110,6 +110,9 @@ class Variation:
     """share of cards with fingers whose fingers vary as people's do: any skin tone (dark brown, as dark
     as some inks, to pale), 0.12-0.45 of the mark's width wide (a finger beside a small mark is wide),
     over any of the card's four edges (0: light skin, 0.2 wide, over the bottom edge)"""
+    sheen: float = 0.0
+    """share of cards that are glossy, with a lamp's reflection on them over the mark (`Sheen`, round vision66; 0: matte
+    cards, no draw at all)"""
     lens: float = 0.0
     """the camera lens's barrel distortion, the same for every frame (0: a pinhole camera). It draws
     nothing, so the scenes are those of the same seed without it, only seen through the lens. It is k
@@ -142,6 +145,54 @@ MILD = Variation(
 """A clean scene: one variation at a time is added to this in the tests."""
 
 
+@dataclass(frozen=True)
+class Sheen:
+    """A lamp's reflection on a glossy card (`Variation.sheen`), in the card's own frame: the reflection of a tube or a
+    window, a stadium (a segment of `length` widened by `radius` each side) of light added to the card in linear light
+    (gamma 2.2), flat at `peak` (the paper's white: 1) inside and falling to 0 over `soft` beyond its edge (smoothstep),
+    at `offset` from the mark's centre, turned by `angle`. Lengths are in mark widths. It is drawn on the printed card
+    before the fingers (they are above the gloss) and before the camera's light, blur, noise and JPEG; the bench's
+    highlight (`bench/glare.py`, a Gaussian lobe added to the finished frame) is made otherwise on purpose."""
+
+    offset: tuple[float, float]
+    length: float
+    radius: float
+    soft: float
+    angle: float
+    peak: float
+
+    @classmethod
+    def draw(cls, rng: Rng) -> Sheen:
+        """Over the mark: its centre within 0.4 mark widths of the mark's, 0-1.5 long, 0.03-0.25 wide each side with
+        an edge of 0.03-0.3, its peak 0.15-1.2 of white (a fifth wash the ink out at their middle)."""
+        return cls(
+            offset=(float(rng.uniform(-0.4, 0.4)), float(rng.uniform(-0.4, 0.4))),
+            length=float(rng.uniform(0.0, 1.5)),
+            radius=float(rng.uniform(0.03, 0.25)),
+            soft=float(rng.uniform(0.03, 0.3)),
+            angle=float(rng.uniform(0, math.pi)),
+            peak=float(rng.uniform(0.15, 1.2)),
+        )
+
+    def light(self, shape: tuple[int, int], centre: tuple[float, float], mark: float) -> np.ndarray:
+        """The light it adds to each pixel of a card of `shape` (rows, columns) whose mark, `mark` pixels wide, is
+        centred at `centre` (x, y): float32, linear, the paper's white 1."""
+        ys, xs = np.mgrid[0 : shape[0], 0 : shape[1]].astype(np.float32)
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        dx = (xs - centre[0]) / mark - self.offset[0]
+        dy = (ys - centre[1]) / mark - self.offset[1]
+        along = np.clip(c * dx + s * dy, -self.length / 2, self.length / 2)
+        dist = np.hypot(dx - along * c, dy - along * s)  # from the segment
+        t = np.clip((self.radius + self.soft - dist) / self.soft, 0.0, 1.0)
+        return (self.peak * t * t * (3 - 2 * t)).astype(np.float32)
+
+
+def _add_light(img: np.ndarray, light: np.ndarray) -> np.ndarray:
+    """`img` (uint8 BGR) with `light` (per pixel, linear, white 1) added in linear light (gamma 2.2), clipped."""
+    linear = (img.astype(np.float32) / 255.0) ** 2.2 + light[..., None]
+    return np.round(np.clip(linear, 0.0, 1.0) ** (1 / 2.2) * 255.0).astype(np.uint8)
+
+
 @dataclass
 class Scene:
     """One sampled scene: everything but the sensor noise is fixed, so a held card stays put."""
@@ -170,6 +221,7 @@ class Scene:
     finger_edge: int = 0  # the card edge they come over: quarter turns from the bottom
     lens: float = 0.0  # barrel distortion k (`Variation.lens`), applied before light, blur, noise and JPEG
     by_hand: int | None = None  # the random stream of a mark drawn by hand (`Variation.hand_drawn`), or None
+    sheen: Sheen | None = None  # a lamp's reflection on a glossy card (`Variation.sheen`), or None
 
 
 class SceneGenerator:
@@ -246,6 +298,9 @@ class SceneGenerator:
         if v.hand_drawn and rng.random() < v.hand_drawn:
             by_hand = int(rng.integers(2**31))
             scene.by_hand = by_hand if shape in v.hand_drawn_shapes else None
+        # no draw at all when sheen is 0, so that older seeds' scenes stay as they were
+        if v.sheen and rng.random() < v.sheen:
+            scene.sheen = Sheen.draw(rng)
         scene.lens = v.lens  # the camera's, not drawn
         return scene
 
@@ -468,6 +523,8 @@ class SceneGenerator:
                 scene.skew,
                 scene.filled,
             )
+        if scene.sheen is not None:
+            card = _add_light(card, scene.sheen.light(card.shape[:2], (cw / 2, ch / 2), s * k))
         if scene.fingers:
             # fingers over the card's bottom edge (or another: the card turned, drawn on, turned back),
             # their tips stopping short of the mark

@@ -10,7 +10,8 @@ asked only about claimed triangles the first refuses (`DetectorConfig.hand_trian
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday] [--crossings N] [--blind SHARE] [--epochs 6] [--width 1]
+                                       [--everyday] [--crossings N] [--blind SHARE] [--sheen SHARE]
+                                       [--epochs 6] [--width 1]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
@@ -128,7 +129,7 @@ def more_clutter(
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
-    crossings: int = 0,
+    crossings: int = 0, sheen: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -142,13 +143,14 @@ def harvest(
     `arrows`, the cluttered chunks also draw arrows (`synthetic.EXTRA_DISTRACTORS`) as often as each hard kind;
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
     pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks' kinds of clutter also list stars twice and check
-    marks and clock faces once each, with `crossings` crossing strokes that many times (`synthetic.EXTRA_DISTRACTORS`)."""
+    marks and clock faces once each, with `crossings` crossing strokes that many times (`synthetic.EXTRA_DISTRACTORS`);
+    a share `sheen` of the cards is glossy, with a lamp's reflection over the mark (`Variation.sheen`, round vision66)."""
     import cv2
 
     cv2.setNumThreads(1)
     variation = more_clutter(
         (CLUTTERED if seed % 2 else DEFAULT).only(
-            hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes)
+            hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes), sheen=sheen
         ),
         seed, arrows, everyday, crossings,
     )
@@ -259,11 +261,12 @@ def harvest_all(
     everyday: bool = False,
     blind: float = 0.0,
     crossings: int = 0,
+    sheen: float = 0.0,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
     `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
     tuning chunks); read from / written to `cache` (a cache made with other seeds, another `printed`, `hands`,
-    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
+    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings`, `sheen` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
     not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     n_blind = blind_chunks(frames, blind)
@@ -271,12 +274,13 @@ def harvest_all(
         with np.load(cache) as z:
             shares = {
                 k: float(z[k]) if k in z else 0.0
-                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday", "blind", "crossings")
+                for k in ("printed", "hands", "proposals", "arrows", "hand_drawn", "everyday", "blind", "crossings",
+                          "sheen")
             }
             pyramid = str(z["levels"]) if "levels" in z else ""
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
                      "hand_drawn": hand_drawn, "everyday": float(everyday), "blind": blind,
-                     "crossings": float(crossings)}
+                     "crossings": float(crossings), "sheen": sheen}
             drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
             same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
             same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
@@ -286,7 +290,8 @@ def harvest_all(
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
-                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n, [crossings] * n)
+                     [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n, [crossings] * n,
+                     [sheen] * n)
         )
         parts += pool.map(harvest_blind, [seed + BLIND_SEEDS + k for k in range(n_blind)], [CHUNK] * n_blind,
                           [levels] * n_blind)
@@ -306,6 +311,7 @@ def harvest_all(
             everyday=np.array(float(everyday)),
             blind=np.array(blind),
             crossings=np.array(float(crossings)),
+            sheen=np.array(sheen),
             **arrays,
         )
     return parts
@@ -544,6 +550,14 @@ def main(
             "training only (rounds vision29-29b; the bench's blind split then no longer judges the model blind)"
         ),
     ] = 0.0,
+    sheen: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=1.0,
+            help="share of cards that are glossy, a lamp's reflection over the mark (Variation.sheen; round vision66)",
+        ),
+    ] = 0.0,
     claimed_kept_shapes: Annotated[
         str,
         typer.Option(
@@ -579,7 +593,7 @@ def main(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--claimed-kept") from None
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
-                        hand_drawn_shapes, everyday, blind, crossings)
+                        hand_drawn_shapes, everyday, blind, crossings, sheen)
     train, val = split_chunks(parts, blind_chunks(frames, blind))  # the report stays on held-back tuning chunks
     if only:
         train, val = [claimed_kept(p, only) for p in train], [claimed_kept(p, only) for p in val]
