@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
 
 from schemas.messages import Shape
-from services.vision.synthetic import MILD, SceneGenerator, Variation
+from services.vision.synthetic import MILD, SceneGenerator, Sheen, Variation
 
 SKIN = np.array([120, 150, 200])  # the fingers' BGR (their rim is darker)
 
@@ -222,3 +224,40 @@ def test_crossing_strokes_are_drawn_only_when_asked_and_run_on_past_the_crossing
         assert ink[597:604, 597:604].any()
         ys, xs = np.nonzero(ink)
         assert np.hypot(xs - 600, ys - 600).max() >= 2 * size
+
+
+def test_a_glossy_cards_sheen_keeps_the_scene_and_lightens_the_ink_under_it() -> None:
+    """`sheen` (round vision66): a lamp's reflection on a glossy card, drawn last from the random stream (at 0 nothing is
+    drawn: every seed's scenes stay those of before), adds light over the mark's ink and the paper alike: under its
+    flat middle the ink is lighter than the same scene's ink without it, and nothing off the card changes."""
+    assert all(SceneGenerator(seed=s, variation=MILD).scene(Shape.X).sheen is None for s in range(4))
+    lighter = 0
+    for seed in range(6):
+        shape = (Shape.X, Shape.O, Shape.TRIANGLE)[seed % 3]
+        matte = SceneGenerator(seed=seed, variation=MILD.only(noise=0.0))
+        glossy = SceneGenerator(seed=seed, variation=MILD.only(noise=0.0, sheen=1.0))
+        a, b = matte.scene(shape), glossy.scene(shape)
+        assert (a.size, a.center, a.ink, a.paper) == (b.size, b.center, b.ink, b.paper) and b.sheen is not None
+        b.sheen = replace(b.sheen, peak=0.5, offset=(0.0, 0.0), length=0.0, radius=0.6, soft=0.1)  # over the whole mark
+        img_a, lab = matte.render(a)
+        img_b, _ = glossy.render(b)
+        a.ink = a.paper
+        blank, _ = matte.render(a)
+        x, y, w, h = lab[0].box
+        ink = (np.abs(img_a.astype(int) - blank).max(axis=2) > 40)[y : y + h, x : x + w]
+        ink_a = img_a[y : y + h, x : x + w][ink].mean()
+        ink_b = img_b[y : y + h, x : x + w][ink].mean()
+        lighter += ink_b > ink_a + 40  # half of white added in linear light lifts dark ink by over 150 grey levels
+        off_card = np.abs(img_a.astype(int) - img_b).max(axis=2) == 0
+        assert off_card.mean() > 0.5  # the background and clutter are the same
+    assert lighter == 6
+
+
+def test_a_sheens_light_is_flat_inside_and_falls_to_nothing_beyond_its_edge() -> None:
+    """`Sheen.light`: `peak` along its segment and within `radius` of it, 0 beyond `radius + soft`, in between less."""
+    sheen = Sheen(offset=(0.0, 0.0), length=1.0, radius=0.1, soft=0.2, angle=0.0, peak=0.8)
+    light = sheen.light((200, 400), (200.0, 100.0), 100.0)  # the mark 100 px wide, centred at (200, 100)
+    assert light[100, 200] == pytest.approx(0.8) and light[100, 245] == pytest.approx(0.8)  # on the segment
+    assert light[100, 255] == pytest.approx(0.8)  # 5 px beyond its end: within the radius
+    assert light[135, 200] == 0.0 and light[100, 281] == 0.0  # 0.35 widths off it, 0.31 beyond its end
+    assert 0.0 < light[120, 200] < 0.8  # in its soft edge

@@ -289,6 +289,22 @@ def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cach
             training.harvest_all(8, 7, 1, cache, crossings=2)
 
 
+def test_a_sheen_harvest_draws_glossy_cards_and_the_cache_knows_it(tmp_path: Path) -> None:
+    """`training --sheen SHARE` (round vision66): a share of the cards glossy, a lamp's reflection over the mark, in
+    every chunk, reproducibly; a cache made without it is not used for a run that asks for it."""
+    from services.vision import training
+
+    plain, glossy = training.harvest(4, 8), training.harvest(4, 8, sheen=1.0)
+    assert all(np.array_equal(p, q) for p, q in zip(glossy, training.harvest(4, 8, sheen=1.0), strict=True))
+    assert not all(np.array_equal(p, q) for p, q in zip(plain, glossy, strict=True))
+    cache = tmp_path / "harvest.npz"
+    np.savez(cache, seeds=np.array([7]), levels=np.array(""), **{f"0_{j}": a for j, a in enumerate(plain)})
+    with no_pool(training):
+        assert np.array_equal(training.harvest_all(8, 7, 1, cache)[0][0], plain[0])
+        with pytest.raises(PoolRefused):
+            training.harvest_all(8, 7, 1, cache, sheen=0.5)
+
+
 def test_another_verifier_is_loaded_from_its_file_and_a_missing_one_is_refused(tmp_path: Path) -> None:
     """`verifier_model` (round vision45): the verifier from another file, as the benches' `--set` judge a re-joined
     one; the file named is the one read (a copy judges as the committed one, the triangles' network does not); a
