@@ -3,7 +3,7 @@
     pip install -e '.[train]'          # PyTorch and onnx: training only, never needed to run the service
     python -m services.vision.proposer_training [--frames 24000] [--epochs 10] [--seed 20261125]
                                                 [--jobs 2] [--threads 2] [--cache FILE] [--width N x5]
-                                                [--blind SHARE] [--arrows] [--everyday]
+                                                [--blind SHARE] [--arrows] [--everyday] [--sheen SHARE]
                                                 [--keep-float FILE | --from-float FILE]
 
 Its defaults trained the float32 model of 48ea60e (37 min on 2 cores); the committed `proposer.onnx` is
@@ -19,7 +19,9 @@ in whole chunks after the tuning ones (seeds `training.BLIND_SEEDS` on, as the v
 training only: the held-back tenth the report is made on stays tuning chunks. With `--arrows` and `--everyday`
 (round vision43; not the committed recipe) the cluttered chunks also draw the verifier training's extra kinds of
 clutter (arrows; stars, check marks and clock faces: `training.more_clutter`), so the proposer learns that they
-are not marks; the benches judge such a model with `--set proposer_model=FILE`.
+are not marks; the benches judge such a model with `--set proposer_model=FILE`. With `--sheen SHARE` (round vision66;
+not the committed recipe) a share of the cards in every chunk is glossy, with a lamp's reflection over the mark
+(`synthetic.Variation.sheen`, as the verifier's `--sheen`).
 
 The network (`_net`) is a small fully convolutional encoder-decoder (stride 32 at its deepest, for the
 context of a mark filling the frame; output at stride 8) trained with CenterNet's losses (a focal loss
@@ -90,10 +92,13 @@ def _arrays(draw: Callable[[Shape | None], tuple[np.ndarray, list[tuple[Shape, B
     return inputs, labels
 
 
-def render(seed: int, frames: int, arrows: bool = False, everyday: bool = False) -> Chunk:
+def render(seed: int, frames: int, arrows: bool = False, everyday: bool = False, sheen: float = 0.0) -> Chunk:
     """`_arrays` of `frames` tuning frames drawn with `seed`; `arrows` and `everyday` add the verifier training's
-    extra kinds of clutter to a cluttered (odd-seed) chunk (`training.more_clutter`)."""
-    variation = more_clutter((CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS), seed, arrows, everyday)
+    extra kinds of clutter to a cluttered (odd-seed) chunk (`training.more_clutter`); a share `sheen` of the cards is
+    glossy (`Variation.sheen`)."""
+    variation = more_clutter(
+        (CLUTTERED if seed % 2 else DEFAULT).only(hand_variety=HANDS, sheen=sheen), seed, arrows, everyday
+    )
     gen = SceneGenerator(width=WIDTH, height=HEIGHT, seed=seed, variation=variation)
 
     def draw(shape: Shape | None) -> tuple[np.ndarray, list[tuple[Shape, Box]]]:
@@ -119,12 +124,12 @@ def render_blind(seed: int, frames: int) -> Chunk:
 
 def render_all(
     frames: int, seed: int, jobs: int, cache: Path | None, blind: float = 0.0, arrows: bool = False,
-    everyday: bool = False,
+    everyday: bool = False, sheen: float = 0.0,
 ) -> list[Chunk]:
-    """`render` of chunks with seeds seed, seed + 1, ... (with `arrows` and `everyday` clutter); then, with
-    `blind` > 0, `blind_chunks(frames, blind, CHUNK)` chunks of `render_blind` with seeds seed + BLIND_SEEDS, ...
-    (listed after the tuning chunks); read from / written to `cache` (one made with other seeds or other clutter
-    is not used)."""
+    """`render` of chunks with seeds seed, seed + 1, ... (with `arrows` and `everyday` clutter, a share `sheen` of glossy
+    cards); then, with `blind` > 0, `blind_chunks(frames, blind, CHUNK)` chunks of `render_blind` with seeds seed +
+    BLIND_SEEDS, ... (listed after the tuning ones); read from / written to `cache` (one made with other seeds, other
+    clutter or another `sheen` is not used)."""
     tuning = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     blinds = [seed + BLIND_SEEDS + k for k in range(blind_chunks(frames, blind, CHUNK))]
     seeds = tuning + blinds
@@ -132,16 +137,19 @@ def render_all(
     if cache is not None and cache.exists():
         with np.load(cache) as z:
             made_with = z["clutter"].tolist() if "clutter" in z else [0, 0]
-            if z["seeds"].tolist() == seeds and made_with == clutter:
+            glossy = float(z["sheen"]) if "sheen" in z else 0.0
+            if z["seeds"].tolist() == seeds and made_with == clutter and glossy == sheen:
                 return [(z[f"x_{k}"], z[f"y_{k}"]) for k in range(len(seeds))]
     n = len(tuning)
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        parts = list(pool.map(render, tuning, [CHUNK] * n, [arrows] * n, [everyday] * n))
+        parts = list(pool.map(render, tuning, [CHUNK] * n, [arrows] * n, [everyday] * n, [sheen] * n))
         parts += pool.map(render_blind, blinds, [CHUNK] * len(blinds))
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"{name}_{k}": a for k, p in enumerate(parts) for name, a in zip("xy", p, strict=True)}
-        np.savez(cache, seeds=np.array(seeds), clutter=np.array(clutter), **arrays)  # type: ignore[arg-type]
+        np.savez(  # type: ignore[arg-type]
+            cache, seeds=np.array(seeds), clutter=np.array(clutter), sheen=np.array(sheen), **arrays
+        )
     return parts
 
 
@@ -445,13 +453,22 @@ def main(
             "(round vision43)"
         ),
     ] = False,
+    sheen: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=1.0,
+            help="share of cards that are glossy, a lamp's reflection over the mark, as the verifier's --sheen (round "
+            "vision66)",
+        ),
+    ] = 0.0,
 ) -> None:
     if len(widths) != 5:
         raise typer.BadParameter("give --width five times: strides 2, 4, 8, 16 and 32", param_hint="--width")
     if blind < 0:
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0", param_hint="--blind")
     t0 = time.monotonic()
-    parts = render_all(frames, seed, jobs, cache, blind, arrows, everyday)
+    parts = render_all(frames, seed, jobs, cache, blind, arrows, everyday, sheen)
     train, val = split_chunks(parts, blind_chunks(frames, blind, CHUNK))
     typer.echo(f"rendered {sum(len(p[0]) for p in parts)} frames in {time.monotonic() - t0:.0f} s", err=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -463,7 +480,7 @@ def main(
             export(net, from_float)
         quantize(from_float, out, calibration_frames(train), Path(tmp))
         result: dict[str, Any] = {"train_frames": sum(len(p[0]) for p in train), "arrows": arrows, "everyday": everyday,
-                                  "blind": blind, "seed": seed}
+                                  "blind": blind, "sheen": sheen, "seed": seed}
         for t in thresholds:
             result[f"at_{t:g}"] = report(Proposer.load(out), val, t)
         middle = thresholds[len(thresholds) // 2]

@@ -248,6 +248,23 @@ def test_more_clutter_changes_only_the_cluttered_chunks_and_the_cache_knows_it(t
             pt.render_all(4, 7, 1, cache, everyday=True)
 
 
+def test_glossy_cards_change_every_chunk_and_the_cache_knows_it(tmp_path: Path) -> None:
+    """`proposer_training --sheen SHARE` (round vision66): glossy cards in every chunk, the marks' labels unchanged;
+    a cache rendered without them is not used for a run that asks for them."""
+    from services.vision import proposer_training as pt
+
+    plain, glossy = pt.render(4, 4), pt.render(4, 4, sheen=1.0)
+    assert not np.array_equal(plain[0], glossy[0]) and np.array_equal(glossy[0], pt.render(4, 4, sheen=1.0)[0])
+    assert plain[1][:, 0].tolist() == glossy[1][:, 0].tolist() == [0, 1, 2, -1]  # still `training.ORDER`
+
+    cache = tmp_path / "frames.npz"
+    np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])  # an older cache: no sheen recorded
+    with no_pool(pt):
+        assert np.array_equal(pt.render_all(4, 7, 1, cache)[0][0], plain[0])
+        with pytest.raises(PoolRefused):
+            pt.render_all(4, 7, 1, cache, sheen=0.5)
+
+
 def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) -> None:
     """The blind chunks come after the tuning ones; none is held back for the report; a cache made without them is
     not used for a `--blind` run (here: a render that is refused)."""
