@@ -239,13 +239,20 @@ def test_more_clutter_changes_only_the_cluttered_chunks_and_the_cache_knows_it(t
     plain, more = pt.render(3, 4), pt.render(3, 4, arrows=True, everyday=True)
     assert not np.array_equal(plain[0], more[0])
     assert plain[1][:, 0].tolist() == more[1][:, 0].tolist() == [0, 1, 2, -1]  # still `training.ORDER`
+    _an_older_cache_is_refused_for(tmp_path, plain, everyday=True)
+
+
+def _an_older_cache_is_refused_for(tmp_path: Path, plain: tuple[np.ndarray, np.ndarray], **asked: object) -> None:
+    """A cache of seed 7's chunk rendered before an option was recorded is reused for a run without it, and refused
+    (a render is asked of the pool) for a run that `asked` for it."""
+    from services.vision import proposer_training as pt
 
     cache = tmp_path / "frames.npz"
-    np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])  # an older cache: no clutter recorded
+    np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])
     with no_pool(pt):
         assert np.array_equal(pt.render_all(4, 7, 1, cache)[0][0], plain[0])
         with pytest.raises(PoolRefused):
-            pt.render_all(4, 7, 1, cache, everyday=True)
+            pt.render_all(4, 7, 1, cache, **asked)  # type: ignore[arg-type]
 
 
 def test_glossy_cards_change_every_chunk_and_the_cache_knows_it(tmp_path: Path) -> None:
@@ -256,13 +263,7 @@ def test_glossy_cards_change_every_chunk_and_the_cache_knows_it(tmp_path: Path) 
     plain, glossy = pt.render(4, 4), pt.render(4, 4, sheen=1.0)
     assert not np.array_equal(plain[0], glossy[0]) and np.array_equal(glossy[0], pt.render(4, 4, sheen=1.0)[0])
     assert plain[1][:, 0].tolist() == glossy[1][:, 0].tolist() == [0, 1, 2, -1]  # still `training.ORDER`
-
-    cache = tmp_path / "frames.npz"
-    np.savez(cache, seeds=np.array([7]), x_0=plain[0], y_0=plain[1])  # an older cache: no sheen recorded
-    with no_pool(pt):
-        assert np.array_equal(pt.render_all(4, 7, 1, cache)[0][0], plain[0])
-        with pytest.raises(PoolRefused):
-            pt.render_all(4, 7, 1, cache, sheen=0.5)
+    _an_older_cache_is_refused_for(tmp_path, plain, sheen=0.5)
 
 
 def test_blind_chunks_are_for_training_and_the_cache_knows_them(tmp_path: Path) -> None:
