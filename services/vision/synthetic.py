@@ -113,6 +113,9 @@ class Variation:
     sheen: float = 0.0
     """share of cards that are glossy, with a lamp's reflection on them over the mark (`Sheen`, round vision66; 0: matte
     cards, no draw at all)"""
+    sheen_shapes: tuple[Shape, ...] = (Shape.X, Shape.O, Shape.TRIANGLE)
+    """the marks whose cards `sheen` makes glossy (round vision67: X and TRIANGLE, the danger marks); the draw is made for
+    every card, so that a scene's other draws do not depend on it"""
     lens: float = 0.0
     """the camera lens's barrel distortion, the same for every frame (0: a pinhole camera). It draws
     nothing, so the scenes are those of the same seed without it, only seen through the lens. It is k
@@ -300,7 +303,8 @@ class SceneGenerator:
             scene.by_hand = by_hand if shape in v.hand_drawn_shapes else None
         # no draw at all when sheen is 0, so that older seeds' scenes stay as they were
         if v.sheen and rng.random() < v.sheen:
-            scene.sheen = Sheen.draw(rng)
+            sheen = Sheen.draw(rng)
+            scene.sheen = sheen if shape in v.sheen_shapes else None
         scene.lens = v.lens  # the camera's, not drawn
         return scene
 

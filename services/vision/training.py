@@ -10,8 +10,9 @@ asked only about claimed triangles the first refuses (`DetectorConfig.hand_trian
     python -m services.vision.training --out FILE [--frames 16000] [--seed 20261123] [--jobs 2] [--cache FILE]
                                        [--proposals PEAK] [--printed SHARE] [--hands SHARE]
                                        [--levels PYRAMID] [--arrows] [--hand-drawn SHARE [--hand-drawn-shapes S]]
-                                       [--everyday] [--crossings N] [--blind SHARE] [--sheen SHARE]
-                                       [--epochs 6] [--width 1]
+                                       [--everyday] [--crossings N] [--blind SHARE]
+                                       [--sheen SHARE [--sheen-shapes S]] [--epochs 6] [--width 1]
+                                       [--init MODEL] [--lr 3e-3]
                                        (recipe variants, off by default)
 
 Frames come from `synthetic.SceneGenerator` (never from `heldout.py`; for `--blind`, below, also from
@@ -129,7 +130,7 @@ def more_clutter(
 def harvest(
     seed: int, frames: int, printed: float = 0.0, hands: float = 0.0, levels: str = "", proposals: float = 0.0,
     arrows: bool = False, hand_drawn: float = 0.0, hand_drawn_shapes: str = HAND_DRAWN_SHAPES, everyday: bool = False,
-    crossings: int = 0, sheen: float = 0.0,
+    crossings: int = 0, sheen: float = 0.0, sheen_shapes: str = HAND_DRAWN_SHAPES,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(crops (n, 3, PATCH, PATCH) uint8, claim index (0-2: the shape claimed, 3: loose), class index
     into CLASSES, kept by the detector) for every candidate in `frames` tuning frames drawn with `seed`
@@ -144,13 +145,15 @@ def harvest(
     a share `hand_drawn` of the marks of the shapes in `hand_drawn_shapes` ("X,O,TRIANGLE") is drawn by hand with a
     pen (`Variation.hand_drawn`); with `everyday`, the cluttered chunks' kinds of clutter also list stars twice and check
     marks and clock faces once each, with `crossings` crossing strokes that many times (`synthetic.EXTRA_DISTRACTORS`);
-    a share `sheen` of the cards is glossy, with a lamp's reflection over the mark (`Variation.sheen`, round vision66)."""
+    a share `sheen` of the cards of the marks in `sheen_shapes` is glossy, with a lamp's reflection over the mark
+    (`Variation.sheen`, round vision66; `sheen_shapes`, round vision67)."""
     import cv2
 
     cv2.setNumThreads(1)
     variation = more_clutter(
         (CLUTTERED if seed % 2 else DEFAULT).only(
-            hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes), sheen=sheen
+            hand_variety=hands, hand_drawn=hand_drawn, hand_drawn_shapes=parse_shapes(hand_drawn_shapes), sheen=sheen,
+            sheen_shapes=parse_shapes(sheen_shapes),
         ),
         seed, arrows, everyday, crossings,
     )
@@ -246,6 +249,13 @@ def claimed_kept(part: tuple[np.ndarray, ...], shapes: tuple[Shape, ...]) -> tup
     return tuple(a[rows] for a in part)
 
 
+def _same_shapes(cache: Any, key: str, asked: str) -> bool:
+    """Whether the shapes a cache (an open `np.load`) was harvested with under `key` are `asked` (any order or case;
+    a cache made before the option had all three)."""
+    made = str(cache[key]) if key in cache else HAND_DRAWN_SHAPES
+    return set(parse_shapes(made)) == set(parse_shapes(asked))
+
+
 def harvest_all(
     frames: int,
     seed: int,
@@ -262,12 +272,13 @@ def harvest_all(
     blind: float = 0.0,
     crossings: int = 0,
     sheen: float = 0.0,
+    sheen_shapes: str = HAND_DRAWN_SHAPES,
 ) -> list[tuple[np.ndarray, ...]]:
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
     `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
     tuning chunks); read from / written to `cache` (a cache made with other seeds, another `printed`, `hands`,
-    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings`, `sheen` or `blind` setting, other `hand_drawn_shapes` or another pyramid is
-    not used)."""
+    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings`, `sheen` or `blind` setting, other `hand_drawn_shapes` or `sheen_shapes` or
+    another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     n_blind = blind_chunks(frames, blind)
     if cache is not None and cache.exists():
@@ -281,9 +292,9 @@ def harvest_all(
             asked = {"printed": printed, "hands": hands, "proposals": proposals, "arrows": float(arrows),
                      "hand_drawn": hand_drawn, "everyday": float(everyday), "blind": blind,
                      "crossings": float(crossings), "sheen": sheen}
-            drawn = str(z["hand_drawn_shapes"]) if "hand_drawn_shapes" in z else HAND_DRAWN_SHAPES
-            same_shapes = set(parse_shapes(drawn)) == set(parse_shapes(hand_drawn_shapes))  # "triangle" is "TRIANGLE"
-            same = shares == asked and pyramid == levels and (same_shapes or not hand_drawn)
+            same = (shares == asked and pyramid == levels
+                    and (_same_shapes(z, "hand_drawn_shapes", hand_drawn_shapes) or not hand_drawn)
+                    and (_same_shapes(z, "sheen_shapes", sheen_shapes) or not sheen))
             if z["seeds"].tolist() == seeds and same:
                 return [tuple(z[f"{k}_{j}"] for j in range(4)) for k in range(len(seeds) + n_blind)]
     n = len(seeds)
@@ -291,7 +302,7 @@ def harvest_all(
         parts: list[tuple[np.ndarray, ...]] = list(
             pool.map(harvest, seeds, [CHUNK] * n, [printed] * n, [hands] * n, [levels] * n, [proposals] * n,
                      [arrows] * n, [hand_drawn] * n, [hand_drawn_shapes] * n, [everyday] * n, [crossings] * n,
-                     [sheen] * n)
+                     [sheen] * n, [sheen_shapes] * n)
         )
         parts += pool.map(harvest_blind, [seed + BLIND_SEEDS + k for k in range(n_blind)], [CHUNK] * n_blind,
                           [levels] * n_blind)
@@ -312,6 +323,7 @@ def harvest_all(
             blind=np.array(blind),
             crossings=np.array(float(crossings)),
             sheen=np.array(sheen),
+            sheen_shapes=np.array(sheen_shapes),
             **arrays,
         )
     return parts
@@ -375,26 +387,76 @@ def _augment(x: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
     return x.clamp(0.0, 1.0)
 
 
+def load_net(net: torch.nn.Module, model: Path) -> None:
+    """Set `net` (a `_net` of the same width) to the network of a verifier model file (a joined model's `main`,
+    `ensemble.part`), so that it computes what the file computes. The exported graph has each batch norm folded into
+    its convolution (weights and a bias), so the convolution takes the folded weights and its batch norm becomes
+    the identity plus that bias (mean 0, variance 1 - eps, scale 1). ValueError if the file's network is not
+    `net`'s shape."""
+    import onnx  # type: ignore[import-not-found,unused-ignore]
+    import torch  # type: ignore[import-not-found,unused-ignore]
+    from onnx import numpy_helper  # type: ignore[import-not-found,unused-ignore]
+    from torch import nn  # type: ignore[import-not-found,unused-ignore]
+
+    from services.vision.ensemble import MAIN, network
+
+    graph = network(onnx.load(str(model)), MAIN).graph
+    values = {i.name: numpy_helper.to_array(i) for i in graph.initializer}
+    convs = [n for n in graph.node if n.op_type == "Conv"]
+    gemms = [n for n in graph.node if n.op_type == "Gemm"]
+    layers = [m for m in net.features if isinstance(m, nn.Conv2d | nn.BatchNorm2d)]
+    if len(convs) * 2 != len(layers) or len(gemms) != 2:
+        raise ValueError(f"{model}: {len(convs)} convolutions and {len(gemms)} dense layers, not this network's")
+    pairs = [(conv, layers[2 * k], layers[2 * k + 1]) for k, conv in enumerate(convs)]
+    pairs_dense = zip(gemms, (net.hidden, net.out), strict=True)
+    with torch.no_grad():
+        for node, conv, norm in pairs:
+            weight, bias = (torch.from_numpy(values[name].copy()) for name in node.input[1:3])
+            if weight.shape != conv.weight.shape:
+                raise ValueError(f"{model}: a convolution of {tuple(weight.shape)}, not {tuple(conv.weight.shape)}")
+            conv.weight.copy_(weight)
+            norm.weight.fill_(1.0)
+            norm.bias.copy_(bias)
+            norm.running_mean.zero_()
+            norm.running_var.fill_(1.0 - norm.eps)
+        for node, dense in pairs_dense:
+            weight, bias = (torch.from_numpy(values[name].copy()) for name in node.input[1:3])
+            if weight.shape != dense.weight.shape:  # torch's Linear is exported as Gemm with transB = 1
+                raise ValueError(f"{model}: a dense layer of {tuple(weight.shape)}, not {tuple(dense.weight.shape)}")
+            dense.weight.copy_(weight)
+            dense.bias.copy_(bias)
+
+
 def fit(
-    x: np.ndarray, c: np.ndarray, y: np.ndarray, seed: int, epochs: int, log: Any = None, width: float = 1.0
+    x: np.ndarray, c: np.ndarray, y: np.ndarray, seed: int, epochs: int, log: Any = None, width: float = 1.0,
+    init: Path | None = None, lr: float = 3e-3,
 ) -> torch.nn.Module:
-    """Train `_net(width)` on crops x (uint8), claim indices c and labels y; fixed seed, one thread."""
+    """Train `_net(width)` on crops x (uint8), claim indices c and labels y; fixed seed, one thread; one-cycle learning
+    rate up to `lr`. With `init` (a verifier model file, round vision67) the network starts as that file's (`load_net`)
+    and its batch norms stay as they are (their statistics frozen, their bias still learnt): it is fine-tuned."""
     import torch  # type: ignore[import-not-found,unused-ignore]
     import torch.nn.functional as F  # type: ignore[import-not-found,unused-ignore]
+    from torch import nn  # type: ignore[import-not-found,unused-ignore]
 
     torch.manual_seed(seed)
     torch.set_num_threads(1)
     gen = torch.Generator().manual_seed(seed)
     net = _net(width)
+    if init is not None:
+        load_net(net, init)
     xs = torch.from_numpy(x)
     cs = F.one_hot(torch.from_numpy(c), N_CLAIM).float()
     ys = torch.from_numpy(y)
-    opt = torch.optim.AdamW(net.parameters(), lr=3e-3, weight_decay=1e-3)
+    opt = torch.optim.AdamW(net.parameters(), lr=lr, weight_decay=1e-3)
     batch = 256
     steps = epochs * ((len(ys) + batch - 1) // batch)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=3e-3, total_steps=steps)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=lr, total_steps=steps) if steps else None
     for epoch in range(epochs):
         net.train()
+        if init is not None:
+            for m in net.modules():
+                if isinstance(m, nn.BatchNorm2d):
+                    m.eval()
         order = torch.randperm(len(ys), generator=gen)
         total = 0.0
         for k in range(0, len(ys), batch):
@@ -404,7 +466,8 @@ def fit(
             opt.zero_grad()
             loss.backward()
             opt.step()
-            sched.step()
+            if sched is not None:
+                sched.step()
             total += loss.item() * len(idx)
         if log is not None:
             log(f"epoch {epoch + 1}/{epochs}: loss {total / len(ys):.4f}")
@@ -558,6 +621,19 @@ def main(
             help="share of cards that are glossy, a lamp's reflection over the mark (Variation.sheen; round vision66)",
         ),
     ] = 0.0,
+    sheen_shapes: Annotated[
+        str, typer.Option(help="the marks whose cards --sheen makes glossy, comma-separated (round vision67: X,TRIANGLE)")
+    ] = HAND_DRAWN_SHAPES,
+    init: Annotated[
+        Path | None,
+        typer.Option(
+            help="fine-tune: start from this verifier model's network (a joined model's main), its batch norms "
+            "frozen, instead of from random weights (round vision67; with a lower --lr and fewer --epochs)",
+            exists=True,
+            dir_okay=False,
+        ),
+    ] = None,
+    lr: Annotated[float, typer.Option(min=0.0, help="the one-cycle schedule's peak learning rate")] = 3e-3,
     claimed_kept_shapes: Annotated[
         str,
         typer.Option(
@@ -582,10 +658,11 @@ def main(
             raise typer.BadParameter(
                 f"--levels {levels!r}: levels as FACTOR:WINDOW[:LARGEST], comma-separated"
             ) from None
-    try:
-        parse_shapes(hand_drawn_shapes)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--hand-drawn-shapes") from None
+    for shapes, hint in ((hand_drawn_shapes, "--hand-drawn-shapes"), (sheen_shapes, "--sheen-shapes")):
+        try:
+            parse_shapes(shapes)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint=hint) from None
     if blind < 0:
         raise typer.BadParameter(f"--blind {blind}: a share of at least 0")
     try:
@@ -593,7 +670,7 @@ def main(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--claimed-kept") from None
     parts = harvest_all(frames, seed, jobs, cache, printed, hands, levels, proposals, arrows, hand_drawn,
-                        hand_drawn_shapes, everyday, blind, crossings, sheen)
+                        hand_drawn_shapes, everyday, blind, crossings, sheen, sheen_shapes)
     train, val = split_chunks(parts, blind_chunks(frames, blind))  # the report stays on held-back tuning chunks
     if only:
         train, val = [claimed_kept(p, only) for p in train], [claimed_kept(p, only) for p in val]
@@ -606,7 +683,10 @@ def main(
     if missing:
         raise SystemExit(f"no training candidates of class {missing}: harvest more frames")
     typer.echo(f"harvested {len(y)} training candidates in {time.monotonic() - t0:.0f} s", err=True)
-    net = fit(x, c, y, seed, epochs, log=lambda m: typer.echo(m, err=True), width=width)
+    try:
+        net = fit(x, c, y, seed, epochs, log=lambda m: typer.echo(m, err=True), width=width, init=init, lr=lr)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--init") from None
     export(net, out, (threshold_x, threshold_o, threshold_triangle), (loose_x, loose_o, loose_triangle))
     result = {"train_candidates": len(y), "train_by_class": np.bincount(y, minlength=len(CLASSES)).tolist()}
     result.update(report(Verifier.load(out), val, out))

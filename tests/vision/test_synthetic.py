@@ -253,6 +253,20 @@ def test_a_glossy_cards_sheen_keeps_the_scene_and_lightens_the_ink_under_it() ->
     assert lighter == 6
 
 
+def test_sheen_shapes_keeps_the_other_marks_cards_matte_and_every_scene_as_it_was() -> None:
+    """`sheen_shapes` (round vision67): only the cards of those marks are glossy; the sheen is drawn for every card,
+    so a scene's size, place, ink and paper are those of the same seed with the sheen on every card."""
+    for seed in range(6):
+        shape = (Shape.X, Shape.O, Shape.TRIANGLE)[seed % 3]
+        every = SceneGenerator(seed=seed, variation=MILD.only(sheen=1.0)).scene(shape)
+        danger = SceneGenerator(
+            seed=seed, variation=MILD.only(sheen=1.0, sheen_shapes=(Shape.X, Shape.TRIANGLE))
+        ).scene(shape)
+        assert (every.size, every.center, every.ink, every.paper) == (danger.size, danger.center, danger.ink, danger.paper)
+        assert every.sheen is not None
+        assert danger.sheen == (None if shape is Shape.O else every.sheen)
+
+
 def test_a_sheens_light_is_flat_inside_and_falls_to_nothing_beyond_its_edge() -> None:
     """`Sheen.light`: `peak` along its segment and within `radius` of it, 0 beyond `radius + soft`, in between less."""
     sheen = Sheen(offset=(0.0, 0.0), length=1.0, radius=0.1, soft=0.2, angle=0.0, peak=0.8)

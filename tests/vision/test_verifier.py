@@ -291,7 +291,8 @@ def test_a_crossings_harvest_adds_them_to_the_cluttered_chunks_only_and_the_cach
 
 def test_a_sheen_harvest_draws_glossy_cards_and_the_cache_knows_it(tmp_path: Path) -> None:
     """`training --sheen SHARE` (round vision66): a share of the cards glossy, a lamp's reflection over the mark, in
-    every chunk, reproducibly; a cache made without it is not used for a run that asks for it."""
+    every chunk, reproducibly; a cache made without it, or for other marks' cards (`--sheen-shapes`, round vision67), is
+    not used for a run that asks for it."""
     from services.vision import training
 
     plain, glossy = training.harvest(4, 8), training.harvest(4, 8, sheen=1.0)
@@ -303,6 +304,14 @@ def test_a_sheen_harvest_draws_glossy_cards_and_the_cache_knows_it(tmp_path: Pat
         assert np.array_equal(training.harvest_all(8, 7, 1, cache)[0][0], plain[0])
         with pytest.raises(PoolRefused):
             training.harvest_all(8, 7, 1, cache, sheen=0.5)
+    # a glossy cache (made before `--sheen-shapes`: every mark's card) is not used for the danger marks' cards only
+    np.savez(cache, seeds=np.array([7]), levels=np.array(""), sheen=np.array(0.5),
+             **{f"0_{j}": a for j, a in enumerate(glossy)})
+    with no_pool(training):
+        assert np.array_equal(training.harvest_all(8, 7, 1, cache, sheen=0.5, sheen_shapes="triangle,o,x")[0][0],
+                              glossy[0])
+        with pytest.raises(PoolRefused):
+            training.harvest_all(8, 7, 1, cache, sheen=0.5, sheen_shapes="X,TRIANGLE")
 
 
 def test_another_verifier_is_loaded_from_its_file_and_a_missing_one_is_refused(tmp_path: Path) -> None:
@@ -499,3 +508,28 @@ def test_a_wider_network_is_a_verifier_of_the_same_inputs(tmp_path: Path) -> Non
         p = v.probabilities(np.zeros((2, 3, PATCH, PATCH), np.uint8), np.stack([claim(None)] * 2))
         assert p.shape == (2, len(CLASSES)) and np.allclose(p.sum(axis=1), 1.0, atol=1e-5)
     assert 1.8 < sizes[1.5] / sizes[1.0] < 2.6
+
+
+def test_fine_tuning_starts_from_the_committed_network(tmp_path: Path) -> None:
+    """`training --init MODEL` (round vision67): the network starts as the model file's main network, its batch norms
+    folded into the convolutions by the export taken back out of them, so that before any step it names every crop as
+    the committed main network does; a file of another width is refused, naming the layer."""
+    pytest.importorskip("torch")
+    onnx = pytest.importorskip("onnx")
+    from services.vision.ensemble import MAIN, part
+    from services.vision.training import _net, export, load_net
+
+    main = tmp_path / "main.onnx"
+    onnx.save(part(onnx.load(str(MODEL_PATH)), MAIN), str(main))
+    net = _net()
+    load_net(net, MODEL_PATH)
+    export(net.eval(), tmp_path / "loaded.onnx", (0.25, 0.8, 0.8), (0.5, 0.95, 0.9))
+    rng = np.random.default_rng(5)
+    x = rng.integers(0, 256, (64, 3, PATCH, PATCH), dtype=np.uint8)
+    c = np.stack([claim([None, *SHAPES][k % 4]) for k in range(64)])
+    want = Verifier.load(main).probabilities(x, c)
+    got = Verifier.load(tmp_path / "loaded.onnx").probabilities(x, c)
+    assert np.abs(got - want).max() < 1e-4
+    assert np.abs(want - Verifier.load(tmp_path / "loaded.onnx").probabilities(x[::-1].copy(), c)).max() > 0.05
+    with pytest.raises(ValueError, match="convolution"):
+        load_net(_net(1.5), MODEL_PATH)
