@@ -513,7 +513,8 @@ def test_a_wider_network_is_a_verifier_of_the_same_inputs(tmp_path: Path) -> Non
 def test_fine_tuning_starts_from_the_committed_network(tmp_path: Path) -> None:
     """`training --init MODEL` (round vision67): the network starts as the model file's main network, its batch norms
     folded into the convolutions by the export taken back out of them, so that before any step it names every crop as
-    the committed main network does; a file of another width is refused, naming the layer."""
+    the committed main network does (a network of the same shape from random weights does not); a file of another
+    width is refused, naming the layer."""
     pytest.importorskip("torch")
     onnx = pytest.importorskip("onnx")
     from services.vision.ensemble import MAIN, part
@@ -521,15 +522,16 @@ def test_fine_tuning_starts_from_the_committed_network(tmp_path: Path) -> None:
 
     main = tmp_path / "main.onnx"
     onnx.save(part(onnx.load(str(MODEL_PATH)), MAIN), str(main))
-    net = _net()
-    load_net(net, MODEL_PATH)
-    export(net.eval(), tmp_path / "loaded.onnx", (0.25, 0.8, 0.8), (0.5, 0.95, 0.9))
+    loaded = _net()
+    load_net(loaded, MODEL_PATH)
+    for name, net in (("loaded", loaded), ("random", _net())):
+        export(net.eval(), tmp_path / f"{name}.onnx", (0.25, 0.8, 0.8), (0.5, 0.95, 0.9))
     rng = np.random.default_rng(5)
-    x = rng.integers(0, 256, (64, 3, PATCH, PATCH), dtype=np.uint8)
-    c = np.stack([claim([None, *SHAPES][k % 4]) for k in range(64)])
+    marks = [crops(*_card(shape, size)) for shape in SHAPES for size in (40, 80, 120)]
+    x = np.concatenate([np.stack(marks), rng.integers(0, 256, (16, 3, PATCH, PATCH), dtype=np.uint8)])
+    c = np.stack([claim([None, *SHAPES][k % 4]) for k in range(len(x))])
     want = Verifier.load(main).probabilities(x, c)
-    got = Verifier.load(tmp_path / "loaded.onnx").probabilities(x, c)
-    assert np.abs(got - want).max() < 1e-4
-    assert np.abs(want - Verifier.load(tmp_path / "loaded.onnx").probabilities(x[::-1].copy(), c)).max() > 0.05
+    assert np.abs(Verifier.load(tmp_path / "loaded.onnx").probabilities(x, c) - want).max() < 1e-4
+    assert np.abs(Verifier.load(tmp_path / "random.onnx").probabilities(x, c) - want).max() > 0.3
     with pytest.raises(ValueError, match="convolution"):
         load_net(_net(1.5), MODEL_PATH)
