@@ -114,8 +114,8 @@ class Variation:
     """share of cards that are glossy, with a lamp's reflection on them over the mark (`Sheen`, round vision66; 0: matte
     cards, no draw at all)"""
     sheen_shapes: tuple[Shape, ...] = (Shape.X, Shape.O, Shape.TRIANGLE)
-    """the marks whose cards `sheen` makes glossy (round vision67: X and TRIANGLE, the danger marks); the draw is made for
-    every card, so that a scene's other draws do not depend on it"""
+    """the marks whose cards `sheen` makes glossy (round vision67: X and TRIANGLE, the danger marks); the draw is made
+    for every card, so that a scene's other draws do not depend on it"""
     lens: float = 0.0
     """the camera lens's barrel distortion, the same for every frame (0: a pinhole camera). It draws
     nothing, so the scenes are those of the same seed without it, only seen through the lens. It is k

@@ -277,8 +277,8 @@ def harvest_all(
     """`harvest` of chunks of CHUNK frames with seeds seed, seed + 1, ...; then, with `blind` > 0,
     `blind_chunks(frames, blind)` chunks of `harvest_blind` with seeds seed + BLIND_SEEDS, ... (listed after the
     tuning chunks); read from / written to `cache` (a cache made with other seeds, another `printed`, `hands`,
-    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings`, `sheen` or `blind` setting, other `hand_drawn_shapes` or `sheen_shapes` or
-    another pyramid is not used)."""
+    `proposals`, `arrows`, `hand_drawn`, `everyday`, `crossings`, `sheen` or `blind` setting, other `hand_drawn_shapes`
+    or `sheen_shapes` or another pyramid is not used)."""
     seeds = [seed + k for k in range((frames + CHUNK - 1) // CHUNK)]
     n_blind = blind_chunks(frames, blind)
     if cache is not None and cache.exists():
@@ -622,7 +622,8 @@ def main(
         ),
     ] = 0.0,
     sheen_shapes: Annotated[
-        str, typer.Option(help="the marks whose cards --sheen makes glossy, comma-separated (round vision67: X,TRIANGLE)")
+        str,
+        typer.Option(help="the marks whose cards --sheen makes glossy, comma-separated (round vision67: X,TRIANGLE)"),
     ] = HAND_DRAWN_SHAPES,
     init: Annotated[
         Path | None,
