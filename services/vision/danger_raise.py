@@ -1,0 +1,132 @@
+"""Join a second verifier that may only raise the danger shapes' probabilities: `verifier.onnx`'s O stays its own.
+
+    pip install -e '.[train]'
+    python -m services.vision.training --sheen 0.5 --sheen-shapes X,TRIANGLE --proposals 0.3 \\
+        --init services/vision/verifier.onnx --epochs 2 --lr 1e-3 --out glossy.onnx        # round vision67's diagnostic
+    python -m services.vision.ensemble glossy.onnx services/vision/verifier.onnx --out glossy-joined.onnx  # its veto
+    python -m services.vision.danger_raise services/vision/verifier.onnx glossy-joined.onnx --out raised.onnx
+    python bench/vision_bench.py --set verifier_model=raised.onnx                           # judge it
+
+Why (round vision68): a network fine-tuned with glossy cards finds danger marks a lamp's reflection fades that the
+committed one refuses, but it also names more faded round things O (letters in a line of words), and a false O lifts a
+danger. Stopping is the safe direction: so the joined model gives X and TRIANGLE (`--shapes`: one or both) the higher
+of the two networks' probabilities, and O and 'none' the base model's less what the raised shapes gained: first from
+'none', then from O (a row whose raised shapes alone pass one is scaled back to one). So the joined model can name an
+X or a triangle the base refused, never an O the base did not, and a candidate the base names O can become an X or a
+triangle (a stop), not the other way round.
+
+The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): both models'
+nodes on every row (their names prefixed `base_` and `raise_`), then Max, Sub, Relu and a division by the row's sum.
+Its metadata is the base model's (thresholds, loose thresholds, `veto_shapes`), with `raised_shapes` added.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from services.vision.ensemble import SHAPE_NAMES
+from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
+
+BASE, RAISER = "base_", "raise_"  # the prefixes each model's names get
+RAISED = "verifier_danger_raise"  # the graph name
+RAISED_KEY = "raised_shapes"  # the metadata naming the shapes the second model may raise
+DANGER = "X,TRIANGLE"
+DANGER_SHAPES = ("X", "TRIANGLE")  # the shapes a second model may raise: a stop is the safe direction
+
+
+def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
+    """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset): each shape named in
+    `shapes` (one or both of "X" and "TRIANGLE", `DANGER_SHAPES`) gets the higher of the two models' probabilities;
+    what they gained is taken from `base`'s 'none', then from its O (each down to 0 at most); the others are `base`'s;
+    the row is then divided by its sum (one, unless the raised shapes alone pass it)."""
+    from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
+
+    if not shapes or any(s not in DANGER_SHAPES for s in shapes):
+        raise ValueError(f"shapes {shapes!r}: one or both of {', '.join(DANGER_SHAPES)} (an O is never raised)")
+    if base.opset_import[0].version != raiser.opset_import[0].version:
+        raise ValueError(f"the two models' opsets differ: {base.opset_import} and {raiser.opset_import}")
+    b = compose.add_prefix(base, BASE, rename_inputs=False)  # both read `crops` and `claim`
+    r = compose.add_prefix(raiser, RAISER, rename_inputs=False)
+    pb, pr = b.graph.output[0].name, r.graph.output[0].name
+    consts = [helper.make_tensor(f"d_{k}", TensorProto.INT64, [1], [k]) for k in range(len(SHAPES) + 2)]
+    node = helper.make_node
+    nodes, columns, gains = [], [], []
+    o = SHAPE_NAMES.index("O")
+    for k, shape in enumerate(SHAPE_NAMES):
+        nodes.append(node("Slice", [pb, f"d_{k}", f"d_{k + 1}", "d_1"], [f"d_base_{k}"]))
+        if shape not in shapes:
+            columns.append("d_o_left" if k == o else f"d_base_{k}")
+            continue
+        nodes += [
+            node("Slice", [pr, f"d_{k}", f"d_{k + 1}", "d_1"], [f"d_raise_{k}"]),
+            node("Max", [f"d_base_{k}", f"d_raise_{k}"], [f"d_max_{k}"]),
+            node("Sub", [f"d_max_{k}", f"d_base_{k}"], [f"d_gain_{k}"]),
+        ]
+        columns.append(f"d_max_{k}")
+        gains.append(f"d_gain_{k}")
+    n = len(SHAPES)
+    nodes += [
+        node("Slice", [pb, f"d_{n}", f"d_{n + 1}", "d_1"], ["d_none"]),
+        node("Sum", gains, ["d_gained"]),
+        node("Sub", ["d_none", "d_gained"], ["d_none_less"]),
+        node("Relu", ["d_none_less"], ["d_none_left"]),
+        node("Sub", ["d_gained", "d_none"], ["d_over_none"]),  # what 'none' could not pay: from O
+        node("Relu", ["d_over_none"], ["d_from_o"]),
+        node("Sub", [f"d_base_{o}", "d_from_o"], ["d_o_less"]),
+        node("Relu", ["d_o_less"], ["d_o_left"]),
+        node("Concat", [*columns, "d_none_left"], ["d_rows"], axis=1),
+        node("ReduceSum", ["d_rows", "d_1"], ["d_sum"], keepdims=1),
+        node("Div", ["d_rows", "d_sum"], ["probabilities"]),
+    ]
+    out = helper.make_tensor_value_info("probabilities", TensorProto.FLOAT, ["n", len(SHAPES) + 1])
+    graph = helper.make_graph(
+        list(b.graph.node) + list(r.graph.node) + nodes,
+        RAISED,
+        list(base.graph.input),
+        [out],
+        list(b.graph.initializer) + list(r.graph.initializer) + consts,
+    )
+    joined = helper.make_model(graph, opset_imports=base.opset_import, producer_name="services.vision.danger_raise")
+    joined.ir_version = base.ir_version
+    for p in base.metadata_props:
+        if p.key != RAISED_KEY:
+            joined.metadata_props.add(key=p.key, value=p.value)
+    joined.metadata_props.add(key=RAISED_KEY, value=",".join(shapes))
+    joined.doc_string = f"vision mark verifier: python -m services.vision.danger_raise BASE RAISER ({','.join(shapes)})"
+    return joined
+
+
+def main(
+    base_model: Annotated[
+        Path, typer.Argument(help="the model whose O and 'none' stand (the committed verifier.onnx)")
+    ],
+    raiser_model: Annotated[
+        Path, typer.Argument(help="the model that may raise the danger shapes (a joined model: its veto included)")
+    ],
+    shapes: Annotated[str, typer.Option(help="the shapes the second model may raise, comma-separated")] = DANGER,
+    out: Annotated[Path, typer.Option(help="where to write the joined model (never the committed file by default)")] = (
+        Path("verifier-raised.onnx")
+    ),
+) -> None:
+    import onnx  # type: ignore[import-not-found,unused-ignore]
+
+    for path in (base_model, raiser_model):
+        Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
+    if out.resolve() == MODEL_PATH.resolve():
+        raise typer.BadParameter(f"{out}: the committed verifier is replaced only by copying a judged model over it")
+    try:
+        joined = raise_join(onnx.load(str(base_model)), onnx.load(str(raiser_model)),
+                            tuple(t.strip().upper() for t in shapes.split(",") if t.strip()))
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--shapes") from None
+    onnx.checker.check_model(joined)
+    onnx.save(joined, str(out))
+    v = Verifier.load(out)
+    typer.echo(f"wrote {out} ({out.stat().st_size} bytes; thresholds {v.thresholds}, loose {v.loose_thresholds})")
+
+
+if __name__ == "__main__":
+    typer.run(main)
