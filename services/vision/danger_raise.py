@@ -27,7 +27,7 @@ from typing import Annotated, Any
 
 import typer
 
-from services.vision.ensemble import SHAPE_NAMES
+from services.vision.ensemble import SHAPE_NAMES, save_checked
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
 BASE, RAISER = "base_", "raise_"  # the prefixes each model's names get
@@ -122,10 +122,7 @@ def main(
                             tuple(t.strip().upper() for t in shapes.split(",") if t.strip()))
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--shapes") from None
-    onnx.checker.check_model(joined)
-    onnx.save(joined, str(out))
-    v = Verifier.load(out)
-    typer.echo(f"wrote {out} ({out.stat().st_size} bytes; thresholds {v.thresholds}, loose {v.loose_thresholds})")
+    save_checked(joined, out)
 
 
 if __name__ == "__main__":

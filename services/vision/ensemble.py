@@ -217,8 +217,16 @@ def main(
         raise typer.BadParameter(str(exc), param_hint="--veto-shapes") from None
     joined = join(network(onnx.load(str(main_model)), MAIN), network(onnx.load(str(veto_model)), VETO), loose_x,
                   capped)
-    onnx.checker.check_model(joined)
-    onnx.save(joined, str(out))
+    save_checked(joined, out)
+
+
+def save_checked(model: Any, out: Path) -> None:
+    """Write a joined verifier `model` (`onnx.ModelProto`) to `out` after ONNX's checker, load it back as a `Verifier`
+    (which refuses a model not for this code's inputs) and say what was written."""
+    import onnx  # type: ignore[import-not-found,unused-ignore]
+
+    onnx.checker.check_model(model)
+    onnx.save(model, str(out))
     v = Verifier.load(out)
     typer.echo(f"wrote {out} ({out.stat().st_size} bytes; thresholds {v.thresholds}, loose {v.loose_thresholds})")
 
