@@ -33,8 +33,14 @@ from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 BASE, RAISER = "base_", "raise_"  # the prefixes each model's names get
 RAISED = "verifier_danger_raise"  # the graph name
 RAISED_KEY = "raised_shapes"  # the metadata naming the shapes the second model may raise
-DANGER = "X,TRIANGLE"
 DANGER_SHAPES = ("X", "TRIANGLE")  # the shapes a second model may raise: a stop is the safe direction
+DANGER = ",".join(DANGER_SHAPES)
+
+
+def check_shapes(shapes: tuple[str, ...]) -> None:
+    """ValueError unless `shapes` names one or both of `DANGER_SHAPES` (an O is never raised)."""
+    if not shapes or any(s not in DANGER_SHAPES for s in shapes):
+        raise ValueError(f"shapes {shapes!r}: one or both of {', '.join(DANGER_SHAPES)} (an O is never raised)")
 
 
 def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
@@ -44,8 +50,7 @@ def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
     the row is then divided by its sum (one, unless the raised shapes alone pass it)."""
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
 
-    if not shapes or any(s not in DANGER_SHAPES for s in shapes):
-        raise ValueError(f"shapes {shapes!r}: one or both of {', '.join(DANGER_SHAPES)} (an O is never raised)")
+    check_shapes(shapes)
     if base.opset_import[0].version != raiser.opset_import[0].version:
         raise ValueError(f"the two models' opsets differ: {base.opset_import} and {raiser.opset_import}")
     b = compose.add_prefix(base, BASE, rename_inputs=False)  # both read `crops` and `claim`
@@ -117,12 +122,13 @@ def main(
         Verifier.load(path)  # refuses a file that is not a verifier model for this code's inputs
     if out.resolve() == MODEL_PATH.resolve():
         raise typer.BadParameter(f"{out}: the committed verifier is replaced only by copying a judged model over it")
+    names = tuple(t.strip().upper() for t in shapes.split(",") if t.strip())
     try:
-        joined = raise_join(onnx.load(str(base_model)), onnx.load(str(raiser_model)),
-                            tuple(t.strip().upper() for t in shapes.split(",") if t.strip()))
+        check_shapes(names)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--shapes") from None
-    save_checked(joined, out)
+    # as ensemble's: two models of different opsets are refused by `raise_join`'s ValueError, not named as `--shapes`
+    save_checked(raise_join(onnx.load(str(base_model)), onnx.load(str(raiser_model)), names), out)
 
 
 if __name__ == "__main__":
