@@ -1,19 +1,33 @@
 """Join a second verifier that may only raise the danger shapes' probabilities: `verifier.onnx`'s O stays its own.
 
-    pip install -e '.[train]'
-    python -m services.vision.training --sheen 0.5 --sheen-shapes X,TRIANGLE --proposals 0.3 \\
-        --init services/vision/verifier.onnx --epochs 2 --lr 1e-3 --out glossy.onnx        # round vision67's diagnostic
-    python -m services.vision.ensemble glossy.onnx services/vision/verifier.onnx --out glossy-joined.onnx  # its veto
+The committed `verifier.onnx` is such a join since round vision68b: its base is the joined model of round vision45c
+(main and veto, `ensemble.py`), its raiser round vision67's glossy network (kept in docs/experiments/models/) joined
+to the same veto, raising the X alone. It is remade byte for byte from itself and that network:
+
+    python -m services.vision.ensemble docs/experiments/models/vision67_glossy_proposals.onnx \
+        services/vision/verifier.onnx --out glossy-joined.onnx       # the raiser: its veto is the committed base's
     python -m services.vision.danger_raise services/vision/verifier.onnx glossy-joined.onnx --out raised.onnx
-    python bench/vision_bench.py --set verifier_model=raised.onnx                           # judge it
+
+A new raiser (the glossy network came from round vision67's diagnostic fine-tune):
+
+    pip install -e '.[train]'
+    python -m services.vision.training --sheen 0.5 --sheen-shapes X,TRIANGLE --proposals 0.3 \
+        --init services/vision/verifier.onnx --epochs 2 --lr 1e-3 --out glossy.onnx   # starts from the base's main
+    python -m services.vision.ensemble glossy.onnx services/vision/verifier.onnx --out glossy-joined.onnx
+    python -m services.vision.danger_raise services/vision/verifier.onnx glossy-joined.onnx --out raised.onnx
+    python bench/vision_bench.py --set verifier_model=raised.onnx                      # judge it
+
+A raised model given as the base (the committed one) has its base raised instead, so a new raiser replaces the
+committed one rather than adding to it; a raised model as the raiser is refused.
 
 Why (round vision68): a network fine-tuned with glossy cards finds danger marks a lamp's reflection fades that the
-committed one refuses, but it also names more faded round things O (letters in a line of words), and a false O lifts a
+base refuses, but it also names more faded round things O (letters in a line of words), and a false O lifts a
 danger. Stopping is the safe direction: so the joined model gives X and TRIANGLE (`--shapes`: one or both) the higher
 of the two networks' probabilities, and O and 'none' the base model's less what the raised shapes gained: first from
 'none', then from O (a row whose raised shapes alone pass one is scaled back to one). So the joined model can name an
 X or a triangle the base refused, never an O the base did not, and a candidate the base names O can become an X or a
-triangle (a stop), not the other way round.
+triangle (a stop), not the other way round. Raising triangles too took arrow heads for triangles (round vision68);
+raising the X alone passed its held-out rule (round vision68b, docs/experiments/vision-rounds.md).
 
 The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): both models'
 nodes on every row (their names prefixed `base_` and `raise_`), then Max, Sub, Relu and a division by the row's sum.
@@ -27,12 +41,9 @@ from typing import Annotated, Any
 
 import typer
 
-from services.vision.ensemble import SHAPE_NAMES, save_checked
+from services.vision.ensemble import BASE, RAISED, RAISED_KEY, RAISER, SHAPE_NAMES, save_checked, unraise
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
-BASE, RAISER = "base_", "raise_"  # the prefixes each model's names get
-RAISED = "verifier_danger_raise"  # the graph name
-RAISED_KEY = "raised_shapes"  # the metadata naming the shapes the second model may raise
 DANGER_SHAPES = ("X", "TRIANGLE")  # the shapes a second model may raise: a stop is the safe direction
 DANGER = ",".join(DANGER_SHAPES)
 
@@ -106,12 +117,14 @@ def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
 
 def main(
     base_model: Annotated[
-        Path, typer.Argument(help="the model whose O and 'none' stand (the committed verifier.onnx)")
+        Path, typer.Argument(help="the model whose O and 'none' stand (of a raised model, as the committed: its base)")
     ],
     raiser_model: Annotated[
         Path, typer.Argument(help="the model that may raise the danger shapes (a joined model: its veto included)")
     ],
-    shapes: Annotated[str, typer.Option(help="the shapes the second model may raise, comma-separated")] = DANGER,
+    shapes: Annotated[
+        str, typer.Option(help="the shapes the second model may raise, comma-separated (the committed model: X)")
+    ] = "X",
     out: Annotated[Path, typer.Option(help="where to write the joined model (never the committed file by default)")] = (
         Path("verifier-raised.onnx")
     ),
@@ -127,8 +140,14 @@ def main(
         check_shapes(names)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--shapes") from None
+    base, raiser = onnx.load(str(base_model)), onnx.load(str(raiser_model))
+    if raiser.graph.name == RAISED:
+        raise typer.BadParameter(f"{raiser_model}: already a raised model; give the raiser itself", param_hint="RAISER")
+    if base.graph.name == RAISED:  # the committed model: a new raiser replaces its own, not raises it again
+        base = unraise(base, BASE)
+        typer.echo(f"{base_model} is a raised model: its base is raised instead")
     # as ensemble's: two models of different opsets are refused by `raise_join`'s ValueError, not named as `--shapes`
-    save_checked(raise_join(onnx.load(str(base_model)), onnx.load(str(raiser_model)), names), out)
+    save_checked(raise_join(base, raiser, names), out)
 
 
 if __name__ == "__main__":

@@ -46,6 +46,9 @@ JOINED = "verifier_loose_x_veto"  # the graph name `join` gives
 MAIN, VETO = "main_", "veto_"  # the prefixes `join` gives each network's names
 ROLES = (MAIN, VETO)
 CAPPED_KEY = "veto_shapes"  # the metadata naming the shapes the veto caps on loose rows
+RAISED = "verifier_danger_raise"  # the graph name `danger_raise.raise_join` gives (the committed model's since vision68b)
+BASE, RAISER = "base_", "raise_"  # the prefixes it gives each model's names
+RAISED_KEY = "raised_shapes"  # the metadata naming the shapes the raiser may raise
 SHAPE_NAMES = tuple(shape.value for shape in SHAPES)  # the probability columns before 'none', as named
 
 
@@ -84,8 +87,60 @@ def part(joined: Any, role: str) -> Any:
     return model
 
 
+def unraise(raised: Any, role: str) -> Any:
+    """One of the two models a danger-raised model (`onnx.ModelProto` made by `danger_raise.raise_join`) was made of,
+    as it was: `role` "base_" or "raise_"; its nodes and weights with the prefix taken off, so a joined model is a
+    joined model again (`part` takes its networks out); the metadata is the raised model's less `raised_shapes`."""
+    from onnx import NodeProto, TensorProto, helper  # type: ignore[import-not-found,unused-ignore]
+
+    if role not in (BASE, RAISER):
+        raise ValueError(f"role {role!r}: one of {(BASE, RAISER)}")
+    g = raised.graph
+    if g.name != RAISED:
+        raise ValueError(f"not a danger-raised verifier (graph {g.name!r}, expected {RAISED!r})")
+
+    def own(name: str) -> str:  # the model's inputs `crops` and `claim` were never prefixed
+        return name.removeprefix(role)
+
+    nodes = []
+    for n in g.node:  # the model's own nodes: all they make bears its prefix (the join's own are `d_`)
+        if not any(n.output) or not all(o.startswith(role) for o in n.output if o):
+            continue
+        copy = NodeProto()
+        copy.CopyFrom(n)
+        copy.ClearField("name")  # the prefixing gives a nameless node the name "" (kept unset, as it was)
+        if own(n.name):
+            copy.name = own(n.name)
+        copy.input[:] = [own(i) for i in n.input]
+        copy.output[:] = [own(o) for o in n.output]
+        nodes.append(copy)
+    if not nodes or "probabilities" not in nodes[-1].output:
+        raise ValueError(f"no {role!r} model ending in {role}probabilities in {g.name!r}")
+    weights = []
+    for t in g.initializer:
+        if t.name.startswith(role):
+            copy_t = TensorProto()
+            copy_t.CopyFrom(t)
+            copy_t.name = own(t.name)
+            weights.append(copy_t)
+    # the graph's own name is not kept by the join: a model with a veto network was a joined one
+    joined = any(o.startswith(VETO) for n in nodes for o in n.output)
+    graph = helper.make_graph(nodes, JOINED if joined else "verifier", list(g.input), list(g.output), weights)
+    model = helper.make_model(graph, opset_imports=raised.opset_import, producer_name="services.vision.ensemble")
+    model.ir_version = raised.ir_version
+    for p in raised.metadata_props:
+        if p.key != RAISED_KEY:
+            model.metadata_props.add(key=p.key, value=p.value)
+    model.doc_string = f"the {role.rstrip('_')} model of a danger-raised verifier (services.vision.ensemble.unraise)"
+    return model
+
+
 def network(model: Any, role: str) -> Any:
-    """`model` itself, or its network in `role` if it is a joined verifier."""
+    """`model` itself, or its network in `role` if it is a joined verifier; of a danger-raised one (the committed
+    model since round vision68b), its base's network in `role`, so a new main network can still be joined to the
+    committed veto and `training --init` still starts from the committed main network."""
+    if model.graph.name == RAISED:
+        model = unraise(model, BASE)
     return part(model, role) if model.graph.name == JOINED else model
 
 

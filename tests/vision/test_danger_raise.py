@@ -49,9 +49,9 @@ def test_the_raised_shapes_take_the_higher_and_the_rest_stays_the_bases(tmp_path
 
 
 def test_the_committed_model_raised_by_itself_judges_as_it_does_alone(tmp_path: Path) -> None:
-    """The committed joined model (main and veto) as both inputs: the same probabilities on every kind of row, its
-    metadata kept and the raised shapes named; an unknown shape is refused, and so is writing over the committed
-    file."""
+    """The committed model (itself raised since round vision68b) as both inputs: the same probabilities on every kind
+    of row, its metadata kept and the raised shapes named; an unknown shape is refused, and so is writing over the
+    committed file; the command refuses a raised model as the raiser (`ensemble.unraise` gives the raiser itself)."""
     model = onnx.load(str(MODEL_PATH))
     same = _save(raise_join(model, model, ("X", "TRIANGLE")), tmp_path / "same.onnx")
     committed = Verifier.load()
@@ -61,7 +61,7 @@ def test_the_committed_model_raised_by_itself_judges_as_it_does_alone(tmp_path: 
     assert np.allclose(same.probabilities(crops, claims), committed.probabilities(crops, claims), atol=1e-6)
     assert (same.thresholds, same.loose_thresholds) == (committed.thresholds, committed.loose_thresholds)
     meta = {p.key: p.value for p in onnx.load(str(tmp_path / "same.onnx")).metadata_props}
-    assert meta[RAISED_KEY] == "X,TRIANGLE" and meta["veto_shapes"] == "X"
+    assert meta[RAISED_KEY] == "X,TRIANGLE" and meta["veto_shapes"] == "X"  # the outer join's, then the base's
     for bad in (("X", "STAR"), ("O",), ()):
         with pytest.raises(ValueError, match="shapes"):
             raise_join(model, model, bad)
@@ -70,6 +70,8 @@ def test_the_committed_model_raised_by_itself_judges_as_it_does_alone(tmp_path: 
     assert bad.exit_code != 0 and "STAR" in bad.output
     over = runner.invoke(_app(), [str(MODEL_PATH), str(MODEL_PATH), "--out", str(MODEL_PATH)])
     assert over.exit_code != 0 and "committed" in over.output
+    twice = runner.invoke(_app(), [str(MODEL_PATH), str(MODEL_PATH), "--out", str(tmp_path / "twice.onnx")])
+    assert twice.exit_code != 0 and "RAISER" in twice.output and "already" in twice.output
 
 
 def _app() -> object:

@@ -128,13 +128,30 @@ def test_each_network_comes_back_out_of_a_joined_model(tmp_path: Path) -> None:
     assert network(main, "main_") is main  # a plain network is itself
 
 
-def test_the_committed_verifier_is_its_two_networks_joined(tmp_path: Path) -> None:
+def test_the_committed_verifier_is_its_base_raised_by_the_glossy_network(tmp_path: Path) -> None:
+    """Since round vision68b the committed model is a danger-raised join (`danger_raise.py`): its base is two networks
+    joined (main and veto: joined again from its parts it judges exactly as it does), and the committed file is remade
+    byte for byte from that base and round vision68b's raiser, the glossy network in docs/experiments/models/ joined
+    to the base's veto; `network` takes the base's networks out of it, as `training --init` and `ensemble` do."""
+    from services.vision.danger_raise import raise_join
+    from services.vision.ensemble import BASE, MAIN, RAISER, VETO, unraise
+
     committed = onnx.load(str(MODEL_PATH))
-    again = _save(join(part(committed, "main_"), part(committed, "veto_"), loose_x=0.1), tmp_path / "again.onnx")
+    base = unraise(committed, BASE)
+    again = _save(join(part(base, MAIN), part(base, VETO), loose_x=0.1), tmp_path / "again.onnx")
     rng = np.random.default_rng(3)
     crops = rng.integers(0, 256, (16, 3, PATCH, PATCH)).astype(np.uint8)
     claims = np.eye(N_CLAIM, dtype=np.float32)[np.arange(16) % N_CLAIM]
-    assert np.array_equal(again.probabilities(crops, claims), Verifier.load().probabilities(crops, claims))
+    assert np.array_equal(again.probabilities(crops, claims), _save(base, tmp_path / "base.onnx").probabilities(crops, claims))
+    glossy = onnx.load(str(Path(__file__).parents[2] / "docs/experiments/models/vision67_glossy_proposals.onnx"))
+    raiser = join(network(glossy, MAIN), network(committed, VETO), loose_x=0.1)
+    assert raiser.graph.SerializeToString() == unraise(committed, RAISER).graph.SerializeToString()  # the same network
+    assert raise_join(base, raiser, ("X",)).SerializeToString() == MODEL_PATH.read_bytes()
+    assert network(committed, MAIN).graph.SerializeToString() == part(base, MAIN).graph.SerializeToString()
+    with pytest.raises(ValueError, match="not a danger-raised"):
+        unraise(base, BASE)
+    with pytest.raises(ValueError, match="role"):
+        unraise(committed, MAIN)
 
 
 def test_part_refuses_what_is_not_a_joined_model() -> None:

@@ -41,18 +41,20 @@ def test_a_filled_triangle_on_plain_paper_is_found_however_far_the_paper_runs(ki
     assert [d.shape for d in found] == [Shape.TRIANGLE] and iou(found[0].box, box) >= 0.5
 
 
-def test_a_dark_wedge_beside_a_card_is_not_a_mark() -> None:
+def test_a_dark_wedge_beside_a_card_is_not_a_mark(base_verifier: str) -> None:
     # diagnostic blind seed 853 (looked at, stop 106), frame 185: below an O's card, a dark wedge that a card's edge
     # cuts from the board behind, paper along one side only - a false TRIANGLE with almost any ring of paper asked,
-    # none with 0.9 of it; the O is found either way (about 20 s to draw)
+    # none with 0.9 of it; the O is found either way (about 20 s to draw). The committed verifier's base (the model
+    # before round vision68b) names the wedge a triangle at 0.56; the committed model no longer does (at any ring)
     frame_of = vision_bench._generator("blind", 853)
     for i in range(186):
         img, label, _ = frame_of(vision_bench.CLASSES[i % 4])
     assert label is not None and label[0] is Shape.O
-    loose = MarkDetector(DetectorConfig(filled_paper_round=0.01)).detect(img)
+    loose = MarkDetector(DetectorConfig(filled_paper_round=0.01, verifier_model=base_verifier)).detect(img)
     assert any(d.shape is Shape.TRIANGLE and iou(d.box, (420, 354, 53, 23)) >= 0.5 for d in loose)
-    found = MarkDetector(ON).detect(img)
-    assert [d.shape for d in found] == [Shape.O] and iou(found[0].box, label[1]) >= 0.5
+    for config in (DetectorConfig(filled_paper_round=0.9, verifier_model=base_verifier), ON):
+        found = MarkDetector(config).detect(img)
+        assert [d.shape for d in found] == [Shape.O] and iou(found[0].box, label[1]) >= 0.5
 
 
 def test_paper_round_is_the_share_of_paper_in_the_ring() -> None:

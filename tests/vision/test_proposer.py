@@ -319,11 +319,12 @@ def _finds_x(config: DetectorConfig, img: np.ndarray, box: tuple[int, int, int, 
     return any(d.shape is Shape.X and box_overlap(d.box, box) >= 0.5 for d in MarkDetector(config).detect(img))
 
 
-def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
+def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only(base_verifier: str) -> None:
     """`propose_sure` (round vision42; X's on by default since round vision56): a small X under strong motion blur
     that the proposer peaks on at 0.7 or more, but to which the verifier gives under its proposal bar (0.5), is kept
     at the sure bar instead; a sure peak set for another shape changes nothing, and the verifier still judges at the
-    sure bar."""
+    sure bar. With the committed verifier's base (the model before round vision68b raised the X; the committed one
+    finds these X without the sure peak's bar)."""
     from dataclasses import replace
 
     from services.vision.detector import DetectorConfig
@@ -331,21 +332,23 @@ def test_a_sure_peak_lowers_the_verifiers_bar_for_its_own_shape_only() -> None:
     def found(config: DetectorConfig, seed: int) -> bool:
         return _finds_x(config, *_blurred_x(seed))
 
-    off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0))
+    off = DetectorConfig(propose_sure=(0.0, 0.0, 0.0), verifier_model=base_verifier)
     sure_x = replace(off, propose_sure=(0.7, 0.0, 0.0), propose_sure_thresholds=(0.01, 0.99, 0.9))
     for seed in (259, 284):  # the first frame of each: under 0.5 from the verifier (67 and 173 before round vision45c)
         assert not found(off, seed)
         assert not found(replace(sure_x, propose_sure=(0.0, 0.0, 0.7)), seed)
         assert not found(replace(sure_x, propose_sure_thresholds=(0.5, 0.99, 0.9)), seed)
         assert found(sure_x, seed)
-        assert found(DetectorConfig(), seed)  # the default keeps it
+        assert found(replace(off, propose_sure=DetectorConfig().propose_sure), seed)  # the default sure peak keeps it
+        assert found(DetectorConfig(), seed)  # and so does the committed model
 
 
-def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free() -> None:
+def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free(base_verifier: str) -> None:
     """Rounds vision65-65b: under `x_solidity` 0.6 the blurred X of the sure-peak test's seed 259, thickened by its
     blur, is claimed by the shape tests and refused by the card tests. With `x_solidity_veto` on (round vision65) that
     refusal keeps the proposer out and the X is lost; by default (off) the claim leaves the place to the proposer, as
-    it did when the old limit left it unclaimed, and the X is found."""
+    it did when the old limit left it unclaimed, and the X is found. With the committed verifier's base (the model
+    before round vision68b raised the X): the committed model finds this X even with the veto on."""
     from dataclasses import replace
 
     from services.vision.detector import X_SOLIDITY, DetectorConfig, MarkDetector, box_overlap
@@ -358,9 +361,10 @@ def test_a_thick_x_claim_refused_on_its_card_leaves_the_proposer_free() -> None:
     def stages(config: DetectorConfig) -> set[tuple[Shape | None, str]]:
         return {(t.shape, t.stage) for t in MarkDetector(config).trace(img)[1] if box_overlap(t.box, box) >= 0.4}
 
-    default = DetectorConfig()
+    default = DetectorConfig(verifier_model=base_verifier)
     assert (Shape.X, "card") in stages(default) and found(default)
     assert not found(replace(default, x_solidity_veto=True))
+    assert found(DetectorConfig(x_solidity_veto=True))
     old = replace(default, x_solidity=X_SOLIDITY)
     assert (Shape.X, "card") not in stages(old) and found(old)
 
