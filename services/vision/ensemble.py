@@ -1,10 +1,13 @@
-"""Join two verifier networks into one `verifier.onnx`: a loose candidate is named X only if both agree.
+"""Join two verifier networks into one model: a loose candidate is named X only if both agree.
+
+The committed `verifier.onnx` is such a joined model (its base) raised by a second one since round vision68b
+(`danger_raise.py`); given it, this command uses its base's networks (`network`).
 
     pip install -e '.[train]'
     python -m services.vision.training --out main.onnx                # the default recipe
     python -m services.vision.training --everyday --out everyday.onnx  # stars, check marks, clocks (round vision23)
     # the committed veto since round vision45c: --everyday --crossings 6 --proposals 0.3 (crossing strokes too)
-    python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out services/vision/verifier.onnx]
+    python -m services.vision.ensemble main.onnx everyday.onnx [--loose-x 0.1] [--out FILE]  # default: verifier.onnx
     python -m services.vision.ensemble new-main.onnx services/vision/verifier.onnx --out joined.onnx  # keep its veto
     python -m services.vision.ensemble main.onnx everyday.onnx --veto-shapes "X,TRIANGLE*9" --out FILE  # cap more
 

@@ -2,7 +2,8 @@
 
 The committed `verifier.onnx` is two networks this command makes, the default recipe and `--everyday --crossings 6
 --proposals 0.3` (round vision45c; `--everyday` alone from round vision23g), joined by `python -m
-services.vision.ensemble` (see there). The committed `verifier_triangles.onnx`,
+services.vision.ensemble` (see there), and since round vision68b raised by a third, the first fine-tuned with `--init
+--sheen` (`danger_raise.py`, see there). The committed `verifier_triangles.onnx`,
 asked only about claimed triangles the first refuses (`DetectorConfig.hand_triangle`, round vision34), is `--hand-drawn
 0.4 --hand-drawn-shapes TRIANGLE` (never written by default: `--out` names the file).
 
@@ -555,7 +556,7 @@ def main(
         Path,
         typer.Option(
             help="where to write the model; never the committed verifier.onnx by default: that file is two trainings "
-            "joined (python -m services.vision.ensemble MAIN VETO)"
+            "joined (python -m services.vision.ensemble MAIN VETO) and raised by a third (services.vision.danger_raise)"
         ),
     ],
     frames: Annotated[int, typer.Option(help="tuning frames to harvest")] = 16000,

@@ -16,7 +16,9 @@ trained by `python -m services.vision.training` (PyTorch, fixed seed) on candida
 tuning generator only (`synthetic.py`); see the vision README. Since round vision23g the committed file
 holds two such networks joined by `ensemble.py`: the second, trained with stars, check marks and clock
 faces too (`--everyday`), runs on the loose rows only and caps their X probability (a loose candidate is
-named X only if both agree); everything else is the first's. A candidate is kept when the model gives
+named X only if both agree); everything else is the first's. Since round vision68b that joined model is the base
+of a danger-raised one (`danger_raise.py`): a second joined model, its first network fine-tuned on glossy cards, may
+raise a row's X (the higher of the two), never its O. A candidate is kept when the model gives
 its claimed shape at least that shape's threshold (`thresholds`) of probability; a loose candidate is
 named after its likeliest shape if that reaches the stricter `loose_thresholds`. Both sets of
 thresholds are stored in the model file's metadata.
