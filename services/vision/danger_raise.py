@@ -4,14 +4,14 @@ The committed `verifier.onnx` is such a join since round vision68b: its base is 
 (main and veto, `ensemble.py`), its raiser round vision67's glossy network (kept in docs/experiments/models/) joined
 to the same veto, raising the X alone. It is remade byte for byte from itself and that network:
 
-    python -m services.vision.ensemble docs/experiments/models/vision67_glossy_proposals.onnx \
+    python -m services.vision.ensemble docs/experiments/models/vision67_glossy_proposals.onnx \\
         services/vision/verifier.onnx --out glossy-joined.onnx       # the raiser: its veto is the committed base's
     python -m services.vision.danger_raise services/vision/verifier.onnx glossy-joined.onnx --out raised.onnx
 
 A new raiser (the glossy network came from round vision67's diagnostic fine-tune):
 
     pip install -e '.[train]'
-    python -m services.vision.training --sheen 0.5 --sheen-shapes X,TRIANGLE --proposals 0.3 \
+    python -m services.vision.training --sheen 0.5 --sheen-shapes X,TRIANGLE --proposals 0.3 \\
         --init services/vision/verifier.onnx --epochs 2 --lr 1e-3 --out glossy.onnx   # starts from the base's main
     python -m services.vision.ensemble glossy.onnx services/vision/verifier.onnx --out glossy-joined.onnx
     python -m services.vision.danger_raise services/vision/verifier.onnx glossy-joined.onnx --out raised.onnx
@@ -45,7 +45,6 @@ from services.vision.ensemble import BASE, RAISED, RAISED_KEY, RAISER, SHAPE_NAM
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
 DANGER_SHAPES = ("X", "TRIANGLE")  # the shapes a second model may raise: a stop is the safe direction
-DANGER = ",".join(DANGER_SHAPES)
 
 
 def check_shapes(shapes: tuple[str, ...]) -> None:
