@@ -41,7 +41,16 @@ from typing import Annotated, Any
 
 import typer
 
-from services.vision.ensemble import BASE, RAISED, RAISED_KEY, RAISER, SHAPE_NAMES, save_checked, unraise
+from services.vision.ensemble import (
+    BASE,
+    RAISED,
+    RAISED_KEY,
+    RAISER,
+    SHAPE_NAMES,
+    check_same_opset,
+    save_checked,
+    unraise,
+)
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
 
 DANGER_SHAPES = ("X", "TRIANGLE")  # the shapes a second model may raise: a stop is the safe direction
@@ -61,8 +70,7 @@ def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
 
     check_shapes(shapes)
-    if base.opset_import[0].version != raiser.opset_import[0].version:
-        raise ValueError(f"the two models' opsets differ: {base.opset_import} and {raiser.opset_import}")
+    check_same_opset(base, raiser)
     b = compose.add_prefix(base, BASE, rename_inputs=False)  # both read `crops` and `claim`
     r = compose.add_prefix(raiser, RAISER, rename_inputs=False)
     pb, pr = b.graph.output[0].name, r.graph.output[0].name

@@ -170,6 +170,12 @@ def check_capped(capped: Mapping[str, float]) -> None:
         raise ValueError(f"capped shapes {dict(capped)!r}: one or more of {list(SHAPE_NAMES)}, each with a scale above 0")
 
 
+def check_same_opset(first: Any, second: Any) -> None:
+    """ValueError unless two models (`onnx.ModelProto`) to be joined into one graph use the same opset."""
+    if first.opset_import[0].version != second.opset_import[0].version:
+        raise ValueError(f"the two models' opsets differ: {first.opset_import} and {second.opset_import}")
+
+
 def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = MappingProxyType({"X": 1.0})) -> Any:
     """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset): on a loose row each
     shape in `capped` (shape name: scale) gets the lower of `main`'s probability and `veto`'s times the scale. A
@@ -179,8 +185,7 @@ def join(main: Any, veto: Any, loose_x: float, capped: Mapping[str, float] = Map
 
     check_capped(capped)
 
-    if main.opset_import[0].version != veto.opset_import[0].version:
-        raise ValueError(f"the two models' opsets differ: {main.opset_import} and {veto.opset_import}")
+    check_same_opset(main, veto)
     m = compose.add_prefix(main, MAIN, rename_inputs=False)  # reads `crops` and `claim` itself
     v = compose.add_prefix(veto, VETO)  # reads `veto_crops` and `veto_claim`, the loose rows
     pm, pv = m.graph.output[0].name, v.graph.output[0].name
