@@ -31,6 +31,9 @@ raising the X alone passed its held-out rule (round vision68b, docs/experiments/
 
 The result is one ONNX graph over the verifier's usual inputs and output (`verifier.INPUT_FORMAT`): both models'
 nodes on every row (their names prefixed `base_` and `raise_`), then Max, Sub, Relu and a division by the row's sum.
+What the raiser repeats of the base is done once (`ensemble.share`): the committed raiser's veto is the base's, so
+that network runs once on the loose rows (stop 117; the same probabilities bit for bit, 4 % more frames per
+CPU-second, a 0.84 MB file instead of 1.1 MB).
 Its metadata is the base model's (thresholds, loose thresholds, `veto_shapes`), with `raised_shapes` added.
 """
 
@@ -49,6 +52,7 @@ from services.vision.ensemble import (
     SHAPE_NAMES,
     check_same_opset,
     save_checked,
+    share,
     unraise,
 )
 from services.vision.verifier import MODEL_PATH, SHAPES, Verifier
@@ -66,7 +70,8 @@ def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
     """The joined `onnx.ModelProto` of two verifier models (`onnx.ModelProto`, the same opset): each shape named in
     `shapes` (one or both of "X" and "TRIANGLE", `DANGER_SHAPES`) gets the higher of the two models' probabilities;
     what they gained is taken from `base`'s 'none', then from its O (each down to 0 at most); the others are `base`'s;
-    the row is then divided by its sum (one, unless the raised shapes alone pass it)."""
+    the row is then divided by its sum (one, unless the raised shapes alone pass it). What the raiser's nodes repeat of
+    the base's (the same veto, the same pick of the loose rows) is read from the base's (`ensemble.share`)."""
     from onnx import TensorProto, compose, helper  # type: ignore[import-not-found,unused-ignore]
 
     check_shapes(shapes)
@@ -119,7 +124,7 @@ def raise_join(base: Any, raiser: Any, shapes: tuple[str, ...]) -> Any:
             joined.metadata_props.add(key=p.key, value=p.value)
     joined.metadata_props.add(key=RAISED_KEY, value=",".join(shapes))
     joined.doc_string = f"vision mark verifier: python -m services.vision.danger_raise BASE RAISER ({','.join(shapes)})"
-    return joined
+    return share(joined, RAISER)  # the committed raiser's veto is the base's: run once
 
 
 def main(
@@ -151,7 +156,7 @@ def main(
     if raiser.graph.name == RAISED:
         raise typer.BadParameter(f"{raiser_model}: already a raised model; give the raiser itself", param_hint="RAISER")
     if base.graph.name == RAISED:  # the committed model: a new raiser replaces its own, not raises it again
-        base = unraise(base, BASE)
+        base = unraise(base)
         typer.echo(f"{base_model} is a raised model: its base is raised instead")
     # as ensemble's: two models of different opsets are refused by `raise_join`'s ValueError, not named as `--shapes`
     save_checked(raise_join(base, raiser, names), out)

@@ -90,24 +90,23 @@ def part(joined: Any, role: str) -> Any:
     return model
 
 
-def unraise(raised: Any, role: str) -> Any:
-    """One of the two models a danger-raised model (`onnx.ModelProto` made by `danger_raise.raise_join`) was made of,
-    as it was: `role` "base_" or "raise_"; its nodes and weights with the prefix taken off, so a joined model is a
-    joined model again (`part` takes its networks out); the metadata is the raised model's less `raised_shapes`."""
+def unraise(raised: Any) -> Any:
+    """The base of a danger-raised model (`onnx.ModelProto` made by `danger_raise.raise_join`) as it was: its nodes and
+    weights with the prefix "base_" taken off, so a joined model is a joined model again (`part` takes its networks
+    out); the metadata is the raised model's less `raised_shapes`. (The raiser is not taken out: what it shares with
+    the base, `share`, is read from the base's nodes.)"""
     from onnx import NodeProto, TensorProto, helper  # type: ignore[import-not-found,unused-ignore]
 
-    if role not in (BASE, RAISER):
-        raise ValueError(f"role {role!r}: one of {(BASE, RAISER)}")
     g = raised.graph
     if g.name != RAISED:
         raise ValueError(f"not a danger-raised verifier (graph {g.name!r}, expected {RAISED!r})")
 
     def own(name: str) -> str:  # the model's inputs `crops` and `claim` were never prefixed
-        return name.removeprefix(role)
+        return name.removeprefix(BASE)
 
     nodes = []
-    for n in g.node:  # the model's own nodes: all they make bears its prefix (the join's own are `d_`)
-        if not any(n.output) or not all(o.startswith(role) for o in n.output if o):
+    for n in g.node:  # the base's own nodes: all they make bears its prefix (the join's own are `d_`)
+        if not any(n.output) or not all(o.startswith(BASE) for o in n.output if o):
             continue
         copy = NodeProto()
         copy.CopyFrom(n)
@@ -118,10 +117,10 @@ def unraise(raised: Any, role: str) -> Any:
         copy.output[:] = [own(o) for o in n.output]
         nodes.append(copy)
     if not nodes or "probabilities" not in nodes[-1].output:
-        raise ValueError(f"no {role!r} model ending in {role}probabilities in {g.name!r}")
+        raise ValueError(f"no {BASE!r} model ending in {BASE}probabilities in {g.name!r}")
     weights = []
     for t in g.initializer:
-        if t.name.startswith(role):
+        if t.name.startswith(BASE):
             copy_t = TensorProto()
             copy_t.CopyFrom(t)
             copy_t.name = own(t.name)
@@ -134,7 +133,44 @@ def unraise(raised: Any, role: str) -> Any:
     for p in raised.metadata_props:
         if p.key != RAISED_KEY:
             model.metadata_props.add(key=p.key, value=p.value)
-    model.doc_string = f"the {role.rstrip('_')} model of a danger-raised verifier (services.vision.ensemble.unraise)"
+    model.doc_string = "the base model of a danger-raised verifier (services.vision.ensemble.unraise)"
+    return model
+
+
+def share(model: Any, role: str) -> Any:
+    """`model` (`onnx.ModelProto` of two models joined in one graph; changed in place and returned) with what the nodes
+    and weights of `role` (their names' prefix) repeat of earlier ones taken out: a weight equal in value to an earlier
+    one is read from it, then a node doing what an earlier node does (op, attributes) on the same inputs is replaced by
+    it. The graph computes the same, bit for bit, doing it once: a danger-raised model whose raiser carries the base's
+    veto runs that network, and picks the loose rows, once (stop 117: 4 % more frames per CPU-second)."""
+    from onnx import numpy_helper  # type: ignore[import-not-found,unused-ignore]
+
+    g = model.graph
+    alias: dict[str, str] = {}  # a name taken out: the earlier name read instead
+    first: dict[tuple[Any, ...], str] = {}
+    weights = []
+    for t in g.initializer:
+        key = (t.data_type, tuple(t.dims), numpy_helper.to_array(t).tobytes())
+        if t.name.startswith(role) and key in first:
+            alias[t.name] = first[key]
+            continue
+        first.setdefault(key, t.name)
+        weights.append(t)
+    outputs = {o.name for o in g.output}
+    done: dict[tuple[Any, ...], list[str]] = {}
+    nodes = []
+    for n in g.node:  # in the graph's order, so a node's inputs are renamed before it is compared
+        n.input[:] = [alias.get(i, i) for i in n.input]
+        key = (n.domain, n.op_type, tuple(n.input), tuple(a.SerializeToString() for a in n.attribute), len(n.output))
+        if key in done and all(o.startswith(role) and o not in outputs for o in n.output):
+            alias.update(zip(n.output, done[key], strict=True))
+            continue
+        done.setdefault(key, list(n.output))
+        nodes.append(n)
+    del g.initializer[:]
+    g.initializer.extend(weights)
+    del g.node[:]
+    g.node.extend(nodes)
     return model
 
 
@@ -143,7 +179,7 @@ def network(model: Any, role: str) -> Any:
     model since round vision68b), its base's network in `role`, so a new main network can still be joined to the
     committed veto and `training --init` still starts from the committed main network."""
     if model.graph.name == RAISED:
-        model = unraise(model, BASE)
+        model = unraise(model)
     return part(model, role) if model.graph.name == JOINED else model
 
 

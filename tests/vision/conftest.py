@@ -12,9 +12,9 @@ def base_verifier(tmp_path_factory: pytest.TempPathFactory) -> str:
     finds without the setting the test is about) use it, so that they still test that logic."""
     import onnx
 
-    from services.vision.ensemble import BASE, unraise
+    from services.vision.ensemble import unraise
     from services.vision.verifier import MODEL_PATH
 
     path = tmp_path_factory.mktemp("verifier") / "base.onnx"
-    onnx.save(unraise(onnx.load(str(MODEL_PATH)), BASE), str(path))
+    onnx.save(unraise(onnx.load(str(MODEL_PATH))), str(path))
     return str(path)

@@ -4,6 +4,7 @@ the committed model joined with itself, which must judge exactly as it does alon
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +73,33 @@ def test_the_committed_model_raised_by_itself_judges_as_it_does_alone(tmp_path: 
     assert over.exit_code != 0 and "committed" in over.output
     twice = runner.invoke(_app(), [str(MODEL_PATH), str(MODEL_PATH), "--out", str(tmp_path / "twice.onnx")])
     assert twice.exit_code != 0 and "RAISER" in twice.output and "already" in twice.output
+
+
+def test_what_the_raiser_repeats_of_the_base_is_run_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The committed model's raiser carries the base's veto (`ensemble.share`, stop 117): the joined graph holds and
+    runs that network once, and judges bit for bit as the join that runs it twice (the file stop 116 committed), on
+    loose rows and claimed ones."""
+    import services.vision.danger_raise as danger_raise
+    from services.vision.ensemble import MAIN, RAISER, VETO, join, network, unraise
+
+    glossy = Path(__file__).parents[2] / "docs/experiments/models/vision67_glossy_proposals.onnx"
+    committed = onnx.load(str(MODEL_PATH))
+    base = unraise(committed)
+    raiser = join(network(onnx.load(str(glossy)), MAIN), network(committed, VETO), loose_x=0.1)
+    shared = raise_join(base, raiser, ("X",))
+    monkeypatch.setattr(danger_raise, "share", lambda model, role: model)
+    twice = raise_join(base, raiser, ("X",))
+    convs = [sum(n.op_type == "Conv" for n in m.graph.node) for m in (shared, twice)]
+    assert convs == [9, 12]  # three networks of three convolutions, not four
+    assert not any(n.output[0].startswith(RAISER + VETO) for n in shared.graph.node)
+    assert len(shared.SerializeToString()) < 0.8 * len(twice.SerializeToString())
+    assert hashlib.sha256(twice.SerializeToString()).hexdigest().startswith("49823c1e")  # stop 116's committed file
+    rng = np.random.default_rng(5)
+    crops = rng.integers(0, 256, (40, 3, PATCH, PATCH)).astype(np.uint8)
+    claims = np.stack([claim([None, *SHAPES][k % 4]) for k in range(40)])
+    one, two = _save(shared, tmp_path / "shared.onnx"), _save(twice, tmp_path / "twice.onnx")
+    assert np.array_equal(one.probabilities(crops, claims), two.probabilities(crops, claims))
+    assert np.array_equal(one.probabilities(crops[::4], claims[::4]), two.probabilities(crops[::4], claims[::4]))
 
 
 def _app() -> object:
