@@ -52,7 +52,7 @@ def test_the_raised_shapes_take_the_higher_and_the_rest_stays_the_bases(tmp_path
 def test_the_committed_model_raised_by_itself_judges_as_it_does_alone(tmp_path: Path) -> None:
     """The committed model (itself raised since round vision68b) as both inputs: the same probabilities on every kind
     of row, its metadata kept and the raised shapes named; an unknown shape is refused, and so is writing over the
-    committed file; the command refuses a raised model as the raiser (`ensemble.unraise` gives the raiser itself)."""
+    committed file; the command refuses a raised model as the raiser (give the raiser's own joined model)."""
     model = onnx.load(str(MODEL_PATH))
     same = _save(raise_join(model, model, ("X", "TRIANGLE")), tmp_path / "same.onnx")
     committed = Verifier.load()
