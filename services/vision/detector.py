@@ -205,6 +205,13 @@ class DetectorConfig:
     this round: under dim light (exposure 0.35-0.7) or with pale ink a printed mark has 25-35 levels,
     and 25 found 0.7-1.1 % more marks on four tuning seeds with no more false marks there"""
     max_margin_texture: float = 0.35  # margin grey std / (margin - ink): a card is plain, gravel is not
+    texture_window: float = 0.0
+    """the card test's plainness measured against the card's own local mean (0: off): where the card near a mark
+    spreads more than `max_margin_texture` allows, the spread is measured again after each card pixel's mean over a
+    window of this share of the mark's extent (card pixels only) is taken out, so that light that changes smoothly
+    across the card - a lamp's highlight on a glossy card, a strong gradient - is not taken for texture, while gravel's
+    grain, finer than the window, still is. It can only pass a card the plain measure refused. Round vision71 (stop
+    117): under `bench/glare.py`'s highlight the texture test refused a tenth of the lost marks' cards."""
     min_confidence: float = 0.5
     loose_confidence: float = 0.5
     """the confidence a loose candidate needs once the verifier has named it, its probability for that shape taking
@@ -501,6 +508,8 @@ class DetectorConfig:
         if not 0.0 <= self.danger_contrast_ratio < 1.0:
             raise ValueError(f"danger_contrast_ratio: {self.danger_contrast_ratio}: a share of the paper's grey under 1 "
                              "(0: max_contrast_ratio)")
+        if not 0.0 <= self.texture_window <= 4.0:
+            raise ValueError(f"texture_window {self.texture_window}: a share of the mark's extent, 0 (off) to 4")
         if not 0.0 <= self.filled_paper_round <= 1.0:
             raise ValueError(f"filled_paper_round: {self.filled_paper_round}: a share of the ring, 0 (off) to 1")
         if not 0.0 <= self.loose_confidence <= 1.0:
@@ -1940,7 +1949,10 @@ def _on_card(
     near = cv2.inRange(dist, 1.5, max(3.0, cfg.surround * extent))
     card_near = cv2.bitwise_and(card, near)
     mean, std = cv2.meanStdDev(g_roi, mask=card_near)
-    if float(std[0][0]) > cfg.max_margin_texture * (paper - ink):
+    most = cfg.max_margin_texture * (paper - ink)
+    if float(std[0][0]) > most and (
+        cfg.texture_window <= 0 or _local_spread(g_roi, card_near, max(3, round(cfg.texture_window * extent))) > most
+    ):
         return "texture"
     inside, labels = _enclosed(card, filled)
     if inside.any():
@@ -1949,6 +1961,16 @@ def _on_card(
         if on_card > cfg.max_surround_ink * max(1, cv2.countNonZero(card_near)):
             return "ink"
     return float(mean[0][0])
+
+
+def _local_spread(g: np.ndarray, mask: np.ndarray, window: int) -> float:
+    """The standard deviation over `mask` of `g` less each pixel's mean over the masked pixels of a `window` x `window`
+    box round it (a normalised box filter: the mask's own pixels only, so ink beside the card does not pull it down):
+    the grain of the masked region, without what changes over more than the window (`DetectorConfig.texture_window`)."""
+    on = (mask > 0).astype(np.float32)
+    grey = g.astype(np.float32)
+    local = cv2.blur(grey * on, (window, window)) / np.maximum(cv2.blur(on, (window, window)), 1e-6)
+    return float((grey - local)[mask > 0].std())
 
 
 def _band_paper(

@@ -1,0 +1,46 @@
+"""The card test's plainness against the card's own local mean (`DetectorConfig.texture_window`, round vision71): light
+that changes smoothly across a card is not texture, gravel's grain still is."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bench.glare import glare_spot
+from bench.vision_bench import _generator
+from schemas.messages import Shape
+from services.vision.detector import MarkDetector, _local_spread, box_overlap, parse_settings
+from services.vision.verifier import CLASSES
+
+
+def test_a_smooth_lobe_has_little_local_spread_and_grain_keeps_its_own() -> None:
+    ys, xs = np.mgrid[0:120, 0:160].astype(np.float32)
+    lobe = 150.0 + 80.0 * np.exp(-((xs - 60) ** 2 + (ys - 50) ** 2) / (2 * 30.0**2))  # a highlight on a card
+    mask = np.zeros((120, 160), np.uint8)
+    mask[10:110, 10:150] = 255
+    mask[45:75, 65:95] = 0  # the mark's place: not card
+    grain = np.random.default_rng(1).normal(0.0, 12.0, lobe.shape)
+    smooth, gravel = lobe.astype(np.uint8), np.clip(150.0 + grain, 0, 255).astype(np.uint8)
+    plain = float(smooth[mask > 0].std())
+    assert plain > 15.0  # the plain measure: far from plain
+    assert _local_spread(smooth, mask, 15) < 0.15 * plain
+    assert _local_spread(gravel, mask, 15) > 0.9 * float(gravel[mask > 0].std())  # grain finer than the window stays
+
+
+def test_an_x_under_a_highlight_refused_as_texture_is_found_with_the_window() -> None:
+    """Tuning seed 7263's frame 24 under bench/glare.py's highlight at a peak of white: a big X whose card the
+    highlight brightens at one arm. The plain measure refuses its card as texture; with the window the X is found."""
+    frame_of = _generator("tuning", 7263)
+    for i in range(25):
+        img, label, _ = frame_of(CLASSES[i % 4])
+    img, _ = glare_spot(img, np.random.default_rng((7263, 24, 1)), 1.0, label[1])
+    assert label[0] is Shape.X
+    assert not any(d.shape is Shape.X for d in MarkDetector(parse_settings([])).detect(img))
+    found = MarkDetector(parse_settings(["texture_window=0.5"])).detect(img)
+    assert any(d.shape is Shape.X and box_overlap(d.box, label[1]) >= 0.5 for d in found)
+
+
+def test_the_window_is_a_share_of_the_extent() -> None:
+    assert parse_settings([]).texture_window == 0.0  # off by default
+    with pytest.raises(ValueError, match="texture_window"):
+        parse_settings(["texture_window=-0.5"])
