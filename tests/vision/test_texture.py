@@ -36,11 +36,39 @@ def test_an_x_under_a_highlight_refused_as_texture_is_found_with_the_window() ->
     img, _ = glare_spot(img, np.random.default_rng((7263, 24, 1)), 1.0, label[1])
     assert label[0] is Shape.X
     assert not any(d.shape is Shape.X for d in MarkDetector(parse_settings([])).detect(img))
-    found = MarkDetector(parse_settings(["texture_window=0.5"])).detect(img)
-    assert any(d.shape is Shape.X and box_overlap(d.box, label[1]) >= 0.5 for d in found)
+    for setting in ("texture_window=0.5", "danger_texture_window=0.5"):  # an X: a danger mark
+        found = MarkDetector(parse_settings([setting])).detect(img)
+        assert any(d.shape is Shape.X and box_overlap(d.box, label[1]) >= 0.5 for d in found)
 
 
 def test_the_window_is_a_share_of_the_extent() -> None:
-    assert parse_settings([]).texture_window == 0.0  # off by default
-    with pytest.raises(ValueError, match="texture_window"):
-        parse_settings(["texture_window=-0.5"])
+    assert (parse_settings([]).texture_window, parse_settings([]).danger_texture_window) == (0.0, 0.0)  # off
+    for bad in ("texture_window=-0.5", "danger_texture_window=5"):
+        with pytest.raises(ValueError, match="texture_window"):
+            parse_settings([bad])
+
+
+def test_the_danger_window_leaves_an_o_to_the_plain_measure(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`danger_texture_window` measures an X's or a triangle's card against its local mean, never an O's (round
+    vision71b): the window each card test asks for, by the mark's kind."""
+    import services.vision.detector as detector
+
+    asked: list[int] = []
+    spread = detector._local_spread
+
+    def recorded(g: np.ndarray, mask: np.ndarray, window: int) -> float:
+        asked.append(window)
+        return spread(g, mask, window)
+
+    monkeypatch.setattr(detector, "_local_spread", recorded)
+    ys, xs = np.mgrid[0:120, 0:160].astype(np.float32)  # grey ink on a card, a highlight by its corner
+    card = np.clip(140.0 + 100.0 * np.exp(-((xs - 95) ** 2 + (ys - 45) ** 2) / (2 * 12.0**2)), 0, 255).astype(np.uint8)
+    filled = np.zeros_like(card)
+    filled[50:70, 70:90] = 255
+    card[filled > 0] = 80
+    dist = detector._distance(filled, (70, 50, 20, 20), 200.0)
+    cfg = parse_settings(["danger_texture_window=0.5"])
+    o = detector._on_card(card, filled, 80.0, 20.0, dist, cfg, may_rescue=False, danger=False)
+    assert o == "texture" and asked == []  # an O: the plain measure alone, which the highlight fails
+    x = detector._on_card(card, filled, 80.0, 20.0, dist, cfg, may_rescue=False, danger=True)
+    assert asked == [10] and x != "texture"  # an X: measured again with the window (half the extent), and passed
