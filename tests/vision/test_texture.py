@@ -29,20 +29,22 @@ def test_a_smooth_lobe_has_little_local_spread_and_grain_keeps_its_own() -> None
 
 def test_an_x_under_a_highlight_refused_as_texture_is_found_with_the_window() -> None:
     """Tuning seed 7263's frame 24 under bench/glare.py's highlight at a peak of white: a big X whose card the
-    highlight brightens at one arm. The plain measure refuses its card as texture; with the window the X is found."""
+    highlight brightens at one arm. The plain measure refuses its card as texture; with the window (the default for a
+    danger mark since round vision71c) the X is found."""
     frame_of = _generator("tuning", 7263)
     for i in range(25):
         img, label, _ = frame_of(CLASSES[i % 4])
     img, _ = glare_spot(img, np.random.default_rng((7263, 24, 1)), 1.0, label[1])
     assert label[0] is Shape.X
-    assert not any(d.shape is Shape.X for d in MarkDetector(parse_settings([])).detect(img))
-    for setting in ("texture_window=0.5", "danger_texture_window=0.5"):  # an X: a danger mark
-        found = MarkDetector(parse_settings([setting])).detect(img)
+    assert not any(d.shape is Shape.X for d in MarkDetector(parse_settings(["danger_texture_window=0"])).detect(img))
+    for settings in (["texture_window=0.5", "danger_texture_window=0"], []):  # every card's window; the default's
+        found = MarkDetector(parse_settings(settings)).detect(img)
         assert any(d.shape is Shape.X and box_overlap(d.box, label[1]) >= 0.5 for d in found)
 
 
 def test_the_window_is_a_share_of_the_extent() -> None:
-    assert (parse_settings([]).texture_window, parse_settings([]).danger_texture_window) == (0.0, 0.0)  # off
+    # every card's window off (round vision71's false O), a danger mark's at half the extent (round vision71c)
+    assert (parse_settings([]).texture_window, parse_settings([]).danger_texture_window) == (0.0, 0.5)
     for bad in ("texture_window=-0.5", "danger_texture_window=5"):
         with pytest.raises(ValueError, match="texture_window"):
             parse_settings([bad])
