@@ -220,6 +220,10 @@ class DetectorConfig:
     judged it again on fresh seeds, timed in one sitting: on held-out frames 31 of 726 X and triangles a highlight hid
     found (X 239 -> 219), 6 of 307 marks without it, no false O added, 3 more false X or triangles in 4,000 frames
     (6 under the highlight), the same speed: the default since stop 118."""
+    safe_texture_window: float = 0.0
+    """the same window for an O's card, asked only where the plain measure refused it as texture (0: off); an O kept
+    so must also have the verifier's `safe_card_sure`, like an O its card spared at the clear margin: round vision71's
+    window on every card made one false O more under a highlight, and a false O lifts a danger. Round vision72."""
     min_confidence: float = 0.5
     loose_confidence: float = 0.5
     """the confidence a loose candidate needs once the verifier has named it, its probability for that shape taking
@@ -516,9 +520,10 @@ class DetectorConfig:
         if not 0.0 <= self.danger_contrast_ratio < 1.0:
             raise ValueError(f"danger_contrast_ratio: {self.danger_contrast_ratio}: a share of the paper's grey under 1 "
                              "(0: max_contrast_ratio)")
-        if not (0.0 <= self.texture_window <= 4.0 and 0.0 <= self.danger_texture_window <= 4.0):
-            raise ValueError(f"texture_window {self.texture_window}, danger_texture_window {self.danger_texture_window}: "
-                             "shares of the mark's extent, 0 (off) to 4")
+        windows = (self.texture_window, self.danger_texture_window, self.safe_texture_window)
+        if not all(0.0 <= w <= 4.0 for w in windows):
+            raise ValueError(f"texture_window {self.texture_window}, danger_texture_window {self.danger_texture_window}, "
+                             f"safe_texture_window {self.safe_texture_window}: shares of the mark's extent, 0 (off) to 4")
         if not 0.0 <= self.filled_paper_round <= 1.0:
             raise ValueError(f"filled_paper_round: {self.filled_paper_round}: a share of the ring, 0 (off) to 1")
         if not 0.0 <= self.loose_confidence <= 1.0:
@@ -1368,6 +1373,10 @@ class MarkDetector:
         extent = math.sqrt(max(cv2.contourArea(cv2.convexHull(blob.outer)), 1.0))
         dist = _distance(filled, (x - x0, y - y0, w, h), _reach(cfg, extent))
         paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), danger=shape is not Shape.O)
+        if paper == "texture" and shape is Shape.O and cfg.safe_texture_window > 0 and self.verifier is not None:
+            # the O's card against its own local mean: kept so, the O needs the verifier's `safe_card_sure`
+            paper = _on_card(g_roi, filled, ink, extent, dist, cfg, self._rescues(shape), window=cfg.safe_texture_window)
+            self._spared = not isinstance(paper, str) and cfg.safe_card_sure > 0
         # an X claimed only above X_SOLIDITY was a loose candidate before round vision65b: without x_solidity_veto its
         # refusal leaves the proposer free there, as it was then
         vetoes = cfg.x_solidity_veto or named or shape is not Shape.X or blob.area <= X_SOLIDITY * extent**2
@@ -1387,7 +1396,7 @@ class MarkDetector:
         if shape is Shape.O and cfg.safe_margin > 0:
             # a false O would lift a danger: the safe mark must also have the wide clear margin
             margin = _clear_margin(g_roi, bin_roi, filled, ink, extent, dist, cfg)
-            self._spared = margin == "card" and cfg.safe_card_sure > 0
+            self._spared = self._spared or (margin == "card" and cfg.safe_card_sure > 0)
             if not margin or (self._spared and self.verifier is None):
                 self._why = "O margin"
                 self._vetoes.append(_up((x, y, w, h), level.f))
@@ -1902,6 +1911,7 @@ def _on_card(
     cfg: DetectorConfig,
     may_rescue: bool,
     danger: bool = False,
+    window: float | None = None,
 ) -> float | str:
     """The card test: is the mark (filled outline `filled`, mean grey `ink`, `extent`, every pixel's
     distance `dist` to its outline from `_distance`) printed on a plain light card? Returns the card's
@@ -1914,7 +1924,8 @@ def _on_card(
     only for the verifier's rescue (`DetectorConfig.card_rescue`): the tests it may overrule come after
     the two it may not. "beside" is looked for only where the rescue could overrule it (`may_rescue`: the
     mark is an X or triangle; and `card_rescue_from` names "beside"): elsewhere it would be refused all the
-    same, and the second look costs time (round vision36c).
+    same, and the second look costs time (round vision36c). `window`, where given, is the texture test's window in
+    place of the config's (an O's card asked again with `safe_texture_window`).
 
     The card is found from the mark outwards, not assumed to be a ring of fixed width: a band of
     `border` x the mark's extent just outside its outline must be paper (light, plain, clearly
@@ -1959,7 +1970,8 @@ def _on_card(
     card_near = cv2.bitwise_and(card, near)
     mean, std = cv2.meanStdDev(g_roi, mask=card_near)
     most = cfg.max_margin_texture * (paper - ink)
-    window = cfg.danger_texture_window if danger and cfg.danger_texture_window > 0 else cfg.texture_window
+    if window is None:
+        window = cfg.danger_texture_window if danger and cfg.danger_texture_window > 0 else cfg.texture_window
     if float(std[0][0]) > most and (
         window <= 0 or _local_spread(g_roi, card_near, max(3, round(window * extent))) > most
     ):
