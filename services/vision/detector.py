@@ -215,7 +215,8 @@ class DetectorConfig:
     frames the window found 39 of 1,167 marks lost under the highlight but added a false O there, so it is off."""
     danger_texture_window: float = 0.5
     """the same window for an X or a TRIANGLE only (0: `texture_window`), so that a highlighted danger mark can stop the
-    robot while an O, which lifts a danger, keeps the plain measure (as `danger_contrast_ratio` does for light ink).
+    robot while an O, which lifts a danger, is not kept by it (as `danger_contrast_ratio` does for light ink; an O has
+    its own window, `safe_texture_window`, guarded by the verifier).
     Round vision71b (stop 117) was refused on a speed condition measured across sittings; round vision71c (stop 118)
     judged it again on fresh seeds, timed in one sitting: on held-out frames 31 of 726 X and triangles a highlight hid
     found (X 239 -> 219), 6 of 307 marks without it, no false O added, 3 more false X or triangles in 4,000 frames
