@@ -27,19 +27,31 @@ def test_a_smooth_lobe_has_little_local_spread_and_grain_keeps_its_own() -> None
     assert _local_spread(gravel, mask, 15) > 0.9 * float(gravel[mask > 0].std())  # grain finer than the window stays
 
 
+def _bench_glare_frame(seed: int, i: int) -> tuple[np.ndarray, tuple[Shape, tuple[int, int, int, int]]]:
+    """Frame `i` of tuning seed `seed` as `bench/vision_bench.py --glare 1` draws it: the bench's generator, one class
+    a frame in turn, and its highlight at a peak of white from the bench's own draws."""
+    frame_of = _generator("tuning", seed)
+    for k in range(i + 1):
+        img, label, _ = frame_of(CLASSES[k % len(CLASSES)])
+    img, _ = glare_spot(img, np.random.default_rng((seed, i, 1)), 1.0, label[1])
+    return img, label
+
+
+def _finds(img: np.ndarray, label: tuple[Shape, tuple[int, int, int, int]], settings: list[str]) -> bool:
+    """Whether the detector with `settings` finds the labelled mark: its shape, at least half its box."""
+    dets = MarkDetector(parse_settings(settings)).detect(img)
+    return any(d.shape is label[0] and box_overlap(d.box, label[1]) >= 0.5 for d in dets)
+
+
 def test_an_x_under_a_highlight_refused_as_texture_is_found_with_the_window() -> None:
     """Tuning seed 7263's frame 24 under bench/glare.py's highlight at a peak of white: a big X whose card the
     highlight brightens at one arm. The plain measure refuses its card as texture; with the window (the default for a
     danger mark since round vision71c) the X is found."""
-    frame_of = _generator("tuning", 7263)
-    for i in range(25):
-        img, label, _ = frame_of(CLASSES[i % 4])
-    img, _ = glare_spot(img, np.random.default_rng((7263, 24, 1)), 1.0, label[1])
+    img, label = _bench_glare_frame(7263, 24)
     assert label[0] is Shape.X
     assert not any(d.shape is Shape.X for d in MarkDetector(parse_settings(["danger_texture_window=0"])).detect(img))
     for settings in (["texture_window=0.5", "danger_texture_window=0"], []):  # every card's window; the default's
-        found = MarkDetector(parse_settings(settings)).detect(img)
-        assert any(d.shape is Shape.X and box_overlap(d.box, label[1]) >= 0.5 for d in found)
+        assert _finds(img, label, settings)
 
 
 def test_the_window_is_a_share_of_the_extent() -> None:
@@ -82,16 +94,8 @@ def test_an_o_kept_by_its_window_needs_the_verifier_sure() -> None:
     `safe_texture_window` measures it against its local mean and keeps it, for an O only with the verifier's
     `safe_card_sure` (round vision72, the default since stop 118): asked for a certainty no network gives, it is
     refused again."""
-    frame_of = _generator("tuning", 7263)
-    for i in range(374):
-        img, label, _ = frame_of(CLASSES[i % 4])
-    img, _ = glare_spot(img, np.random.default_rng((7263, 373, 1)), 1.0, label[1])
+    img, label = _bench_glare_frame(7263, 373)
     assert label[0] is Shape.O
-
-    def found(settings: list[str]) -> bool:
-        dets = MarkDetector(parse_settings(settings)).detect(img)
-        return any(d.shape is Shape.O and box_overlap(d.box, label[1]) >= 0.5 for d in dets)
-
-    assert not found(["safe_texture_window=0"])
-    assert found([])
-    assert not found(["safe_card_sure=1"])
+    assert not _finds(img, label, ["safe_texture_window=0"])
+    assert _finds(img, label, [])
+    assert not _finds(img, label, ["safe_card_sure=1"])
