@@ -33,7 +33,9 @@ with a recall slice by the share of the mark's box it washes out to white. With 
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
-detected class's precision. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
+detected class's precision. With `--split heldout` every false mark is also charged to what it lies on
+(`lies_on`: the frame's true mark taken for another shape, the clutter or held card under it, else the background;
+the held-out generator records what it drew, `heldout.Drawn`), a table of what fools the detector. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by
 the wall clock and by this process's CPU time (on a shared machine the first includes waiting for a
 core).
 """
@@ -41,11 +43,12 @@ core).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import statistics
 import time
-from collections import defaultdict
+from collections import Counter, defaultdict
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -56,7 +59,7 @@ import typer
 from bench.flicker import WAVES, flicker_bands
 from bench.glare import glare_spot
 from schemas.messages import Shape
-from services.vision.detector import Detection, MarkDetector, box_overlap, parse_settings
+from services.vision.detector import Box, Detection, MarkDetector, box_overlap, parse_settings
 from services.vision.verifier import Verifier
 
 CLASSES: tuple[Shape | None, ...] = (Shape.X, Shape.O, Shape.TRIANGLE, None)
@@ -178,6 +181,8 @@ def main(
     times: list[float] = []
     cpu = 0.0  # this process's CPU seconds in detect: unlike wall time, not inflated by other load
     kept: list[np.ndarray] = []
+    what = getattr(frame_of, "lies_on", None)  # held-out frames: what false marks lie on
+    false_on: dict[str, Counter[str]] = defaultdict(Counter)
     if failures:
         failures.mkdir(parents=True, exist_ok=True)
     for i in range(frames):
@@ -203,9 +208,14 @@ def main(
             else:
                 fp[d.shape] += 1
                 wrong = True
+                if what is not None:
+                    false_on[what(d.box, label[1] if label else None)][d.shape.value] += 1
         if label is None:
             empty_frames += 1
             empty_with_marks += bool(found)
+            if what is not None:
+                for on in {what(d.box, None) for d in found}:
+                    false_on[on]["mark_free_frames"] += 1
         else:
             n_true[label[0]] += 1
             for name, value in meta.items():
@@ -247,6 +257,7 @@ def main(
         "per_class": per_class,
         "mark_free_frames": empty_frames,
         "false_mark_rate": round(empty_with_marks / empty_frames, 4) if empty_frames else None,
+        **({"false_marks_on": _false_on(false_on)} if what is not None else {}),
         "recall_by": {
             name: {k: {"recall": round(v[0] / v[1], 3), "n": v[1]} for k, v in sorted(cells.items())}
             for name, cells in slices.items()
@@ -288,6 +299,33 @@ Meta = dict[str, str]
 FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | None, Meta]]
 
 
+def lies_on(gen: Any, box: Box, truth: Box | None) -> str:
+    """What a false mark at `box` in a held-out generator's (`gen`) last frame lies on: the frame's true mark (at
+    `truth`, taken for another shape), else the last thing drawn under the false mark's centre (`heldout.Drawn`:
+    its box grown by a tenth, a cable's curve within its half-width and a quarter of the false mark's size), else
+    the background (a scikit-image picture's name, or "room")."""
+    if truth is not None and box_overlap(box, truth) >= 0.3:
+        return "the mark (another shape)"
+    cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
+    for d in reversed(gen.drawn):
+        if d.curve is not None:
+            if _to_polyline(d.curve, (cx, cy)) <= d.width / 2 + max(box[2], box[3]) / 4:
+                return d.kind
+            continue
+        x, y, w, h = d.box
+        if x - w / 10 <= cx <= x + w * 1.1 and y - h / 10 <= cy <= y + h * 1.1:
+            return d.kind
+    return f"background: {gen.background}"
+
+
+def _to_polyline(points: np.ndarray, at: tuple[float, float]) -> float:
+    """The distance from point `at` to the polyline through `points` ((n, 2), n >= 2)."""
+    p0, d = points[:-1], np.diff(points, axis=0)
+    c = np.asarray(at, np.float64)
+    t = np.clip(((c - p0) * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-12), 0.0, 1.0)
+    return float(np.min(np.hypot(*(p0 + t[:, None] * d - c).T)))
+
+
 def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0.0,
                calibrated: bool = False, keep_matrix: bool = False, hand_drawn: float = 0.0,
                plus_signs: bool = False, without: tuple[str, ...] = ()) -> FrameFn:
@@ -317,6 +355,8 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
                 meta["style"] = lab.style
             return img, (lab.shape, lab.box), meta
 
+        if split == "heldout":  # it records what it drew: what each false mark lies on
+            held.lies_on = functools.partial(lies_on, gen)  # type: ignore[attr-defined]
         return held
     if split == "tuning":
         from services.vision.synthetic import DISTRACTORS, SceneGenerator, Variation
@@ -418,6 +458,10 @@ def _tables(r: dict[str, Any]) -> str:
         rc = "-" if c["recall"] is None else f"{c['recall']:.3f}"
         lines.append(f"{name:<10} {c['frames']:>6}  {p:>9}  {rc:>6}  {c['false']:>5}  {c['missed']:>6}")
     lines.append(f"mark-free frames with a false mark: {r['false_mark_rate']:.2%} of {r['mark_free_frames']}")
+    if r.get("false_marks_on"):
+        lines += ["", "false marks by what they lie on  X  O  TRIANGLE  (mark-free frames with one)"]
+        for on, c in r["false_marks_on"].items():
+            lines.append(f"  {on:<30} {c['X']:>3} {c['O']:>3} {c['TRIANGLE']:>3}  ({c['mark_free_frames']})")
     lines.append("")
     for name, cells in r["recall_by"].items():
         row = ", ".join(f"{k}: {v['recall']:.3f} (n={v['n']})" for k, v in cells.items())
@@ -447,6 +491,13 @@ def _timed_passes(det: MarkDetector, frames: list[np.ndarray], passes: int = 3) 
             det.detect(img)
         best = max(best, len(frames) / (time.perf_counter() - t0))
     return round(best, 1)
+
+
+def _false_on(counts: dict[str, Counter[str]]) -> dict[str, dict[str, int]]:
+    """False marks by what they lie on (`lies_on`), most first: each shape's count and the mark-free frames with one."""
+    keys = [s.value for s in Shape] + ["mark_free_frames"]
+    rows = {on: {k: c[k] for k in keys} for on, c in counts.items()}
+    return dict(sorted(rows.items(), key=lambda kv: (-sum(kv[1][s.value] for s in Shape), kv[0])))
 
 
 def _save_failure(folder: Path, i: int, img: np.ndarray, label: Any, found: list[Detection]) -> None:

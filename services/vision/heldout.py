@@ -119,6 +119,19 @@ class HeldOutLabel:
     filled: bool  # a filled triangle
 
 
+@dataclass(frozen=True)
+class Drawn:
+    """One thing a held-out frame shows besides its background, for telling what a false mark was made of
+    (`bench/vision_bench.py`'s false marks by what they lie on): its kind (`_clutter`'s kinds, or the held card's:
+    "mark card", "blank card", "decoy disc", "decoy square", "decoy outline square", "decoy word") and its box in
+    the frame (x, y, w, h; where a lens bends the scene, the box before it); a cable's curve as well, with its width."""
+
+    kind: str
+    box: Box
+    curve: np.ndarray | None = None
+    width: float = 0.0
+
+
 CLIP_FPS = 30.0
 CLIP_FRAMES = 36
 CLIP_SHOWN = 6
@@ -170,7 +183,13 @@ class HeldOutGenerator:
     def __init__(self, seed: int = 0, width: int = 640, height: int = 480, lens: float = 0.0) -> None:
         self.rng = np.random.default_rng(seed)
         self.width, self.height = width, height
-        self.bank = _load_bank()
+        named = _load_bank()
+        self.bank = [img for _, img in named]
+        self.bank_names = [name for name, _ in named]
+        self.drawn: list[Drawn] = []
+        """What the last scene showed over its background, in the order drawn (`Drawn`); it draws no random number"""
+        self.background = ""
+        """The last scene's background: a `HELDOUT_BACKGROUNDS` name, or "room"""
         self.fonts: list[Path | None] = [*_fonts(), None]
         # `lens`: the barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws
         # no random numbers, so a seed's scenes are the same with and without it.
@@ -329,6 +348,7 @@ class HeldOutGenerator:
         the same scene before the card was put in it (with `keep_empty`, else None), and the mark's label. With
         `layers`, the card and its fingers are appended to it as a layer of their own (`_held_card`)."""
         rng = self.rng
+        self.drawn = []
         bg = self._background()
         for _ in range(int(rng.integers(2, 7))):
             self._clutter(bg)
@@ -343,7 +363,8 @@ class HeldOutGenerator:
     def _background(self) -> Image.Image:
         rng, w, h = self.rng, self.width, self.height
         if self.bank and rng.random() < 0.75:
-            src = self.bank[int(rng.integers(len(self.bank)))]
+            pick = int(rng.integers(len(self.bank)))
+            src, self.background = self.bank[pick], self.bank_names[pick]
             scale = max(w / src.width, h / src.height) * float(rng.uniform(1.0, 1.8))
             big = src.resize((math.ceil(src.width * scale), math.ceil(src.height * scale)), Image.BILINEAR)
             x0 = int(rng.integers(0, big.width - w + 1))
@@ -353,6 +374,7 @@ class HeldOutGenerator:
                 img = img.transpose(Image.FLIP_TOP_BOTTOM)
             return img.convert("RGB")
         # a room: a wall colour, a shelf, a window, a door frame
+        self.background = "room"
         wall = tuple(int(v) for v in rng.integers(60, 200, 3))
         img = Image.new("RGB", (w, h), wall)  # type: ignore[arg-type]
         d = ImageDraw.Draw(img)
@@ -379,6 +401,7 @@ class HeldOutGenerator:
                 pad = 0.3 * (tb[3] - tb[1])
                 d.rectangle((tb[0] - pad, tb[1] - pad, tb[2] + pad, tb[3] + pad), fill=_paper(rng))
             d.text((cx, cy), text, fill=col, font=font)
+            self._note("words", d.textbbox((cx, cy), text, font=font))
         elif kind == "sign":  # a prohibition sign: red ring and bar on white
             r = s / 2
             d.ellipse(
@@ -393,30 +416,43 @@ class HeldOutGenerator:
                 fill=(200, 20, 20),
                 width=max(2, int(0.12 * s)),
             )
+            self._note(kind, (cx - r, cy - r, cx + r, cy + r))
         elif kind == "square":
             pts = _poly(cx, cy, s / 2, 4, float(rng.uniform(0, 90)))
             if rng.random() < 0.5:
                 d.polygon(pts, fill=col)
             else:
                 d.line([*pts, pts[0]], fill=col, width=max(2, int(s * rng.uniform(0.06, 0.2))), joint="curve")
+            self._note(kind, (cx - s / 2, cy - s / 2, cx + s / 2, cy + s / 2))
         elif kind == "disc":
             d.ellipse((cx - s / 2, cy - s / 2, cx + s / 2, cy + s / 2), fill=col)
+            self._note(kind, (cx - s / 2, cy - s / 2, cx + s / 2, cy + s / 2))
         elif kind == "triangle":  # filled, off any card: clutter
             d.polygon(_poly(cx, cy, s / 2, 3, float(rng.uniform(0, 120))), fill=col)
+            self._note(kind, (cx - s / 2, cy - s / 2, cx + s / 2, cy + s / 2))
         elif kind == "face" and self.bank:
             cat = self.bank[0]  # the cat's face
             face = cat.crop((110, 20, 300, 210)).resize((max(8, int(s * 1.3)),) * 2)
             img.paste(face, (int(cx), int(cy)))
+            self._note(kind, (cx, cy, cx + face.width, cy + face.height))
         elif kind == "cable":
             p = rng.uniform([-60, -60], [w + 60, h + 60], size=(4, 2))
             t = np.linspace(0, 1, 50)[:, None]
             c = (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t**2 * p[2] + t**3 * p[3]
-            d.line([tuple(q) for q in c], fill=col, width=int(rng.integers(2, 14)), joint="curve")
+            width = int(rng.integers(2, 14))
+            d.line([tuple(q) for q in c], fill=col, width=width, joint="curve")
+            self._note(kind, (*c.min(axis=0), *c.max(axis=0)), curve=c, width=width)
         else:  # texture: a patch of a held-out texture image
             src = self.bank[int(rng.integers(len(self.bank)))] if self.bank else None
             if src is not None:
                 patch = src.resize((max(8, int(s * 1.5)),) * 2).convert("RGB")
                 img.paste(patch, (int(cx), int(cy)))
+                self._note("texture", (cx, cy, cx + patch.width, cy + patch.height))
+
+    def _note(self, kind: str, corners: tuple[float, ...], curve: np.ndarray | None = None, width: float = 0.0) -> None:
+        """Record a thing just drawn (`Drawn`), given its box's corners (x0, y0, x1, y1) in the frame."""
+        x0, y0, x1, y1 = (int(round(v)) for v in corners)
+        self.drawn.append(Drawn(kind, (x0, y0, x1 - x0 + 1, y1 - y0 + 1), curve, width))
 
     def _held_card(
         self, img: Image.Image, shape: Shape | None, layers: list[np.ndarray] | None = None
@@ -451,11 +487,12 @@ class HeldOutGenerator:
         mx0, my0 = pad + borders[0], pad + borders[1]
         mark_box = (mx0, my0, mx0 + mark_w, my0 + ms)
         filled = False
+        held = "mark card" if shape is not None else "blank card"
         if shape is not None:
             ink = _ink(rng)
             filled = self._draw_mark(canvas, mask, shape, mark_box, ink)
         elif rng.random() < 0.6:
-            self._decoy(canvas, mark_box)
+            held = self._decoy(canvas, mark_box)
         finger_near = self._fingers(canvas, card_box, mark_box)
         # the pose: in-plane rotation, tilt about a random axis, a position that keeps the card in view
         rot = float(rng.uniform(-180, 180))
@@ -490,6 +527,9 @@ class HeldOutGenerator:
         coeffs = tuple(float(v) for v in inv.reshape(-1)[:8])
         warped = canvas.transform((self.width, self.height), Image.PERSPECTIVE, coeffs, Image.BICUBIC)
         img.paste(warped, (0, 0), warped)
+        corners = _project(hm, np.array([[card_box[0], card_box[1]], [card_box[2], card_box[1]],
+                                         [card_box[2], card_box[3]], [card_box[0], card_box[3]]]))
+        self._note(held, (*corners.min(axis=0), *corners.max(axis=0)))
         if layers is not None:
             shifted = inv @ _PAD_SHIFT
             shifted /= shifted[2, 2]
@@ -596,7 +636,8 @@ class HeldOutGenerator:
         oy = (y0 + y1) / 2 - (tb[1] + tb[3]) / 2
         d.text((ox, oy), char, fill=255, font=font)
 
-    def _decoy(self, canvas: Image.Image, box: tuple[float, ...]) -> None:
+    def _decoy(self, canvas: Image.Image, box: tuple[float, ...]) -> str:
+        """Draw a decoy on a mark-free card, in `box`; its kind (`Drawn`)."""
         rng = self.rng
         d = ImageDraw.Draw(canvas)
         x0, y0, x1, y1 = box
@@ -605,16 +646,17 @@ class HeldOutGenerator:
         s = min(x1 - x0, y1 - y0)
         if what == 0:
             d.ellipse(box, fill=ink)
-        elif what == 1:
+            return "decoy disc"
+        if what == 1:
             d.rectangle(box, outline=ink, width=max(2, int(0.12 * s)))
-        elif what == 2:
+            return "decoy outline square"
+        if what == 2:
             d.rectangle(box, fill=ink)
-        else:
-            word = str(rng.choice(WORDS))
-            font = _font(
-                self.fonts[int(rng.integers(len(self.fonts)))], max(8, int(s / max(2, len(word)) * 1.4))
-            )
-            d.text((x0, (y0 + y1) / 2), word, fill=ink, font=font, anchor="lm")
+            return "decoy square"
+        word = str(rng.choice(WORDS))
+        font = _font(self.fonts[int(rng.integers(len(self.fonts)))], max(8, int(s / max(2, len(word)) * 1.4)))
+        d.text((x0, (y0 + y1) / 2), word, fill=ink, font=font, anchor="lm")
+        return "decoy word"
 
     def _fingers(self, canvas: Image.Image, card: tuple[float, ...], mark: tuple[float, ...]) -> bool:
         """Two to four fingers over one edge and a thumb over the opposite one, each a capsule that
@@ -885,12 +927,13 @@ def lens_maps(lens: float, width: int, height: int) -> tuple[np.ndarray, np.ndar
     return np.ascontiguousarray(src[..., 0]), np.ascontiguousarray(src[..., 1])
 
 
-def _load_bank() -> list[Image.Image]:
+def _load_bank() -> list[tuple[str, Image.Image]]:
+    """The background images of `HELDOUT_BACKGROUNDS` that scikit-image has, with their names."""
     try:
         from skimage import data
     except ImportError:
         return []
-    bank: list[Image.Image] = []
+    bank: list[tuple[str, Image.Image]] = []
     for name in HELDOUT_BACKGROUNDS:
         try:
             # binary_blobs draws new blobs on every call unless given a seed: the set must repeat
@@ -903,7 +946,7 @@ def _load_bank() -> list[Image.Image]:
             a = (255 * (a - a.min()) / max(1e-9, float(a.max() - a.min()))).astype(np.uint8)
         if a.ndim == 3 and a.shape[2] == 4:
             a = a[:, :, :3]
-        bank.append(Image.fromarray(a).convert("RGB"))
+        bank.append((name, Image.fromarray(a).convert("RGB")))
     return bank
 
 
