@@ -88,6 +88,10 @@ def finish(steps: Steps) -> list[Detection]:
 
 X_SOLIDITY = 0.5
 """The most an X's ink filled of its convex hull before round vision65b raised `DetectorConfig.x_solidity`."""
+TWIN_PAPER = 0.1
+"""`DetectorConfig.text_twin`: how near the grey round a two-letter word's other letter must be to the candidate's paper,
+a share of (paper - ink). On a tuning look (stop 119) the other letter of every turned two-letter word on a card was
+within 0.05, and every mark the looser size alone lost had its neighbour on another paper, 0.16 to 0.33 away."""
 
 
 @dataclass(frozen=True)
@@ -177,6 +181,12 @@ class DetectorConfig:
     text_paper: float = 0.7
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
+    text_twin: float = 0.0
+    """text line, turned: a lone neighbour also makes a two-letter word (NO, OK, XO on a card held up at any angle) where
+    its upright box's longest side is within this share of the candidate's, not only the tenth a twin must be within,
+    if it is printed on the candidate's own paper: the median grey of a thin ring round it within `TWIN_PAPER` x
+    (paper - ink) of the candidate's paper (0: off). A letter's upright box turns with it, and O, K and N differ in
+    width: a turned two-letter word's letters are seldom a tenth apart. Round vision73 (stop 119)"""
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
     (0: any shape as dark as `dark` counts, however much darker than the mark)"""
@@ -506,6 +516,8 @@ class DetectorConfig:
                 raise ValueError(f"bad pyramid level ({f}, {block}): factor >= 1, window odd and >= 3")
         if self.text_whole not in ("", "turned", "all"):
             raise ValueError(f"text_whole: {self.text_whole!r}: '' (off), 'turned' or 'all'")
+        if not 0.0 <= self.text_twin < 1.0:
+            raise ValueError(f"text_twin: {self.text_twin}: a share of the candidate's size, 0 (off) to below 1")
         unknown = set(self.card_rescue_from) - set(CARD_TESTS)
         if unknown:
             raise ValueError(f"card_rescue_from: unknown card tests {sorted(unknown)}; known: {CARD_TESTS}")
@@ -1201,6 +1213,7 @@ class MarkDetector:
             self.config.text_paper,
             self.config.text_turned,
             self.config.text_whole,
+            self.config.text_twin,
         )
 
     # ------------------------------------------------------------------ one pyramid level
@@ -2424,6 +2437,7 @@ def _in_text_line(
     paper_share: float = 0.0,
     turned: bool = False,
     whole: str = "",
+    twin: float = 0.0,
 ) -> bool:
     """A letter inside a word: letter-sized neighbours in the same ink on its baseline or cap line -
     two of them, the nearest less than half a letter height away and the other within two; or one
@@ -2432,7 +2446,9 @@ def _in_text_line(
     `turned`: also look along the line to each letter-sized neighbour, for a word seen turned (a
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
     (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours on the
-    turned lines ("turned") or on every line ("all"; `DetectorConfig.text_whole`)."""
+    turned lines ("turned") or on every line ("all"; `DetectorConfig.text_whole`). `twin`: on a turned line, a lone
+    neighbour that far from the candidate's size is a twin too where it is printed on the candidate's paper
+    (`DetectorConfig.text_twin`)."""
     rows = turned_rows = _around(stats, i)
     if whole:
         H, W = labels.shape[:2]
@@ -2464,7 +2480,7 @@ def _in_text_line(
         angle = float(np.degrees(np.arctan2(dy[j], dx[j]))) % 180.0
         if all(abs(angle - a) > 3.0 for a in tried) and min(angle, 180.0 - angle) > 3.0:
             tried.append(angle)
-            if _line_of_letters(letters, angle, rows):
+            if _line_of_letters(letters, angle, rows, twin):
                 return True
     return False
 
@@ -2494,6 +2510,12 @@ class _Letters:
         if j not in self._means:
             self._means[j] = _component_mean(self.g, self.labels, self.stats, j)
         return self._means[j]
+
+    def ring_grey(self, j: int) -> float:
+        """The median grey of a thin ring round neighbour `j` (`_ring`): the paper it is printed on."""
+        x0, y0, ring = _ring(self.labels, self.stats, j)
+        around = self.g[y0 : y0 + ring.shape[0], x0 : x0 + ring.shape[1]][ring > 0]
+        return float(np.median(around)) if around.size else math.inf
 
     def paper_round(self, j: int) -> float:
         """`_paper_round` of neighbour `j`, cut half-way between the candidate's ink and paper."""
@@ -2531,9 +2553,10 @@ def _around(stats: np.ndarray, i: int) -> np.ndarray:
     return np.flatnonzero(near)
 
 
-def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray) -> bool:
+def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: float = 0.0) -> bool:
     """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test), over the
-    neighbours `rows` (`_around`) of the candidate `letters` measures."""
+    neighbours `rows` (`_around`) of the candidate `letters` measures; on a turned line a lone neighbour within
+    `twin` of its size on its paper is a twin as well (`DetectorConfig.text_twin`)."""
     stats = letters.stats
     x, y, w, h, area = (int(v) for v in stats[letters.i][:5])
     xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
@@ -2561,6 +2584,8 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray) -> bool:
         # box's longest side within a tenth of the candidate's (a two-letter word, NO or OK, seen turned a
         # little; within a fifth, seed 99 lost 7 more tuning marks)
         twin_line = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= 0.1 * size)
+        if twin > 0:  # a lone neighbour further from its size, if on the candidate's paper (below)
+            paper_twin = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= twin * size) & ~twin_line
         beside, close = (along >= 0.5 * size) & (along <= 2.8 * size), along <= 1.3 * size
     similar = (
         (hs >= 0.7 * h)
@@ -2588,7 +2613,12 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray) -> bool:
         return False
     if int(similar.sum()) >= 2:
         return True
-    return bool((near & twin_line).any())
+    if (near & twin_line).any():
+        return True
+    if angle == 0.0 or twin <= 0:
+        return False
+    most = TWIN_PAPER * (paper - ink)
+    return any(abs(letters.ring_grey(int(rows[k])) - paper) <= most for k in np.flatnonzero(near & paper_twin))
 
 
 def _paper_round(
@@ -2596,20 +2626,25 @@ def _paper_round(
 ) -> float:
     """The share of a thin ring just outside component `j` that is lighter than `cut` (and, with `within`, a mask
     over `g`, inside it)."""
-    x, y, w, h = (int(v) for v in stats[j][:4])
-    x0, y0 = max(0, x - 4), max(0, y - 4)
-    x1, y1 = min(g.shape[1], x + w + 4), min(g.shape[0], y + h + 4)
-    own = cv2.inRange(labels[y0:y1, x0:x1], j, j)
-    ring = cv2.subtract(
-        cv2.dilate(own, np.ones((7, 7), np.uint8)), cv2.dilate(own, np.ones((3, 3), np.uint8))
-    )
+    x0, y0, ring = _ring(labels, stats, j)
     n = cv2.countNonZero(ring)
     if n == 0:
         return 0.0
+    y1, x1 = y0 + ring.shape[0], x0 + ring.shape[1]
     light = g[y0:y1, x0:x1][ring > 0] > cut
     if within is not None:
         light &= within[y0:y1, x0:x1][ring > 0] > 0
     return float(np.count_nonzero(light)) / n
+
+
+def _ring(labels: np.ndarray, stats: np.ndarray, j: int) -> tuple[int, int, np.ndarray]:
+    """A thin ring just outside component `j` (2 to 3 pixels out): its region's corner (x0, y0) in `labels` and the
+    ring's mask over that region."""
+    x, y, w, h = (int(v) for v in stats[j][:4])
+    x0, y0 = max(0, x - 4), max(0, y - 4)
+    x1, y1 = min(labels.shape[1], x + w + 4), min(labels.shape[0], y + h + 4)
+    own = cv2.inRange(labels[y0:y1, x0:x1], j, j)
+    return x0, y0, cv2.subtract(cv2.dilate(own, np.ones((7, 7), np.uint8)), cv2.dilate(own, np.ones((3, 3), np.uint8)))
 
 
 def _component_mean(g: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
