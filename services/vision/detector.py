@@ -92,6 +92,15 @@ TWIN_PAPER = 0.1
 """`DetectorConfig.text_twin`: how near the grey round a two-letter word's other letter must be to the candidate's paper,
 a share of (paper - ink). On a tuning look (stop 119) the other letter of every turned two-letter word on a card was
 within 0.05, and every mark the looser size alone lost had its neighbour on another paper, 0.16 to 0.33 away."""
+TWIN_INK = 0.15
+"""... and how near its mean grey must be to the candidate's ink, a share of (paper - ink): a word's letters differ by
+their strokes' width under blur (up to 0.14 on the look), a finger over the card from the ink by more (0.24)."""
+TWIN_CONTRAST = 40.0
+"""... the least (paper - ink), grey levels, for which the looser twin is asked: a faint, blurred pair (27 levels on
+the look: a hand-drawn O and a finger's shadow) is no readable word; the look's words were 87 or more."""
+TWIN_SIZE = 10
+"""... and the least upright box side, pixels at its level, of the candidate: specks of noise two by two are no word,
+and the text-line test also judges the small components under a proposal (`_in_text`)."""
 
 
 @dataclass(frozen=True)
@@ -184,8 +193,9 @@ class DetectorConfig:
     text_twin: float = 0.0
     """text line, turned: a lone neighbour also makes a two-letter word (NO, OK, XO on a card held up at any angle) where
     its upright box's longest side is within this share of the candidate's, not only the tenth a twin must be within,
-    if it is printed on the candidate's own paper: the median grey of a thin ring round it within `TWIN_PAPER` x
-    (paper - ink) of the candidate's paper (0: off). A letter's upright box turns with it, and O, K and N differ in
+    if it is printed on the candidate's own paper in its ink: the median grey of a thin ring round it within
+    `TWIN_PAPER` x (paper - ink) of the candidate's paper, its mean grey within `TWIN_INK` x (paper - ink) of the
+    candidate's ink, a readable pair (`TWIN_CONTRAST`, `TWIN_SIZE`) (0: off). A letter's upright box turns with it, and O, K and N differ in
     width: a turned two-letter word's letters are seldom a tenth apart. Round vision73 (stop 119)"""
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
@@ -2615,10 +2625,13 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
         return True
     if (near & twin_line).any():
         return True
-    if angle == 0.0 or twin <= 0:
+    if angle == 0.0 or twin <= 0 or paper - ink < TWIN_CONTRAST or max(w, h) < TWIN_SIZE:
         return False
-    most = TWIN_PAPER * (paper - ink)
-    return any(abs(letters.ring_grey(int(rows[k])) - paper) <= most for k in np.flatnonzero(near & paper_twin))
+    return any(
+        abs(letters.mean(j) - ink) <= TWIN_INK * (paper - ink)
+        and abs(letters.ring_grey(j) - paper) <= TWIN_PAPER * (paper - ink)
+        for j in (int(rows[k]) for k in np.flatnonzero(near & paper_twin))
+    )
 
 
 def _paper_round(
