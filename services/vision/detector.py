@@ -191,12 +191,14 @@ class DetectorConfig:
     """text line: the share of a thin ring round a neighbouring letter that must be paper (lighter than
     half-way from ink to paper); the dark background beyond a card's edge is not a letter (0: off)"""
     text_twin: float = 0.0
-    """text line, turned: a lone neighbour also makes a two-letter word (NO, OK, XO on a card held up at any angle) where
-    its upright box's longest side is within this share of the candidate's, not only the tenth a twin must be within,
-    if it is printed on the candidate's own paper in its ink: the median grey of a thin ring round it within
+    """text line, turned: a lone neighbour also makes a two-letter word (NO, OK, XO on a card held up at any angle)
+    where its upright box's longest side is within this share of the candidate's, not only the tenth a twin must be
+    within, if it is printed on the candidate's own paper in its ink: the median grey of a thin ring round it within
     `TWIN_PAPER` x (paper - ink) of the candidate's paper, its mean grey within `TWIN_INK` x (paper - ink) of the
-    candidate's ink, a readable pair (`TWIN_CONTRAST`, `TWIN_SIZE`) (0: off). A letter's upright box turns with it, and O, K and N differ in
-    width: a turned two-letter word's letters are seldom a tenth apart. Round vision73 (stop 119)"""
+    candidate's ink, in a readable pair (`TWIN_CONTRAST`, `TWIN_SIZE`) (0: off). A letter's upright box turns with it,
+    and O, K and N differ in width: a turned two-letter word's letters are seldom a tenth apart. Off: rounds vision73
+    and 73b (stop 119) did not land it; at 0.3, 32 -> 10 tuning probe frames of 400 with a word card held up had a
+    false mark, but on held-out frames 23 -> 20 false marks on words, where the rule asked for 19"""
     letter_ink: float = 0.0
     """... printed in the same ink: its mean grey within max(8, letter_ink x (paper - ink)) of the mark's
     (0: any shape as dark as `dark` counts, however much darker than the mark)"""
@@ -2457,7 +2459,7 @@ def _in_text_line(
     camera's roll, a sign hung askew); there two neighbours in line are needed, or one twin
     (`_line_of_letters`). `whole`: only components wholly inside the image count as neighbours on the
     turned lines ("turned") or on every line ("all"; `DetectorConfig.text_whole`). `twin`: on a turned line, a lone
-    neighbour that far from the candidate's size is a twin too where it is printed on the candidate's paper
+    neighbour that far from the candidate's size is a twin too where it is printed on the candidate's paper in its ink
     (`DetectorConfig.text_twin`)."""
     rows = turned_rows = _around(stats, i)
     if whole:
@@ -2566,7 +2568,7 @@ def _around(stats: np.ndarray, i: int) -> np.ndarray:
 def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: float = 0.0) -> bool:
     """`_in_text_line` along a line turned by `angle` degrees (0: the horizontal baseline test), over the
     neighbours `rows` (`_around`) of the candidate `letters` measures; on a turned line a lone neighbour within
-    `twin` of its size on its paper is a twin as well (`DetectorConfig.text_twin`)."""
+    `twin` of its size, on its paper in its ink, is a twin as well (`DetectorConfig.text_twin`)."""
     stats = letters.stats
     x, y, w, h, area = (int(v) for v in stats[letters.i][:5])
     xs, ys, ws, hs, areas = (stats[rows, k] for k in range(5))
@@ -2577,6 +2579,7 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
             (np.abs(ys + hs - (y + h)) <= 0.12 * h) | (np.abs(ys - y) <= 0.12 * h)  # baseline or cap line
         )
         twin_line = (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
+        paper_twin = np.zeros_like(twin_line)  # the looser twin is for turned lines only
         beside, close = (gap >= 0) & (gap <= 2.0 * h), gap <= 0.5 * h
     else:
         # a turned letter's upright box is no guide to where the letter ends along the line, so the
@@ -2594,8 +2597,8 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
         # box's longest side within a tenth of the candidate's (a two-letter word, NO or OK, seen turned a
         # little; within a fifth, seed 99 lost 7 more tuning marks)
         twin_line = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= 0.1 * size)
-        if twin > 0:  # a lone neighbour further from its size, if on the candidate's paper (below)
-            paper_twin = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= twin * size) & ~twin_line
+        # `twin`: a lone neighbour further from its size, if on the candidate's paper in its ink (below)
+        paper_twin = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= twin * size) & ~twin_line
         beside, close = (along >= 0.5 * size) & (along <= 2.8 * size), along <= 1.3 * size
     similar = (
         (hs >= 0.7 * h)

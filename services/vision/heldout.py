@@ -189,7 +189,7 @@ class HeldOutGenerator:
         self.drawn: list[Drawn] = []
         """What the last scene showed over its background, in the order drawn (`Drawn`); it draws no random number"""
         self.background = ""
-        """The last scene's background: a `HELDOUT_BACKGROUNDS` name, or "room"""
+        """The last scene's background: a `HELDOUT_BACKGROUNDS` name, or "room"."""
         self.fonts: list[Path | None] = [*_fonts(), None]
         # `lens`: the barrel distortion of the camera's lens (OpenCV's k1 = -lens); 0: a pinhole camera. It draws
         # no random numbers, so a seed's scenes are the same with and without it.

@@ -61,7 +61,7 @@ def test_a_false_mark_is_charged_to_the_mark_the_thing_on_top_under_it_or_the_ba
             Drawn("cable", (0, 300, 641, 1), curve, 8.0),
         ],
     )
-    assert vision_bench.lies_on(gen, (400, 50, 40, 40), (405, 55, 30, 30)) == "the mark (another shape)"
+    assert vision_bench.lies_on(gen, (400, 50, 40, 40), (405, 55, 30, 30)) == "the mark itself"
     assert vision_bench.lies_on(gen, (100, 100, 20, 20), None) == "decoy word"
     assert vision_bench.lies_on(gen, (160, 100, 16, 16), None) == "words"
     assert vision_bench.lies_on(gen, (300, 290, 20, 20), None) == "cable"  # its centre 4 px beside the curve
