@@ -201,6 +201,7 @@ def main(
         times.append(time.perf_counter() - t0)
         cpu += time.process_time() - c0
         hit = wrong = False
+        ons: set[str] = set()  # what this frame's false marks lie on (held-out frames)
         for d in found:
             if label is not None and not hit and d.shape == label[0] and box_overlap(d.box, label[1]) >= 0.5:
                 hit = True
@@ -209,13 +210,13 @@ def main(
                 fp[d.shape] += 1
                 wrong = True
                 if what is not None:
-                    false_on[what(d.box, label[1] if label else None)][d.shape.value] += 1
+                    ons.add(on := what(d.box, label[1] if label else None))
+                    false_on[on][d.shape.value] += 1
         if label is None:
             empty_frames += 1
             empty_with_marks += bool(found)
-            if what is not None:
-                for on in {what(d.box, None) for d in found}:
-                    false_on[on]["mark_free_frames"] += 1
+            for on in ons:  # every mark there is false
+                false_on[on]["mark_free_frames"] += 1
         else:
             n_true[label[0]] += 1
             for name, value in meta.items():

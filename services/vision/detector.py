@@ -2579,7 +2579,7 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
             (np.abs(ys + hs - (y + h)) <= 0.12 * h) | (np.abs(ys - y) <= 0.12 * h)  # baseline or cap line
         )
         twin_line = (np.abs(ys - y) <= 0.1 * h) & (np.abs(ys + hs - (y + h)) <= 0.1 * h)
-        paper_twin = np.zeros_like(twin_line)  # the looser twin is for turned lines only
+        paper_twin = None  # the looser twin is for turned lines only
         beside, close = (gap >= 0) & (gap <= 2.0 * h), gap <= 0.5 * h
     else:
         # a turned letter's upright box is no guide to where the letter ends along the line, so the
@@ -2598,7 +2598,9 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
         # little; within a fifth, seed 99 lost 7 more tuning marks)
         twin_line = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= 0.1 * size)
         # `twin`: a lone neighbour further from its size, if on the candidate's paper in its ink (below)
-        paper_twin = (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= twin * size) & ~twin_line
+        paper_twin = (
+            (across <= 0.1 * h) & (np.abs(np.maximum(ws, hs) - size) <= twin * size) & ~twin_line if twin > 0 else None
+        )
         beside, close = (along >= 0.5 * size) & (along <= 2.8 * size), along <= 1.3 * size
     similar = (
         (hs >= 0.7 * h)
@@ -2628,7 +2630,7 @@ def _line_of_letters(letters: _Letters, angle: float, rows: np.ndarray, twin: fl
         return True
     if (near & twin_line).any():
         return True
-    if angle == 0.0 or twin <= 0 or paper - ink < TWIN_CONTRAST or max(w, h) < TWIN_SIZE:
+    if paper_twin is None or paper - ink < TWIN_CONTRAST or max(w, h) < TWIN_SIZE:
         return False
     return any(
         abs(letters.mean(j) - ink) <= TWIN_INK * (paper - ink)
