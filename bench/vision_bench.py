@@ -36,8 +36,8 @@ overlaps the true box (intersection over the smaller box >= 0.5); anything else 
 detected class's precision. With `--split heldout` every false mark is also charged to what it lies on
 (`lies_on`: the frame's true mark, taken for another shape or boxed twice, else the clutter or held card under it,
 else the background; the held-out generator records what it drew, `heldout.Drawn`): a table of what fools the
-detector. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by the wall clock and by this process's CPU time (on a shared machine the first includes waiting for a
-core).
+detector. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by the wall clock and by this
+process's CPU time (on a shared machine the first includes waiting for a core).
 """
 
 from __future__ import annotations
@@ -302,9 +302,9 @@ FrameFn = Any  # Callable[[Shape | None], tuple[np.ndarray, tuple[Shape, box] | 
 
 def lies_on(gen: Any, box: Box, truth: Box | None) -> str:
     """What a false mark at `box` in a held-out generator's (`gen`) last frame lies on: the frame's true mark (at
-    `truth`: taken for another shape, or a second box over it), else the last thing drawn under the false mark's centre (`heldout.Drawn`:
-    its box grown by a tenth, a cable's curve within its half-width and a quarter of the false mark's size), else
-    the background (a scikit-image picture's name, or "room")."""
+    `truth`: taken for another shape, or a second box over it), else the last thing drawn under the false mark's
+    centre (`heldout.Drawn`: its box grown by a tenth, a cable's curve within its half-width and a quarter of the
+    false mark's size), else the background (a scikit-image picture's name, or "room")."""
     if truth is not None and box_overlap(box, truth) >= 0.3:
         return "the mark itself"
     cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
