@@ -70,7 +70,9 @@ ACCESS: tuple[Access, ...] = (
     Access("vision/scene", Kind.TOPIC, (OPERATOR,), ("vision",)),  # simulator control
     Access("vision/preview", Kind.TOPIC, ("vision",)),
     Access("voice/command", Kind.TOPIC, ("voice", OPERATOR), ("reasoner",)),
-    Access("reasoner/decision", Kind.TOPIC, ("reasoner",)),
+    # voice: the answer to its last command, before it puts the next (services/voice/pacing.py): the router's rate
+    # limit below drops a put that reaches it within 1 ms of the last, as puts held back together would
+    Access("reasoner/decision", Kind.TOPIC, ("reasoner",), ("voice",)),
     Access("motion/goal", Kind.TOPIC, ("reasoner",), ("motion",)),
     Access("motion/state", Kind.TOPIC, ("motion",), ("reasoner",)),
     Access("motion/joints", Kind.TOPIC, ("motion",)),

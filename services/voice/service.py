@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from schemas.messages import Command, HealthStatus, SpeechState, VoiceCommand
+from schemas.messages import Command, Decision, HealthStatus, SpeechState, VoiceCommand
 from services.runtime import ServiceContext, default_state_dir
 from services.runtime.flags import parse_flag
 from services.voice.audio import SAMPLE_RATE, AudioError
@@ -59,6 +59,7 @@ from services.voice.own_voice import (
     said_stop,
     tail_from,
 )
+from services.voice.pacing import CommandPacer
 from services.voice.robot_voice import RobotVoice
 from services.voice.segmenter import VADS, SegmenterConfig
 from services.voice.sources import ALTERNATIVES, SourceError, SourceSpec, Utterance, utterances
@@ -367,6 +368,9 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
     # Congestion blocks rather than drops (as for motion goals): a spoken command, "stop" included,
     # is one message per utterance and must not vanish on a busy link; listening waits meanwhile.
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
+    # the reasoner's answers pace the puts, so that the router's input limit never takes two commands for a flood
+    pacer = CommandPacer()
+    ctx.subscribe(ctx.keys.reasoner_decision, Decision, lambda d: pacer.answered(d.cause_stamp))
     stats = _Stats()
     gain_db = gain_from(settings.gain)
     pre_roll_s = settings.segmenter().pre_roll_s
@@ -459,14 +463,17 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
             stats.rejected += 1
         else:
             stats.accepted += 1
-        msg = pub.put(rec.message(stamp=utt.stamp))
+        message = rec.message(stamp=utt.stamp)
+        pacer.turn()
+        pacer.put(message.stamp)
+        msg = pub.put(message)
         ctx.log.info("heard", origin=utt.origin, command=msg.command.value if msg.command else None,
                      text=msg.text, confidence=msg.confidence, decode_ms=round(rec.decode_s * 1000, 1),
                      latency_ms=round((time.time() - utt.stamp) * 1000, 1), early=utt.recognition is not None,
                      snr_db=round(utt.snr_db, 1) if utt.snr_db is not None else None,
                      peak_dbfs=round(level.peak_dbfs, 1), **rec.detail)
         # the stream's last speech-to-noise estimate: whether the room counts as clear (`clear_window_s`)
-        ctx.update_detail(**stats.as_detail(), **meter.detail(), **echo_detail(),
+        ctx.update_detail(**stats.as_detail(), **meter.detail(), **echo_detail(), **pacer.detail(),
                           **({"last_snr_db": round(utt.snr_db, 1)} if utt.snr_db is not None else {}))
 
     delay, last_error = settings.retry_s, ""

@@ -33,10 +33,12 @@ from schemas.access import (
     qos_overwrites,
 )
 from schemas.keys import SERVICES, Keys
+from schemas.messages import Command, Decision, Reason, Situation, Verdict, VoiceCommand
 from services.cli import keys as deployment_keys
 from services.cli.router import free_port, wait_listening
-from services.runtime import ConfigError, Credentials, RouterSecurity, client_config, router_config
+from services.runtime import ConfigError, Credentials, RouterSecurity, client_config, encode, router_config
 from services.runtime.config import check_listen
+from services.voice.pacing import CommandPacer
 from tests.conftest import ROOT, wait_for
 
 
@@ -164,8 +166,8 @@ def test_a_secure_router_listens_on_other_interfaces_only_with_tls(keys_dir: Pat
 
 # ---------------------------------------------------------------------------------------- a real router
 @pytest.fixture(scope="module")
-def secure_router(keys_dir: Path) -> Iterator[tuple[str, str]]:
-    """A secured router process (tcp on loopback and tls) for robot `sec`: (tcp, tls) endpoints."""
+def router_process(keys_dir: Path) -> Iterator[tuple[subprocess.Popen[bytes], str, str]]:
+    """A secured router process (tcp on loopback and tls) for robot `sec`: the process, its tcp and tls endpoints."""
     port, tls_port = free_port(), free_port()
     proc = subprocess.Popen(
         [
@@ -188,10 +190,16 @@ def secure_router(keys_dir: Path) -> Iterator[tuple[str, str]]:
     try:
         wait_listening(port)
         wait_listening(tls_port)
-        yield f"tcp/127.0.0.1:{port}", f"tls/localhost:{tls_port}"
+        yield proc, f"tcp/127.0.0.1:{port}", f"tls/localhost:{tls_port}"
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(10)
+
+
+@pytest.fixture(scope="module")
+def secure_router(router_process: tuple[subprocess.Popen[bytes], str, str]) -> tuple[str, str]:
+    """The secured router's (tcp, tls) endpoints."""
+    return router_process[1], router_process[2]
 
 
 def open_as(endpoint: str, folder: Path | None) -> zenoh.Session:
@@ -297,6 +305,65 @@ def test_the_router_limits_the_rate_of_one_session_on_the_reasoners_inputs(
     finally:
         for s in (reasoner, voice, operator, motion):
             s.close()
+
+
+@pytest.mark.parametrize("paced", [False, True])
+def test_commands_put_while_the_router_is_held_back_all_arrive_when_paced(
+    router_process: tuple[subprocess.Popen[bytes], str, str], keys_dir: Path, paced: bool
+) -> None:
+    """Three commands put 30 ms apart reach a router that the scheduler held back together, and its rate limit keeps
+    only the first. Paced by the reasoner's answers (`services.voice.pacing`, the voice service's way, over the
+    access table's read right on decisions), each is put only once the router has passed the one before: all
+    three arrive."""
+    proc, tcp, _tls = router_process
+    k = Keys("sec")
+    reasoner, voice = open_as(tcp, keys_dir / "reasoner"), open_as(tcp, keys_dir / "voice")
+    try:
+        got: list[VoiceCommand] = []
+        answers = reasoner.declare_publisher(k.reasoner_decision)
+
+        def answer(sample: zenoh.Sample) -> None:  # the reasoner: a decision for each command, caused by it
+            command = VoiceCommand.model_validate_json(sample.payload.to_bytes())
+            got.append(command)
+            answers.put(encode(Decision(command=command.command, verdict=Verdict.OBEY, reason=Reason.OK,
+                                        situation=Situation.SAFE, cause_stamp=command.stamp)))
+
+        _sub = reasoner.declare_subscriber(k.voice_command, answer)
+        pacer = CommandPacer()
+        _answers = voice.declare_subscriber(k.reasoner_decision, lambda s: pacer.answered(
+            Decision.model_validate_json(s.payload.to_bytes()).cause_stamp))
+        pub = voice.declare_publisher(k.voice_command)
+        wait_for(lambda: pub.matching_status.matching, timeout=5)
+
+        def say(word: str) -> None:
+            if paced:
+                pacer.turn()
+            command = VoiceCommand(command=Command(word), text=word, confidence=1.0, engine="test")
+            pacer.put(command.stamp)
+            pub.put(encode(command))
+
+        say("stand")  # the reasoner is there and answers: pacing begins
+        wait_for(lambda: len(got) == 1, timeout=5)
+        time.sleep(0.1)
+        os.kill(proc.pid, signal.SIGSTOP)  # held back for 200 ms: less than the pacer's wait for an answer
+        resume = threading.Timer(0.2, os.kill, (proc.pid, signal.SIGCONT))
+        resume.start()
+        try:
+            for word in ("yes", "no", "yes"):
+                say(word)
+                time.sleep(0.03)
+        finally:
+            resume.join()
+            os.kill(proc.pid, signal.SIGCONT)
+        time.sleep(1.0)
+        words = [c.command.value for c in got[1:] if c.command is not None]
+        if paced:
+            assert words == ["yes", "no", "yes"] and pacer.held >= 1 and pacer.unanswered == 0, words
+        else:  # the first, and whatever the scheduler let come after the router woke
+            assert words[0] == "yes" and len(words) < 3, words
+    finally:
+        reasoner.close()
+        voice.close()
 
 
 def test_the_router_sets_the_priority_of_the_reasoners_inputs(secure_router: tuple[str, str], keys_dir: Path) -> None:
