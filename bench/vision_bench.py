@@ -33,11 +33,12 @@ with a recall slice by the share of the mark's box it washes out to white. With 
 frame's width: `heldout.lens_maps`), the labels the ink's distorted extent. Frames cycle X, O,
 TRIANGLE and mark-free. A detection is correct when its class equals the frame's mark and its box
 overlaps the true box (intersection over the smaller box >= 0.5); anything else counts against the
-detected class's precision. With `--split heldout` every false mark is also charged to what it lies on
-(`lies_on`: the frame's true mark, taken for another shape or boxed twice, else the clutter or held card under it,
-else the background; the held-out generator records what it drew, `heldout.Drawn`): a table of what fools the
-detector. Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by the wall clock and by this
-process's CPU time (on a shared machine the first includes waiting for a core).
+detected class's precision. With `--split heldout`, and `--split tuning` without a lens, every false mark is also
+charged to what it lies on (`lies_on`: the frame's true mark, taken for another shape or boxed twice, else the clutter
+or held card under it, else the background; the held-out generator records what it drew, `heldout.Drawn`, the tuning
+one the pixels each thing changed, `synthetic.Painted`, `lies_on_painted`): a table of what fools the detector.
+Timing covers `MarkDetector.detect` only, with OpenCV on one thread, by the wall clock and by this process's CPU time
+(on a shared machine the first includes waiting for a core).
 """
 
 from __future__ import annotations
@@ -181,7 +182,7 @@ def main(
     times: list[float] = []
     cpu = 0.0  # this process's CPU seconds in detect: unlike wall time, not inflated by other load
     kept: list[np.ndarray] = []
-    what = getattr(frame_of, "lies_on", None)  # held-out frames: what false marks lie on
+    what = getattr(frame_of, "lies_on", None)  # held-out and tuning frames: what false marks lie on
     false_on: dict[str, Counter[str]] = defaultdict(Counter)
     if failures:
         failures.mkdir(parents=True, exist_ok=True)
@@ -319,6 +320,22 @@ def lies_on(gen: Any, box: Box, truth: Box | None) -> str:
     return f"background: {gen.background}"
 
 
+def lies_on_painted(gen: Any, box: Box, truth: Box | None) -> str:
+    """What a false mark at `box` in a recording tuning generator's (`gen`, `SceneGenerator.record`) last frame lies
+    on: the frame's true mark (as `lies_on`), else the last thing drawn - the held card, then the clutter newest
+    first (`synthetic.Painted`) - that changed a pixel within a quarter of the false mark's size of its centre, else
+    the background (a scikit-image sample's name, or "procedural")."""
+    if truth is not None and box_overlap(box, truth) >= 0.3:
+        return "the mark itself"
+    x, y, w, h = box
+    r, cx, cy = max(w, h) / 4, x + w / 2, y + h / 2
+    near = (slice(max(0, int(cy - r)), int(cy + r) + 1), slice(max(0, int(cx - r)), int(cx + r) + 1))
+    for painted in ([gen.card] if gen.card is not None else []) + gen.painted[::-1]:
+        if painted.mask[near].any():
+            return str(painted.kind)
+    return f"background: {gen.background}"
+
+
 def _to_polyline(points: np.ndarray, at: tuple[float, float]) -> float:
     """The distance from point `at` to the polyline through `points` ((n, 2), n >= 2)."""
     p0, d = points[:-1], np.diff(points, axis=0)
@@ -410,6 +427,9 @@ def _generator(split: str, seed: int, hand_variety: float = 0.0, lens: float = 0
             }
             return img, (labels[0].shape, labels[0].box), meta
 
+        if not lens:  # it records what it drew (through a lens it would be elsewhere): what false marks lie on
+            tgen.record = True
+            tuning.lies_on = functools.partial(lies_on_painted, tgen)  # type: ignore[attr-defined]
         return tuning
     raise typer.BadParameter(f"split must be heldout, blind or tuning, got {split!r}")
 

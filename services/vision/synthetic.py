@@ -227,6 +227,15 @@ class Scene:
     sheen: Sheen | None = None  # a lamp's reflection on a glossy card (`Variation.sheen`), or None
 
 
+@dataclass(frozen=True)
+class Painted:
+    """One thing a recording generator (`SceneGenerator.record`) drew over the background: its kind (a `DISTRACTORS`
+    name, a decoy card's "decoy ...", or "mark card") and the pixels it changed."""
+
+    kind: str
+    mask: np.ndarray  # bool, height x width
+
+
 class SceneGenerator:
     """Renders labelled frames. Deterministic for a given seed."""
 
@@ -243,8 +252,20 @@ class SceneGenerator:
         self.height = height
         self.variation = variation
         self.rng = np.random.default_rng(seed)
-        self.bank = _load_backgrounds(backgrounds) if use_skimage else []
+        named = _load_backgrounds(backgrounds) if use_skimage else []
+        self.bank = [img for _, img in named]
+        self.bank_names = [name for name, _ in named]
         self.face = _load_face() if use_skimage else None
+        self.record = False
+        """Record what each scene draws (`painted`, `card`, `background`): a bench's tuning split does, to tell what
+        each false mark lies on. It draws no random number, so a seed's frames are the same either way."""
+        self.painted: list[Painted] = []
+        """The last scene's clutter, in the order drawn (with `record`)."""
+        self.card: Painted | None = None
+        """The held card of the last frame rendered, drawn over the clutter (with `record`; None without a mark, or
+        through a lens)."""
+        self.background = ""
+        """The last scene's background: a scikit-image sample's name, or "procedural"."""
 
     # ------------------------------------------------------------------ public
     def frame(self, shape: Shape | None) -> tuple[np.ndarray, list[Label]]:
@@ -335,10 +356,13 @@ class SceneGenerator:
         """Render `scene` (the same scene twice differs only in sensor noise)."""
         img = scene.background.copy()
         labels: list[Label] = []
+        self.card = None
         if scene.shape is not None:
             box = self._draw_card(img, scene, scene.center)
             if box is not None:
                 labels.append(Label(scene.shape, box))
+            if self.record and not scene.lens:
+                self.card = Painted("mark card", np.any(img != scene.background, axis=2))
         if scene.lens:
             img, labels = _through_lens(img, labels, scene.lens)
         out = cv2.multiply(img.astype(np.float32), cv2.merge([scene.light] * 3))
@@ -357,8 +381,10 @@ class SceneGenerator:
     # ------------------------------------------------------------------ background and clutter
     def _background(self) -> np.ndarray:
         rng, w, h = self.rng, self.width, self.height
+        self.painted, self.background = [], "procedural"
         if self.bank and rng.random() < 0.85:
-            src = self.bank[int(rng.integers(len(self.bank)))]
+            pick = int(rng.integers(len(self.bank)))
+            src, self.background = self.bank[pick], self.bank_names[pick]
             scale = max(w / src.shape[1], h / src.shape[0]) * rng.uniform(1.0, 1.6)
             big = cv2.resize(src, None, fx=scale, fy=scale, interpolation=cv2.INTER_LINEAR)
             y0 = int(rng.integers(0, big.shape[0] - h + 1))
@@ -371,10 +397,14 @@ class SceneGenerator:
         lo, hi = self.variation.distractors
         for _ in range(int(rng.integers(lo, hi + 1))):
             kind = self.variation.kinds[int(rng.integers(len(self.variation.kinds)))]
-            self._distractor(img, kind)
+            before = img.copy() if self.record else None
+            name = self._distractor(img, kind)
+            if before is not None:
+                self.painted.append(Painted(name or kind, np.any(img != before, axis=2)))
         return img
 
-    def _distractor(self, img: np.ndarray, kind: str) -> None:
+    def _distractor(self, img: np.ndarray, kind: str) -> str | None:
+        """Draw one clutter of `kind`; a decoy card says what it carries ("decoy ..."), the rest None."""
         rng, w, h = self.rng, self.width, self.height
         cx, cy = float(rng.uniform(0, w)), float(rng.uniform(0, h))
         size = float(math.exp(rng.uniform(math.log(20), math.log(220))))
@@ -419,7 +449,7 @@ class SceneGenerator:
         elif kind == "texture":
             _draw_texture(img, rng, cx, cy, size * 1.5)
         elif kind == "card":
-            self._draw_decoy_card(img, cx, cy, size)
+            return self._draw_decoy_card(img, cx, cy, size)
         elif kind == "arrow":
             _draw_arrow(img, rng, cx, cy, size)
         elif kind in ("star", "check", "clock"):
@@ -428,9 +458,11 @@ class SceneGenerator:
             _draw_crossing(img, rng, cx, cy, size)
         else:
             raise ValueError(f"unknown clutter kind {kind!r}: one of {', '.join(DISTRACTORS + EXTRA_DISTRACTORS)}")
+        return None
 
-    def _draw_decoy_card(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
-        """A white card carrying a non-mark: square, filled disc, filled square or a word."""
+    def _draw_decoy_card(self, img: np.ndarray, cx: float, cy: float, size: float) -> str:
+        """A white card carrying a non-mark: square, filled disc, filled square or a word; returns which ("decoy
+        outline square", "decoy disc", "decoy filled square", "decoy word")."""
         rng = self.rng
         side = size * 1.8
         card = np.full((int(side), int(side), 3), int(rng.integers(200, 256)), np.uint8)
@@ -461,6 +493,7 @@ class SceneGenerator:
             side, side, (cx, cy), 1.0, rng.uniform(-180, 180), (rng.uniform(-30, 30), rng.uniform(-30, 30))
         )
         _paste_warped(img, card, h_mat)
+        return ("decoy outline square", "decoy disc", "decoy filled square", "decoy word")[int(what)]
 
     def _draw_face(self, img: np.ndarray, cx: float, cy: float, size: float) -> None:
         size = max(size, 40.0)
@@ -1100,7 +1133,8 @@ def _procedural_background(rng: Rng, w: int, h: int) -> np.ndarray:
     return img
 
 
-def _load_backgrounds(names: tuple[str, ...] = SKIMAGE_BACKGROUNDS) -> list[np.ndarray]:
+def _load_backgrounds(names: tuple[str, ...] = SKIMAGE_BACKGROUNDS) -> list[tuple[str, np.ndarray]]:
+    """The scikit-image samples of `names` that load here, with their names, as BGR."""
     try:
         from skimage import data
     except ImportError:
@@ -1120,7 +1154,7 @@ def _load_backgrounds(names: tuple[str, ...] = SKIMAGE_BACKGROUNDS) -> list[np.n
             if img.ndim == 2
             else cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2BGR)
         )
-        bank.append(img)
+        bank.append((name, img))
     return bank
 
 

@@ -87,7 +87,7 @@ def main() -> None:
     args = ap.parse_args()
     cv2.setNumThreads(1)
     det = _detector(args.set)
-    backgrounds = synthetic._load_backgrounds()
+    backgrounds = [img for _, img in synthetic._load_backgrounds()]
     if args.save:
         args.save.mkdir(parents=True, exist_ok=True)
     report: dict[str, object] = {"seed": args.seed, "frames_per_mode": args.frames, "set": args.set}
