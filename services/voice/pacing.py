@@ -10,8 +10,8 @@ The reasoner answers every command it is given with a `Decision` whose `cause_st
 that answer is back the router has passed the command, and a put made `gap_s` later reaches it outside the limit.
 So the voice service puts its next command only after the answer to its last one, or `wait_s` after that put if
 no answer comes (a reasoner that is down or shedding a flood): live speech, a word or more apart, never waits. It
-paces only once a decision has come at all: with no reasoner on the bus (a bench, `hri listen`) nothing would answer,
-and commands go at once as before.
+paces only once a decision has come at all: with no reasoner on the bus (a bench, the service run alone) nothing
+would answer, and commands go at once as before.
 """
 
 from __future__ import annotations
