@@ -345,8 +345,8 @@ def test_commands_put_while_the_router_is_held_back_all_arrive_when_paced(
         say("stand")  # the reasoner is there and answers: pacing begins
         wait_for(lambda: len(got) == 1, timeout=5)
         time.sleep(0.1)
-        os.kill(proc.pid, signal.SIGSTOP)  # held back for 200 ms: less than the pacer's wait for an answer
-        resume = threading.Timer(0.2, os.kill, (proc.pid, signal.SIGCONT))
+        os.kill(proc.pid, signal.SIGSTOP)  # held back for 300 ms: less than the pacer's wait for an answer (0.5 s)
+        resume = threading.Timer(0.3, os.kill, (proc.pid, signal.SIGCONT))
         resume.start()
         try:
             for word in ("yes", "no", "yes"):
