@@ -193,6 +193,31 @@ class ServiceContext:
 
         self.thread(drain, f"latest:{key}")
 
+    def polled(self, key: str, model: type[M], size: int = 32) -> Callable[[], list[M]]:
+        """The newest `size` valid `model`s on `key`, for a thread of the caller's to take when it wants them: the
+        returned function empties the queue (never blocking; anything invalid logged, counted and dropped, as by
+        `subscribe`). Zenoh fills a `RingChannel` (the oldest dropped when full) and no thread or Python callback of
+        Zenoh's waits on it, so none can wake while the process exits (a callback's own thread can)."""
+        if size < 1:
+            raise ValueError(f"queue size for {key} must be at least 1, not {size}")
+        sub = self.session.declare_subscriber(key, zenoh.handlers.RingChannel(size))
+        self._keep.append(sub)
+
+        def take() -> list[M]:
+            out: list[M] = []
+            while True:
+                try:
+                    sample = sub.handler.try_recv()
+                except Exception:  # channel closed with the session
+                    return out
+                if sample is None:
+                    return out
+                msg = self._decode(sample, model)
+                if msg is not None:
+                    out.append(msg)
+
+        return take
+
     def _subscribe_bounded(self, key: str, deliver: Callable[[zenoh.Sample], None], size: int,
                            when: Callable[[], bool] | None, rate: float | None) -> None:
         if size < 1:

@@ -369,8 +369,8 @@ def _listen(ctx: ServiceContext, settings: VoiceSettings, own: OwnVoice | None, 
     # is one message per utterance and must not vanish on a busy link; listening waits meanwhile.
     pub = ctx.publisher(ctx.keys.voice_command, VoiceCommand, block=True)
     # the reasoner's answers pace the puts, so that the router's input limit never takes two commands for a flood
-    pacer = CommandPacer()
-    ctx.subscribe(ctx.keys.reasoner_decision, Decision, lambda d: pacer.answered(d.cause_stamp))
+    decisions = ctx.polled(ctx.keys.reasoner_decision, Decision)
+    pacer = CommandPacer(lambda: [d.cause_stamp for d in decisions()])
     stats = _Stats()
     gain_db = gain_from(settings.gain)
     pre_roll_s = settings.segmenter().pre_roll_s

@@ -7,6 +7,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import cast
@@ -88,6 +89,33 @@ def test_latest_only_subscriber_skips_to_the_newest(bus: ServiceContext, peer: S
         pub.put(MarkObservation(frame=frame))
     wait_for(lambda: seen and seen[-1] == 50, timeout=5)
     assert len(seen) < 10, seen
+
+
+def test_a_polled_subscription_hands_over_the_newest_valid_messages_without_blocking(
+    bus: ServiceContext, peer: ServiceContext
+) -> None:
+    threads = {t.name for t in threading.enumerate()}
+    take = bus.polled(bus.keys.voice_command, VoiceCommand, size=3)
+    assert take() == []  # nothing yet, and no waiting for it
+    assert {t.name for t in threading.enumerate()} == threads  # no thread of its own
+    arrived: list[bytes] = []
+    _count = bus.session.declare_subscriber(bus.keys.voice_command, lambda s: arrived.append(s.payload.to_bytes()))
+    pub = peer.publisher(peer.keys.voice_command, VoiceCommand)
+    wait_for(lambda: pub.matched)
+    peer.session.put(peer.keys.voice_command, b"not json")
+    for word in ("stand", "yes", "no", "go"):
+        pub.put(VoiceCommand(command=word, confidence=1))
+    wait_for(lambda: len(arrived) == 5)
+    time.sleep(0.1)  # the same session's other subscriber: delivered together
+    assert [m.command.value for m in take()] == ["yes", "no", "go"]  # the newest 3; the oldest dropped unread
+    assert take() == []
+    rejected = bus.counters.rejected
+    peer.session.put(peer.keys.voice_command, b"not json")
+    wait_for(lambda: len(arrived) == 6)
+    time.sleep(0.1)
+    assert take() == [] and bus.counters.rejected == rejected + 1  # invalid: logged, counted, dropped
+    with pytest.raises(ValueError, match="at least 1"):
+        bus.polled(bus.keys.voice_command, VoiceCommand, size=0)
 
 
 def test_health_queryable_and_liveliness(bus: ServiceContext, peer: ServiceContext) -> None:

@@ -36,7 +36,15 @@ from schemas.keys import SERVICES, Keys
 from schemas.messages import Command, Decision, Reason, Situation, Verdict, VoiceCommand
 from services.cli import keys as deployment_keys
 from services.cli.router import free_port, wait_listening
-from services.runtime import ConfigError, Credentials, RouterSecurity, client_config, encode, router_config
+from services.runtime import (
+    ConfigError,
+    Credentials,
+    RouterSecurity,
+    ServiceContext,
+    client_config,
+    encode,
+    router_config,
+)
 from services.runtime.config import check_listen
 from services.voice.pacing import CommandPacer
 from tests.conftest import ROOT, wait_for
@@ -329,9 +337,8 @@ def test_commands_put_while_the_router_is_held_back_all_arrive_when_paced(
                                         situation=Situation.SAFE, cause_stamp=command.stamp)))
 
         _sub = reasoner.declare_subscriber(k.voice_command, answer)
-        pacer = CommandPacer()
-        _answers = voice.declare_subscriber(k.reasoner_decision, lambda s: pacer.answered(
-            Decision.model_validate_json(s.payload.to_bytes()).cause_stamp))
+        decisions = ServiceContext("voice", voice, k).polled(k.reasoner_decision, Decision)  # as the service does
+        pacer = CommandPacer(lambda: [d.cause_stamp for d in decisions()])
         pub = voice.declare_publisher(k.voice_command)
         wait_for(lambda: pub.matching_status.matching, timeout=5)
 
