@@ -35,15 +35,11 @@ POLL_S = 0.002
 """How often a waiting command looks for its answer."""
 
 
-def _nothing() -> Iterable[float | None]:
-    return ()
-
-
 @dataclass
 class CommandPacer:
     """Holds each command until the reasoner has answered the previous one. One thread: the one that puts."""
 
-    receive: Callable[[], Iterable[float | None]] = _nothing
+    receive: Callable[[], Iterable[float | None]]
     """The `cause_stamp`s of the decisions come since it was last called (never blocking)."""
     wait_s: float = WAIT_S
     gap_s: float = GAP_S
